@@ -1,0 +1,52 @@
+// csv.h — CSV text to numeric tables and trajectories, and back.
+//
+// The format users exchange with manipid: a header row of column names, then rows of
+// numbers, comma-separated, SI units. Trajectories use the columns
+//     t, q1..qn, tau1..taun [, ref1..refn]
+// (the layout `manipid simulate` writes). Parsing is strict and every failure is an
+// InputError whose field names the column (or "csv" for structural problems) and whose
+// message gives the line number, so users can fix their file from the message alone.
+#pragma once
+
+#include "manipid/core/model.h"
+#include "manipid/core/trajectory.h"
+
+#include <Eigen/Core>
+
+#include <cstddef>
+#include <string>
+#include <string_view>
+#include <vector>
+
+namespace manipid::api {
+
+struct CsvLimits {
+  std::size_t max_columns = 1024;
+  std::size_t max_rows = 10'000'000;
+};
+
+struct CsvTable {
+  std::vector<std::string> columns;
+  Eigen::MatrixXd data;  ///< rows × columns
+
+  int rows() const { return static_cast<int>(data.rows()); }
+  /// Index of a column, or -1.
+  int column_index(std::string_view name) const;
+  /// A column's values; throws InputError(name, "missing column ...") when absent.
+  Eigen::VectorXd column(std::string_view name) const;
+};
+
+/// Parses CSV text: header of unique, non-empty names; every row the same number of fields;
+/// every field a finite number (NaN and Inf are rejected). Blank lines and a trailing
+/// newline are ignored; CRLF line ends are accepted.
+CsvTable parse_csv(std::string_view text, const CsvLimits& limits = {});
+/// Formats with the shortest representation that reads back to the same double.
+std::string format_csv(const CsvTable& table);
+
+/// Columns t, q1..qn, tau1..taun, and ref1..refn when present. n is the number of q
+/// columns; tau and ref, when given, must have the same count. With `require_torque` a
+/// missing tau column is an error. The result is validated (Trajectory::validate).
+Trajectory trajectory_from_csv(const CsvTable& table, bool require_torque = false);
+CsvTable trajectory_to_csv(const Trajectory& trajectory);
+
+}  // namespace manipid::api

@@ -1,0 +1,70 @@
+// filters.h — the paper's differential filters: windowed, band-limited FIR filters that
+// low-pass a sampled signal and, optionally, differentiate it once or twice.
+//
+// The ideal response of order k is (iΩ/Δ)^k for |Ω| ≤ Ωg and 0 beyond (Ω in rad/sample);
+// its inverse Fourier transform is truncated to n = −M..M and multiplied by the paper's
+// Harris window w(n) = 0.36 + 0.49 cos(nπ/M) + 0.14 cos(2nπ/M) + 0.01 cos(3nπ/M). Then,
+// as in the paper:
+//   order 0 (`Filtr`,  lowpass):     scaled to unit DC gain;
+//   order 1 (`Filtr1`, derivative1): scaled so that a ramp gives its slope exactly;
+//   order 2 (`Filtr2`, derivative2): its DC gain removed with the normalised low-pass, then
+//                                    scaled so that t² gives exactly 2.
+// The output is the 'valid' part: for N input samples, N − 2M − 1 outputs, output j
+// (0-based) centred on input sample M + j, i.e. 1-based inputs M+1..N−M−1 as in the paper.
+// (The paper's loop stops one sample short of the last full window; we keep its length.)
+#pragma once
+
+#include <Eigen/Core>
+
+#include <complex>
+#include <memory>
+
+namespace manipid {
+
+enum class FilterOrder { lowpass = 0, derivative1 = 1, derivative2 = 2 };
+
+struct FilterSettings {
+  int half_length = 100;  ///< M: the filter has 2M + 1 taps. Must be ≥ 2.
+  double band = 0.2;      ///< Ωg: band edge, rad/sample, in (0, π].
+  double dt = 0.001;      ///< Δ: sample period, s.
+
+  /// Throws InputError (fields "half_length", "band", "dt") unless the settings are usable.
+  void validate() const;
+  bool operator==(const FilterSettings&) const = default;
+};
+
+/// Coefficients of the three filters for one (M, Ωg, Δ); immutable once built.
+class DifferentialFilter {
+ public:
+  explicit DifferentialFilter(const FilterSettings& settings);
+
+  const FilterSettings& settings() const { return settings_; }
+  /// Taps c[n], n = −M..M stored at index n + M; output y[i] = Σ_n c[n] x[i + n].
+  const Eigen::VectorXd& coefficients(FilterOrder order) const;
+
+  /// Number of outputs for `input_samples` inputs: N − 2M − 1 (≤ 0 means too few samples).
+  int output_length(int input_samples) const { return input_samples - 2 * settings_.half_length - 1; }
+  /// Index of the input sample that output j is centred on (0-based): M + j.
+  int first_output_index() const { return settings_.half_length; }
+
+  /// Filters x into y (y must have output_length(x.size()) entries). Throws InputError
+  /// ("samples") when x is too short.
+  void apply(FilterOrder order, const Eigen::Ref<const Eigen::VectorXd>& x,
+             Eigen::Ref<Eigen::VectorXd> y) const;
+  Eigen::VectorXd apply(FilterOrder order, const Eigen::Ref<const Eigen::VectorXd>& x) const;
+  /// All three orders in one pass over x (the identification's common case).
+  void apply_all(const Eigen::Ref<const Eigen::VectorXd>& x, Eigen::Ref<Eigen::VectorXd> lowpass,
+                 Eigen::Ref<Eigen::VectorXd> derivative1, Eigen::Ref<Eigen::VectorXd> derivative2) const;
+
+  /// H(Ω) = Σ_n c[n] e^{iΩn}, Ω in rad/sample (the response to e^{iΩt/Δ}, in physical units).
+  std::complex<double> frequency_response(FilterOrder order, double omega) const;
+
+ private:
+  FilterSettings settings_;
+  Eigen::VectorXd lowpass_, derivative1_, derivative2_;
+};
+
+/// A shared filter for these settings, built once and reused (thread-safe cache).
+std::shared_ptr<const DifferentialFilter> cached_filter(const FilterSettings& settings);
+
+}  // namespace manipid
