@@ -19,8 +19,10 @@ KineticEnergy parse_kinetic_energy(const std::string& text, const std::string& f
 std::vector<std::string> parameter_names(int joint_count) {
   std::vector<std::string> names;
   names.reserve(2 * joint_count);
-  for (int k = 1; k <= joint_count; ++k) names.push_back("m" + std::to_string(k));
-  for (int k = 1; k <= joint_count; ++k) names.push_back("l" + std::to_string(k));
+  // (append rather than "m" + to_string: g++ 12 warns falsely on the latter at -O3, bug 105329)
+  for (char prefix : {'m', 'l'}) {
+    for (int k = 1; k <= joint_count; ++k) names.push_back(std::string(1, prefix).append(std::to_string(k)));
+  }
   return names;
 }
 

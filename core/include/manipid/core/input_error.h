@@ -1,0 +1,72 @@
+// input_error.h — the paper's input-error cost (its eq. 5, discrete), in Gram form.
+//
+// With filtered signals q^f, q̇^f, q̈^f, τ^f (N' samples) and the regressor Y_t (regressor.h),
+//     J(θ) = Σ_j w_j · (1/N') Σ_t (Y_t β(θ) − τ^f_t)_j²  =  (β − β*)ᵀ A (β − β*) + J*,
+// where A = (1/N') Σ_t Y_tᵀ W Y_t, β* minimises the quadratic over all β (not only over the
+// products reachable from some θ), and J* is its residual. A, β* and J* are accumulated once,
+// so an evaluation (and its gradient 2 Gᵀ A (β − β*), G = ∂β/∂θ) costs O(dim β²) whatever
+// the number of samples. Writing J around β* rather than as βᵀAβ − 2bᵀβ + c avoids the
+// cancellation that would otherwise eat the digits of a small cost.
+#pragma once
+
+#include "manipid/core/filters.h"
+#include "manipid/core/model.h"
+#include "manipid/core/regressor.h"
+#include "manipid/core/simulation.h"
+#include "manipid/core/trajectory.h"
+
+#include <Eigen/Core>
+
+#include <optional>
+
+namespace manipid {
+
+/// Filtered signals for input-error identification; matrices are samples × joints.
+struct FilteredData {
+  FilterSettings filter;
+  Eigen::MatrixXd q, qd, qdd, tau;
+  int samples() const { return static_cast<int>(q.rows()); }
+};
+
+/// Filters q (orders 0, 1, 2) and forms τ^f: the low-passed measured torque, or — the paper's
+/// way — τ^f = Kp (r^f − q^f) − Kd q̇^f from the reference when `controller` is given and
+/// `use_reference` is set. Throws InputError when data or gains do not fit.
+FilteredData filter_for_input_error(const Trajectory& data, const FilterSettings& filter, bool use_reference,
+                                    const std::optional<PdController>& controller);
+
+class InputErrorCost {
+ public:
+  /// `joint_weights` has one entry per joint (w_j ≥ 0); empty means all 1.
+  InputErrorCost(const RobotModel& model, const FilteredData& data, Eigen::VectorXd joint_weights = {});
+
+  /// J(θ) in Gram form; with `gradient`, also ∂J/∂θ (2n entries, θ order).
+  double evaluate(const Parameters& parameters, Eigen::VectorXd* gradient = nullptr) const;
+  /// J(θ) sample by sample with inverse_dynamics: the reference the Gram form is tested against.
+  double evaluate_direct(const Parameters& parameters) const;
+
+  /// Gauss–Newton Hessian of the sum of squares, J_rᵀ J_r = N' Gᵀ A G (2n × 2n).
+  Eigen::MatrixXd gauss_newton_matrix(const Parameters& parameters) const;
+  /// Residual count N'·n, and the mean square of the weighted filtered torque (Σ_j w_j mean τ_j²).
+  long residual_count() const { return static_cast<long>(data_.samples()) * model_.joint_count(); }
+  double torque_mean_square() const { return torque_mean_square_; }
+  /// The smallest cost any β reaches (J*): what no parameter value can explain.
+  double floor() const { return floor_; }
+
+  const ParameterProducts& products() const { return products_; }
+  const Eigen::MatrixXd& gram() const { return gram_; }
+  const Eigen::VectorXd& joint_weights() const { return weights_; }
+  const FilteredData& data() const { return data_; }
+  const RobotModel& model() const { return model_; }
+
+ private:
+  RobotModel model_;
+  FilteredData data_;
+  Eigen::VectorXd weights_;
+  ParameterProducts products_;
+  Eigen::MatrixXd gram_;       // A
+  Eigen::VectorXd beta_star_;  // β*
+  double floor_ = 0.0;         // J*
+  double torque_mean_square_ = 0.0;
+};
+
+}  // namespace manipid

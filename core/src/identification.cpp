@@ -1,0 +1,486 @@
+// identification.cpp — identify(): validation, the three methods, and the result (identification.h).
+#include "manipid/core/identification.h"
+
+#include "filter_choice.h"
+#include "manipid/core/input_error.h"
+#include "manipid/core/output_error.h"
+#include "optimizer.h"
+#include "uncertainty.h"
+
+#include <Eigen/Eigenvalues>
+#include <Eigen/SVD>
+
+#include <chrono>
+#include <cmath>
+#include <limits>
+#include <sstream>
+
+namespace manipid {
+
+const char* to_string(IdentificationMethod method) {
+  switch (method) {
+    case IdentificationMethod::output_error: return "output-error";
+    case IdentificationMethod::two_stage: return "two-stage";
+    default: return "input-error";
+  }
+}
+
+IdentificationMethod parse_identification_method(const std::string& text, const std::string& field) {
+  if (text == "input-error") return IdentificationMethod::input_error;
+  if (text == "output-error") return IdentificationMethod::output_error;
+  if (text == "two-stage") return IdentificationMethod::two_stage;
+  throw InputError(field, "unknown method '" + text + "' (expected input-error, output-error or two-stage)");
+}
+
+std::vector<std::string> identification_algorithms() {
+  return {"LN_BOBYQA", "LN_NELDERMEAD", "LN_SBPLX", "LD_LBFGS", "LD_SLSQP"};
+}
+
+namespace {
+
+using Clock = std::chrono::steady_clock;
+
+struct Setup {
+  int n = 0;
+  std::vector<std::string> names;
+  std::vector<bool> free;
+  Eigen::VectorXd initial, lower, upper;
+  bool use_reference = false;
+};
+
+Setup validate(const RobotModel& model, const Trajectory& data, const IdentificationOptions& options) {
+  Setup setup;
+  setup.n = model.joint_count();
+  const int n = setup.n;
+  data.validate();
+  if (data.joint_count() != n) {
+    throw InputError("q", "the data has " + std::to_string(data.joint_count()) + " joints, the model has " +
+                              std::to_string(n));
+  }
+  check_parameters(model, options.initial);
+  setup.names = parameter_names(n);
+  setup.initial = options.initial.vector();
+  setup.free.assign(2 * n, options.free.empty());
+  for (const std::string& name : options.free) {
+    const int index = parameter_index(name, n);
+    if (index < 0) {
+      throw InputError("free", "unknown parameter '" + name + "' in the free list (this robot has m1..m" +
+                                   std::to_string(n) + " and l1..l" + std::to_string(n) + ")");
+    }
+    setup.free[index] = true;
+  }
+  setup.lower = options.lower.size() ? options.lower : Eigen::VectorXd::Zero(2 * n);
+  setup.upper = options.upper.size() ? options.upper
+                                     : Eigen::VectorXd::Constant(2 * n, std::numeric_limits<double>::infinity());
+  if (setup.lower.size() != 2 * n || setup.upper.size() != 2 * n) {
+    throw InputError("bounds", "bounds need " + std::to_string(2 * n) + " entries (m1..mn, l1..ln)");
+  }
+  for (int i = 0; i < 2 * n; ++i) {
+    if (std::isnan(setup.lower[i]) || std::isnan(setup.upper[i]) || setup.lower[i] > setup.upper[i]) {
+      throw InputError(setup.names[i], "the bounds of " + setup.names[i] + " are not an interval");
+    }
+    if (setup.free[i] && (setup.initial[i] < setup.lower[i] || setup.initial[i] > setup.upper[i])) {
+      std::ostringstream text;
+      text << "the initial value of " << setup.names[i] << " (" << setup.initial[i] << ") is outside its bounds ["
+           << setup.lower[i] << ", " << setup.upper[i] << "]";
+      throw InputError(setup.names[i], text.str());
+    }
+  }
+  const bool gradient = detail::algorithm_uses_gradient(options.algorithm);  // throws on unknown names
+  const bool needs_simulation = options.method != IdentificationMethod::input_error;
+  if (needs_simulation) {
+    if (!data.has_reference()) {
+      throw InputError("ref", std::string(to_string(options.method)) + " needs the reference: the data has no ref columns");
+    }
+    if (!options.controller) throw InputError("kp", std::string(to_string(options.method)) + " needs the PD gains kp and kd");
+    if (options.method == IdentificationMethod::output_error && gradient) {
+      throw InputError("algorithm", "output-error runs derivative-free algorithms only (LN_BOBYQA, LN_NELDERMEAD, LN_SBPLX)");
+    }
+  }
+  if (options.controller && (options.controller->kp.size() != n || options.controller->kd.size() != n)) {
+    throw InputError("kp", "kp and kd need " + std::to_string(n) + " entries, one per joint");
+  }
+  switch (options.torque_source) {
+    case TorqueSource::measured:
+      if (!data.has_torque()) throw InputError("tau", "the data has no tau columns");
+      setup.use_reference = false;
+      break;
+    case TorqueSource::reference:
+      setup.use_reference = true;
+      break;
+    case TorqueSource::automatic:
+      setup.use_reference = !data.has_torque();
+      break;
+  }
+  if (setup.use_reference && options.method != IdentificationMethod::output_error) {
+    if (!data.has_reference()) throw InputError("tau", "the data has neither tau nor ref columns");
+    if (!options.controller) throw InputError("kp", "the data has no tau columns: forming the torque from ref needs kp and kd");
+  }
+  if (options.max_evaluations < 1) throw InputError("max_evaluations", "max_evaluations must be at least 1");
+  if (!(options.max_seconds > 0)) throw InputError("max_seconds", "max_seconds must be positive");
+  return setup;
+}
+
+detail::MinimizeSettings minimize_settings(const IdentificationOptions& options, const Setup& setup,
+                                           detail::HistoryRecorder& history) {
+  detail::MinimizeSettings settings;
+  settings.algorithm = options.algorithm;
+  settings.free = setup.free;
+  settings.lower = setup.lower;
+  settings.upper = setup.upper;
+  settings.relative_x_tolerance = options.relative_x_tolerance;
+  settings.relative_f_tolerance = options.relative_f_tolerance;
+  settings.max_evaluations = options.max_evaluations;
+  settings.max_seconds = options.max_seconds;
+  settings.cancel = options.cancel;
+  settings.on_evaluation = options.on_evaluation;
+  settings.history = &history;
+  return settings;
+}
+
+int count_free(const std::vector<bool>& free) { return static_cast<int>(std::count(free.begin(), free.end(), true)); }
+
+void apply_uncertainty(IdentificationResult& result, const detail::Uncertainty& uncertainty) {
+  result.std_errors = uncertainty.std_errors;
+  result.correlation = uncertainty.correlation;
+  result.identifiability = uncertainty.report;
+}
+
+// Forward-difference Jacobian of the output-error residual at θ along the identifiable
+// directions `basis` (relative coordinates over the free parameters), returned in θ units
+// (zero along the directions the data cannot see). Steps are 1e-4 relative: well above the
+// adaptive integrator's tolerance-level noise, well below the curvature scale.
+Eigen::MatrixXd output_error_jacobian(const OutputErrorCost& cost, const Eigen::VectorXd& theta,
+                                      const Eigen::VectorXd& residual, const std::vector<bool>& free,
+                                      const Eigen::MatrixXd& basis) {
+  std::vector<int> free_index;
+  for (int i = 0; i < theta.size(); ++i) {
+    if (free[i]) free_index.push_back(i);
+  }
+  const int p = static_cast<int>(free_index.size());
+  Eigen::VectorXd scale(p);
+  for (int a = 0; a < p; ++a) scale[a] = theta[free_index[a]] != 0.0 ? std::abs(theta[free_index[a]]) : 1.0;
+  const double step = 1e-4;
+  Eigen::MatrixXd reduced(residual.size(), basis.cols());
+  for (int c = 0; c < basis.cols(); ++c) {
+    Eigen::VectorXd shifted = theta;
+    for (int a = 0; a < p; ++a) shifted[free_index[a]] += step * basis(a, c) * scale[a];
+    Eigen::VectorXd moved;
+    cost.evaluate(Parameters::from_vector(shifted), &moved);
+    reduced.col(c) = (moved - residual) / step;
+  }
+  // J_θ = J_B Bᵀ D⁻¹ (B has orthonormal columns).
+  const Eigen::MatrixXd relative = reduced * basis.transpose();
+  Eigen::MatrixXd jacobian = Eigen::MatrixXd::Zero(residual.size(), theta.size());
+  for (int a = 0; a < p; ++a) jacobian.col(free_index[a]) = relative.col(a) / scale[a];
+  return jacobian;
+}
+
+// Levenberg–Marquardt on the output error from a good start (the two-stage method's second
+// stage). It moves θ only along the identifiable directions (`basis`, from the exact
+// input-error structure) so the flat m1/l1 valley of the paper's robot cannot swallow a
+// step, and it estimates the initial angles alongside: starting from one noisy first sample
+// would bias θ through the start transient.
+struct GaussNewtonOutcome {
+  Eigen::VectorXd theta, start, residual;
+  Eigen::MatrixXd jacobian;  // ∂residual/∂θ at `theta`, θ units (zero along unseen directions)
+  double cost = 0.0;
+  int iterations = 0;
+  std::string stop_reason;
+  bool cancelled = false;
+};
+
+GaussNewtonOutcome gauss_newton_output_error(const OutputErrorCost& cost, const Eigen::VectorXd& theta_start,
+                                             const Eigen::MatrixXd& basis, const Setup& setup,
+                                             const IdentificationOptions& options, detail::HistoryRecorder& history,
+                                             long& evaluation_index) {
+  const int n = setup.n;
+  std::vector<int> free_index;
+  for (int i = 0; i < theta_start.size(); ++i) {
+    if (setup.free[i]) free_index.push_back(i);
+  }
+  const int p = static_cast<int>(free_index.size());
+  const int r = static_cast<int>(basis.cols());
+  GaussNewtonOutcome outcome;
+  outcome.theta = theta_start;
+  outcome.start = cost.measured_start();
+  auto record = [&](double value, const Eigen::VectorXd& theta) {
+    const long index = evaluation_index++;
+    history.add(index, value, theta);
+    if (options.on_evaluation) options.on_evaluation(index, value, theta);
+  };
+  auto evaluate = [&](const Eigen::VectorXd& theta, const Eigen::VectorXd& start, Eigen::VectorXd* residual) {
+    return cost.evaluate(Parameters::from_vector(theta), residual, &start);
+  };
+  outcome.cost = evaluate(outcome.theta, outcome.start, &outcome.residual);
+  record(outcome.cost, outcome.theta);
+  outcome.stop_reason = "max_iterations";
+  const double theta_step = 1e-4;  // relative; above integrator noise, below curvature
+  const double start_step = 1e-5;  // rad
+  Eigen::MatrixXd reduced;         // residual × (r + n): relative θ directions, then start angles
+  Eigen::VectorXd scale(p);
+  auto jacobian_at_current = [&]() {
+    for (int a = 0; a < p; ++a) scale[a] = std::max(std::abs(outcome.theta[free_index[a]]), 1e-12);
+    reduced.resize(outcome.residual.size(), r + n);
+    Eigen::VectorXd moved;
+    for (int c = 0; c < r; ++c) {
+      Eigen::VectorXd shifted = outcome.theta;
+      for (int a = 0; a < p; ++a) shifted[free_index[a]] += theta_step * basis(a, c) * scale[a];
+      evaluate(shifted, outcome.start, &moved);
+      reduced.col(c) = (moved - outcome.residual) / theta_step;
+    }
+    for (int j = 0; j < n; ++j) {
+      Eigen::VectorXd shifted_start = outcome.start;
+      shifted_start[j] += start_step;
+      evaluate(outcome.theta, shifted_start, &moved);
+      reduced.col(r + j) = (moved - outcome.residual) / start_step;
+    }
+  };
+  bool jacobian_current = false;
+  double damping = 0.0;
+  for (int iteration = 0; iteration < options.output_error_iterations; ++iteration) {
+    if (options.cancel && options.cancel->load()) {
+      outcome.cancelled = true;
+      outcome.stop_reason = "cancelled";
+      break;
+    }
+    jacobian_at_current();
+    jacobian_current = true;
+    const Eigen::MatrixXd normal = reduced.transpose() * reduced;
+    const Eigen::VectorXd gradient = reduced.transpose() * outcome.residual;
+    const double largest = normal.diagonal().maxCoeff();
+    bool improved = false;
+    for (int attempt = 0; attempt < 8 && !improved; ++attempt) {
+      Eigen::MatrixXd damped = normal;
+      damped.diagonal() += damping * normal.diagonal() + Eigen::VectorXd::Constant(r + n, 1e-14 * largest);
+      Eigen::VectorXd step = -damped.ldlt().solve(gradient);
+      // Trust region: no parameter moves by more than 10 % in one step.
+      const Eigen::VectorXd relative = basis * step.head(r);
+      const double biggest = relative.cwiseAbs().maxCoeff();
+      if (biggest > 0.1) step *= 0.1 / biggest;
+      Eigen::VectorXd candidate = outcome.theta;
+      for (int a = 0; a < p; ++a) candidate[free_index[a]] += scale[a] * (basis.row(a) * step.head(r))(0);
+      candidate = candidate.cwiseMax(setup.lower).cwiseMin(setup.upper);
+      const Eigen::VectorXd candidate_start = outcome.start + step.tail(n);
+      Eigen::VectorXd residual;
+      const double value = evaluate(candidate, candidate_start, &residual);
+      record(value, candidate);
+      if (value < outcome.cost) {
+        const double change = (outcome.cost - value) / std::max(outcome.cost, 1e-300);
+        outcome.theta = candidate;
+        outcome.start = candidate_start;
+        outcome.residual = residual;
+        outcome.cost = value;
+        damping *= 0.1;
+        improved = true;
+        jacobian_current = false;
+        ++outcome.iterations;
+        if (change < 1e-7) {
+          outcome.stop_reason = "converged";
+          iteration = options.output_error_iterations;
+        }
+      } else {
+        damping = damping == 0.0 ? 1e-3 : damping * 10.0;
+      }
+    }
+    if (!improved) {
+      outcome.stop_reason = "converged";  // no step along the identifiable directions lowers the cost
+      break;
+    }
+  }
+  if (!jacobian_current && !outcome.cancelled) jacobian_at_current();
+  // ∂residual/∂θ = J_B Bᵀ D⁻¹ (B orthonormal); the start angles stay nuisance parameters.
+  const Eigen::MatrixXd relative = reduced.leftCols(r) * basis.transpose();
+  outcome.jacobian = Eigen::MatrixXd::Zero(outcome.residual.size(), outcome.theta.size());
+  for (int a = 0; a < p; ++a) outcome.jacobian.col(free_index[a]) = relative.col(a) / scale[a];
+  return outcome;
+}
+
+// Gauss–Newton polish of an input-error minimum. The Gram form makes each step exact and
+// cheap (H = Gᵀ A G, g = Gᵀ A (β − β*)); steps are solved in relative coordinates with the
+// unidentifiable directions truncated, so a derivative-free optimiser that stalled in the
+// paper robot's flat m1/l1 valley or its narrow m3/m4/l4 one still ends at the minimum.
+int refine_input_error(const InputErrorCost& cost, Eigen::VectorXd& theta, double& value, const Setup& setup,
+                       const IdentificationOptions& options, detail::HistoryRecorder& history, long& index) {
+  std::vector<int> free_index;
+  for (int i = 0; i < theta.size(); ++i) {
+    if (setup.free[i]) free_index.push_back(i);
+  }
+  const int p = static_cast<int>(free_index.size());
+  int steps = 0;
+  for (int iteration = 0; iteration < 30 && p > 0; ++iteration) {
+    if (options.cancel && options.cancel->load()) break;
+    const Parameters parameters = Parameters::from_vector(theta);
+    Eigen::VectorXd gradient;
+    cost.evaluate(parameters, &gradient);
+    const Eigen::MatrixXd information = cost.gauss_newton_matrix(parameters) / cost.data().samples();
+    Eigen::VectorXd scale(p), g(p);
+    Eigen::MatrixXd H(p, p);
+    for (int a = 0; a < p; ++a) {
+      scale[a] = std::max(std::abs(theta[free_index[a]]), 1e-12);
+      g[a] = 0.5 * gradient[free_index[a]] * scale[a];
+    }
+    for (int a = 0; a < p; ++a)
+      for (int b = 0; b < p; ++b) H(a, b) = scale[a] * information(free_index[a], free_index[b]) * scale[b];
+    const Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd> eigen(H);
+    const double largest = eigen.eigenvalues().maxCoeff();
+    Eigen::VectorXd step = Eigen::VectorXd::Zero(p);
+    for (int k = 0; k < p; ++k) {
+      const double lambda = eigen.eigenvalues()[k];
+      if (lambda > detail::kUnidentifiableRatio * detail::kUnidentifiableRatio * largest) {
+        const Eigen::VectorXd v = eigen.eigenvectors().col(k);
+        step -= v * (v.dot(g) / lambda);
+      }
+    }
+    bool improved = false;
+    for (double fraction = 1.0; fraction > 1e-3 && !improved; fraction *= 0.5) {
+      Eigen::VectorXd candidate = theta;
+      for (int a = 0; a < p; ++a) candidate[free_index[a]] += fraction * step[a] * scale[a];
+      candidate = candidate.cwiseMax(setup.lower).cwiseMin(setup.upper);
+      const double candidate_value = cost.evaluate(Parameters::from_vector(candidate));
+      const long evaluation = index++;
+      history.add(evaluation, candidate_value, candidate);
+      if (options.on_evaluation) options.on_evaluation(evaluation, candidate_value, candidate);
+      if (candidate_value < value) {
+        const double change = (value - candidate_value) / std::max(value, 1e-300);
+        theta = candidate;
+        value = candidate_value;
+        improved = true;
+        ++steps;
+        if (change < 1e-13) iteration = 30;
+      }
+    }
+    if (!improved) break;
+  }
+  return steps;
+}
+
+}  // namespace
+
+IdentificationResult identify(const RobotModel& model, const Trajectory& data, const IdentificationOptions& options) {
+  const Setup setup = validate(model, data, options);
+  const auto started = Clock::now();
+  IdentificationResult result;
+  result.method = options.method;
+  result.algorithm = options.algorithm;
+  result.names = setup.names;
+  result.free = setup.free;
+  result.initial = setup.initial;
+  detail::HistoryRecorder history(options.history_limit);
+  const int free_count = count_free(setup.free);
+
+  std::optional<InputErrorCost> input_error;
+  if (options.method != IdentificationMethod::output_error) {
+    const detail::FilterChoice choice = detail::choose_filter(model, data, options, setup.use_reference);
+    result.filter = choice.settings;
+    result.filter_chosen_automatically = choice.automatic;
+    result.torque_source = setup.use_reference ? TorqueSource::reference : TorqueSource::measured;
+    const FilteredData filtered = filter_for_input_error(data, choice.settings, setup.use_reference, options.controller);
+    Eigen::VectorXd weights;
+    if (options.weighting == JointWeighting::inverse_variance) {
+      weights.resize(setup.n);
+      for (int j = 0; j < setup.n; ++j) {
+        const double mean = filtered.tau.col(j).mean();
+        const double variance = (filtered.tau.col(j).array() - mean).square().mean();
+        weights[j] = variance > 0 ? 1.0 / variance : 1.0;
+      }
+    }
+    input_error.emplace(model, filtered, weights);
+    const detail::CostFunction cost = [&](const Eigen::VectorXd& theta, Eigen::VectorXd* gradient) {
+      return input_error->evaluate(Parameters::from_vector(theta), gradient);
+    };
+    const detail::MinimizeOutcome outcome = detail::minimize(cost, setup.initial, minimize_settings(options, setup, history));
+    result.estimate = outcome.theta;
+    result.initial_cost = outcome.initial_cost;
+    result.final_cost = outcome.cost;
+    result.evaluations = outcome.evaluations;
+    result.stop_reason = outcome.stop_reason;
+    result.cancelled = outcome.cancelled;
+    if (options.refine && !result.cancelled) {
+      long index = result.evaluations;
+      result.refinement_steps =
+          refine_input_error(*input_error, result.estimate, result.final_cost, setup, options, history, index);
+      result.evaluations = index;
+    }
+
+    // σ² per residual, inflated by 1/Σc0² because low-passed residuals are correlated over
+    // about π/Ωg samples (white noise through the filter keeps Σc0² of its variance).
+    const double residual_sum = result.final_cost * filtered.samples();
+    const double dof = std::max(1.0, static_cast<double>(input_error->residual_count() - free_count));
+    const double correlation_factor = 1.0 / cached_filter(choice.settings)->coefficients(FilterOrder::lowpass).squaredNorm();
+    const detail::UncertaintyInput uncertainty{
+        .names = setup.names,
+        .theta = result.estimate,
+        .free = setup.free,
+        .information = input_error->gauss_newton_matrix(Parameters::from_vector(result.estimate)),
+        .structure = {},
+        .residual_variance = residual_sum / dof * correlation_factor,
+        .products = &input_error->products()};
+    apply_uncertainty(result, detail::assess_uncertainty(uncertainty));
+    if (choice.q_noise > 1e-7 && options.method == IdentificationMethod::input_error) {
+      std::ostringstream text;
+      text << "q carries measurement noise (about " << choice.q_noise
+           << " rad): input-error standard errors count torque noise but not the noise the filtered derivatives of "
+              "q carry into the regressor (errors-in-variables), so they are optimistic and the estimates slightly "
+              "biased; the two-stage method (--method two-stage) removes that bias";
+      result.warnings.push_back(text.str());
+    }
+  }
+
+  if (options.method != IdentificationMethod::input_error && !result.cancelled) {
+    // The exact structure (which directions no data can see) comes from the Gram form.
+    if (!input_error) {
+      const FilterSettings structure_filter{100, 0.2, data.dt()};
+      input_error.emplace(model, filter_for_input_error(data, structure_filter, true, options.controller));
+    }
+    const Eigen::VectorXd start = options.method == IdentificationMethod::two_stage ? result.estimate : setup.initial;
+    const Eigen::MatrixXd structure = input_error->gauss_newton_matrix(Parameters::from_vector(start));
+    const Eigen::MatrixXd basis = detail::identifiable_basis(structure, start, setup.free);
+    const OutputErrorCost output_error(model, data, *options.controller, options.simulation_relative_tolerance);
+    Eigen::VectorXd residual;
+    Eigen::MatrixXd jacobian;
+    if (options.method == IdentificationMethod::output_error) {
+      const detail::CostFunction cost = [&](const Eigen::VectorXd& theta, Eigen::VectorXd*) {
+        return output_error.evaluate(Parameters::from_vector(theta));
+      };
+      const detail::MinimizeOutcome outcome =
+          detail::minimize(cost, setup.initial, minimize_settings(options, setup, history));
+      result.estimate = outcome.theta;
+      result.initial_cost = outcome.initial_cost;
+      result.final_cost = outcome.cost;
+      result.evaluations = outcome.evaluations;
+      result.stop_reason = outcome.stop_reason;
+      result.cancelled = outcome.cancelled;
+      output_error.evaluate(Parameters::from_vector(result.estimate), &residual);
+      jacobian = output_error_jacobian(output_error, result.estimate, residual, setup.free, basis);
+    } else {
+      long index = result.evaluations;
+      const GaussNewtonOutcome outcome =
+          gauss_newton_output_error(output_error, result.estimate, basis, setup, options, history, index);
+      result.estimate = outcome.theta;
+      result.final_cost = outcome.cost;  // now the output-error cost, rad²
+      result.evaluations = index;
+      result.stop_reason = outcome.stop_reason;
+      result.cancelled = outcome.cancelled;
+      residual = outcome.residual;
+      jacobian = outcome.jacobian;
+    }
+    result.simulations = output_error.simulations();
+    const double dof = std::max(1.0, static_cast<double>(output_error.residual_count() - free_count));
+    const detail::UncertaintyInput uncertainty{
+        .names = setup.names,
+        .theta = result.estimate,
+        .free = setup.free,
+        .information = jacobian.transpose() * jacobian,
+        .structure = input_error->gauss_newton_matrix(Parameters::from_vector(result.estimate)),
+        .residual_variance = residual.squaredNorm() / dof,
+        .products = &input_error->products()};
+    apply_uncertainty(result, detail::assess_uncertainty(uncertainty));
+  }
+
+  result.history = history.records();
+  result.wall_seconds = std::chrono::duration<double>(Clock::now() - started).count();
+  return result;
+}
+
+}  // namespace manipid

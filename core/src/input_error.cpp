@@ -1,0 +1,113 @@
+// input_error.cpp — filtering for, and the Gram form of, the input-error cost (input_error.h).
+#include "manipid/core/input_error.h"
+
+#include "manipid/core/dynamics.h"
+
+#include <Eigen/QR>
+
+#include <string>
+
+namespace manipid {
+
+FilteredData filter_for_input_error(const Trajectory& data, const FilterSettings& filter, bool use_reference,
+                                    const std::optional<PdController>& controller) {
+  filter.validate();
+  const int n = data.joint_count();
+  const auto differential = cached_filter(filter);
+  const int outputs = differential->output_length(data.samples());
+  if (outputs < 1) {
+    throw InputError("samples", "the filter (half-length " + std::to_string(filter.half_length) + ") needs more than " +
+                                    std::to_string(2 * filter.half_length + 1) + " samples, the data has " +
+                                    std::to_string(data.samples()));
+  }
+  FilteredData result;
+  result.filter = filter;
+  result.q.resize(outputs, n);
+  result.qd.resize(outputs, n);
+  result.qdd.resize(outputs, n);
+  result.tau.resize(outputs, n);
+  for (int j = 0; j < n; ++j) {
+    differential->apply_all(data.q.col(j), result.q.col(j), result.qd.col(j), result.qdd.col(j));
+  }
+  if (use_reference) {
+    if (!data.has_reference()) throw InputError("ref", "the data has no ref columns to form the torque from");
+    if (!controller) throw InputError("kp", "forming the torque from the reference needs the PD gains kp and kd");
+    if (controller->kp.size() != n || controller->kd.size() != n) {
+      throw InputError("kp", "kp and kd need " + std::to_string(n) + " entries, one per joint");
+    }
+    Eigen::VectorXd reference_filtered(outputs);
+    for (int j = 0; j < n; ++j) {
+      differential->apply(FilterOrder::lowpass, data.ref.col(j), reference_filtered);
+      // The controller is linear, so filtering its output equals this combination of filtered inputs.
+      result.tau.col(j) = controller->kp[j] * (reference_filtered - result.q.col(j)) - controller->kd[j] * result.qd.col(j);
+    }
+  } else {
+    if (!data.has_torque()) throw InputError("tau", "the data has no tau columns (give ref columns and the PD gains instead)");
+    for (int j = 0; j < n; ++j) differential->apply(FilterOrder::lowpass, data.tau.col(j), result.tau.col(j));
+  }
+  return result;
+}
+
+InputErrorCost::InputErrorCost(const RobotModel& model, const FilteredData& data, Eigen::VectorXd joint_weights)
+    : model_(model), data_(data), weights_(std::move(joint_weights)), products_(parameter_products(model)) {
+  const int n = model.joint_count();
+  const int samples = data.samples();
+  if (data.q.cols() != n) throw InputError("q", "the data has " + std::to_string(data.q.cols()) + " joints, the model " + std::to_string(n));
+  if (weights_.size() == 0) weights_ = Eigen::VectorXd::Ones(n);
+  if (weights_.size() != n || (weights_.array() < 0).any() || !weights_.allFinite()) {
+    throw InputError("weights", "joint weights need " + std::to_string(n) + " finite, non-negative entries");
+  }
+  const int p = products_.size();
+  // Stack the weighted regressor rows, then one product gives A (faster than n·N' rank updates).
+  Eigen::MatrixXd stacked(static_cast<Eigen::Index>(samples) * n, p);
+  Eigen::VectorXd torque(static_cast<Eigen::Index>(samples) * n);
+  DynamicsWorkspace workspace(model);
+  Eigen::MatrixXd Y(n, p);
+  Eigen::VectorXd q(n), qd(n), qdd(n);
+  const Eigen::ArrayXd root_weights = weights_.array().sqrt();
+  for (int t = 0; t < samples; ++t) {
+    q = data.q.row(t).transpose();
+    qd = data.qd.row(t).transpose();
+    qdd = data.qdd.row(t).transpose();
+    regressor(model, products_, workspace, q, qd, qdd, Y);
+    stacked.middleRows(static_cast<Eigen::Index>(t) * n, n) = root_weights.matrix().asDiagonal() * Y;
+    torque.segment(static_cast<Eigen::Index>(t) * n, n) = root_weights * data.tau.row(t).transpose().array();
+  }
+  gram_ = Eigen::MatrixXd(p, p);
+  gram_.setZero();
+  gram_.selfadjointView<Eigen::Lower>().rankUpdate(stacked.transpose(), 1.0 / samples);
+  gram_ = gram_.selfadjointView<Eigen::Lower>();
+  // β* from the stacked system itself (rank-revealing, so never-excited columns are harmless).
+  beta_star_ = stacked.completeOrthogonalDecomposition().solve(torque);
+  floor_ = (stacked * beta_star_ - torque).squaredNorm() / samples;
+  torque_mean_square_ = torque.squaredNorm() / samples;
+}
+
+double InputErrorCost::evaluate(const Parameters& parameters, Eigen::VectorXd* gradient) const {
+  const Eigen::VectorXd delta = products_.evaluate(parameters) - beta_star_;
+  const Eigen::VectorXd A_delta = gram_ * delta;
+  if (gradient) *gradient = 2.0 * products_.jacobian(parameters).transpose() * A_delta;
+  return delta.dot(A_delta) + floor_;
+}
+
+double InputErrorCost::evaluate_direct(const Parameters& parameters) const {
+  const int n = model_.joint_count();
+  DynamicsWorkspace workspace(model_);
+  Eigen::VectorXd tau(n), q(n), qd(n), qdd(n);
+  double sum = 0.0;
+  for (int t = 0; t < data_.samples(); ++t) {
+    q = data_.q.row(t).transpose();
+    qd = data_.qd.row(t).transpose();
+    qdd = data_.qdd.row(t).transpose();
+    inverse_dynamics(model_, parameters, workspace, q, qd, qdd, tau);
+    sum += (weights_.array() * (tau - data_.tau.row(t).transpose()).array().square()).sum();
+  }
+  return sum / data_.samples();
+}
+
+Eigen::MatrixXd InputErrorCost::gauss_newton_matrix(const Parameters& parameters) const {
+  const Eigen::MatrixXd G = products_.jacobian(parameters);
+  return static_cast<double>(data_.samples()) * G.transpose() * gram_ * G;
+}
+
+}  // namespace manipid

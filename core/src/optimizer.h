@@ -1,0 +1,66 @@
+// optimizer.h — internal: NLopt behind a small interface, for every identification method.
+//
+// It owns what NLopt 2.7.1 needs handled with care: fixed parameters are removed from the
+// vector (2.7.1 ignores force_stop when a parameter is pinned by equal bounds), the
+// nlopt::opt is built in place and never copied after its objective is set, and exceptions
+// are turned into a stop reason. Parameters are scaled by their start values so that kg and
+// m look alike to the optimiser.
+#pragma once
+
+#include "manipid/core/identification.h"
+
+#include <Eigen/Core>
+
+#include <atomic>
+#include <functional>
+#include <string>
+#include <vector>
+
+namespace manipid::detail {
+
+/// Keeps a bounded history: every stride-th record, plus the first, the best and the last.
+class HistoryRecorder {
+ public:
+  explicit HistoryRecorder(int limit) : limit_(limit < 3 ? 3 : limit) {}
+  void add(long index, double cost, const Eigen::VectorXd& theta);
+  std::vector<HistoryRecord> records() const;
+
+ private:
+  int limit_;
+  long stride_ = 1;
+  std::vector<HistoryRecord> kept_;
+  HistoryRecord best_, last_;
+  bool any_ = false;
+};
+
+/// θ (all parameters) → cost, and ∂cost/∂θ when `gradient` is not null.
+using CostFunction = std::function<double(const Eigen::VectorXd& theta, Eigen::VectorXd* gradient)>;
+
+struct MinimizeSettings {
+  std::string algorithm = "LN_BOBYQA";
+  std::vector<bool> free;        // per parameter
+  Eigen::VectorXd lower, upper;  // θ bounds, all parameters
+  double relative_x_tolerance = 1e-10;
+  double relative_f_tolerance = 1e-14;
+  int max_evaluations = 20000;
+  double max_seconds = 120.0;
+  const std::atomic<bool>* cancel = nullptr;
+  std::function<void(long, double, const Eigen::VectorXd&)> on_evaluation;
+  HistoryRecorder* history = nullptr;
+  long first_index = 0;  // evaluation numbers continue across stages
+};
+
+struct MinimizeOutcome {
+  Eigen::VectorXd theta;
+  double cost = 0.0;
+  double initial_cost = 0.0;
+  long evaluations = 0;
+  std::string stop_reason;
+  bool cancelled = false;
+};
+
+/// Throws InputError("algorithm") for an unknown or unsuitable algorithm name.
+bool algorithm_uses_gradient(const std::string& algorithm);
+MinimizeOutcome minimize(const CostFunction& cost, const Eigen::VectorXd& initial, const MinimizeSettings& settings);
+
+}  // namespace manipid::detail
