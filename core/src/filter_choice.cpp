@@ -1,8 +1,11 @@
 // filter_choice.cpp — filter settings for input-error (filter_choice.h).
 #include "filter_choice.h"
 
+#include "manipid/core/input_error.h"
+
 #include <algorithm>
 #include <cmath>
+#include <limits>
 #include <vector>
 
 namespace manipid::detail {
@@ -19,16 +22,63 @@ double estimate_noise(const Eigen::Ref<const Eigen::VectorXd>& signal) {
   return 1.4826 * *middle / std::sqrt(70.0);
 }
 
+namespace {
+
+// J*: the cost no parameter value can remove (the least-squares floor over all products β),
+// on every `stride`-th filtered sample. It measures how far the filtered data are from any
+// instance of the model: filter distortion of the nonlinear dynamics (a band too narrow for
+// the motion) plus noise (a band too wide for the derivatives of noisy q).
+double floor_for(const RobotModel& model, const Trajectory& data, const FilterSettings& settings, bool use_reference,
+                 const std::optional<PdController>& controller, int stride) {
+  const FilteredData full = filter_for_input_error(data, settings, use_reference, controller);
+  FilteredData thin;
+  thin.filter = settings;
+  const int rows = (full.samples() + stride - 1) / stride;
+  auto take = [&](const Eigen::MatrixXd& m) {
+    Eigen::MatrixXd out(rows, m.cols());
+    for (int i = 0; i < rows; ++i) out.row(i) = m.row(i * stride);
+    return out;
+  };
+  thin.q = take(full.q);
+  thin.qd = take(full.qd);
+  thin.qdd = take(full.qdd);
+  thin.tau = take(full.tau);
+  return InputErrorCost(model, thin).floor();
+}
+
+}  // namespace
+
 FilterChoice choose_filter(const RobotModel& model, const Trajectory& data, const IdentificationOptions& options,
                            bool use_reference) {
-  (void)model;
-  (void)use_reference;
   FilterChoice choice;
   for (int j = 0; j < data.joint_count(); ++j) choice.q_noise = std::max(choice.q_noise, estimate_noise(data.q.col(j)));
   choice.settings.dt = data.dt();
+  choice.settings.half_length = options.half_length;
+  choice.settings.band = options.band;
   choice.automatic = options.band <= 0.0 || options.half_length <= 0;
-  choice.settings.band = options.band > 0.0 ? options.band : 0.2;
-  choice.settings.half_length = options.half_length > 0 ? options.half_length : 100;
+  if (!choice.automatic) return choice;
+
+  // Candidates: the given value where one is given, else a grid. Longer windows flatten the
+  // passband (the Harris window's transition is about 4π/M wide) but cost samples at both ends.
+  std::vector<int> lengths = options.half_length > 0 ? std::vector<int>{options.half_length} : kAutoHalfLengths;
+  std::vector<double> bands = options.band > 0.0 ? std::vector<double>{options.band} : kAutoBands;
+  double best = std::numeric_limits<double>::infinity();
+  for (int length : lengths) {
+    if (data.samples() < 4 * (2 * length + 1)) continue;  // keep most of the data
+    for (double band : bands) {
+      const FilterSettings candidate{length, band, data.dt()};
+      const double value = floor_for(model, data, candidate, use_reference, options.controller, 4);
+      if (value < best) {
+        best = value;
+        choice.settings = candidate;
+      }
+    }
+  }
+  if (!std::isfinite(best)) {
+    // Too few samples for any candidate window: the shortest that fits, paper's band otherwise.
+    choice.settings.half_length = options.half_length > 0 ? options.half_length : std::max(2, (data.samples() - 2) / 8);
+    choice.settings.band = options.band > 0.0 ? options.band : 0.2;
+  }
   return choice;
 }
 

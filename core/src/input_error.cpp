@@ -5,6 +5,8 @@
 
 #include <Eigen/QR>
 
+#include <cmath>
+
 #include <string>
 
 namespace manipid {
@@ -73,21 +75,31 @@ InputErrorCost::InputErrorCost(const RobotModel& model, const FilteredData& data
     stacked.middleRows(static_cast<Eigen::Index>(t) * n, n) = root_weights.matrix().asDiagonal() * Y;
     torque.segment(static_cast<Eigen::Index>(t) * n, n) = root_weights * data.tau.row(t).transpose().array();
   }
-  gram_ = Eigen::MatrixXd(p, p);
-  gram_.setZero();
-  gram_.selfadjointView<Eigen::Lower>().rankUpdate(stacked.transpose(), 1.0 / samples);
-  gram_ = gram_.selfadjointView<Eigen::Lower>();
-  // β* from the stacked system itself (rank-revealing, so never-excited columns are harmless).
-  beta_star_ = stacked.completeOrthogonalDecomposition().solve(torque);
-  floor_ = (stacked * beta_star_ - torque).squaredNorm() / samples;
-  torque_mean_square_ = torque.squaredNorm() / samples;
+  const double root_samples = std::sqrt(static_cast<double>(samples));
+  stacked /= root_samples;
+  torque /= root_samples;
+  torque_mean_square_ = torque.squaredNorm();
+  const Eigen::HouseholderQR<Eigen::MatrixXd> qr(stacked);
+  const Eigen::VectorXd rotated = qr.householderQ().adjoint() * torque;
+  const Eigen::Index kept = std::min<Eigen::Index>(p, rotated.size());
+  triangle_ = Eigen::MatrixXd::Zero(p, p);
+  triangle_.topRows(kept) = qr.matrixQR().topRows(kept).triangularView<Eigen::Upper>();
+  rotated_ = Eigen::VectorXd::Zero(p);
+  rotated_.head(kept) = rotated.head(kept);
+  orthogonal_ = rotated.tail(rotated.size() - kept).squaredNorm();
+  // Products the data never excite leave R singular; the rank-revealing solve finds what
+  // part of z no β reaches.
+  const Eigen::VectorXd best = triangle_.completeOrthogonalDecomposition().solve(rotated_);
+  floor_ = orthogonal_ + (triangle_ * best - rotated_).squaredNorm();
 }
 
 double InputErrorCost::evaluate(const Parameters& parameters, Eigen::VectorXd* gradient) const {
-  const Eigen::VectorXd delta = products_.evaluate(parameters) - beta_star_;
-  const Eigen::VectorXd A_delta = gram_ * delta;
-  if (gradient) *gradient = 2.0 * products_.jacobian(parameters).transpose() * A_delta;
-  return delta.dot(A_delta) + floor_;
+  const Eigen::VectorXd residual = triangle_.triangularView<Eigen::Upper>() * products_.evaluate(parameters) - rotated_;
+  if (gradient) {
+    *gradient = 2.0 * products_.jacobian(parameters).transpose() *
+                (triangle_.triangularView<Eigen::Upper>().transpose() * residual);
+  }
+  return residual.squaredNorm() + orthogonal_;
 }
 
 double InputErrorCost::evaluate_direct(const Parameters& parameters) const {
@@ -106,8 +118,8 @@ double InputErrorCost::evaluate_direct(const Parameters& parameters) const {
 }
 
 Eigen::MatrixXd InputErrorCost::gauss_newton_matrix(const Parameters& parameters) const {
-  const Eigen::MatrixXd G = products_.jacobian(parameters);
-  return static_cast<double>(data_.samples()) * G.transpose() * gram_ * G;
+  const Eigen::MatrixXd RG = triangle_.triangularView<Eigen::Upper>() * products_.jacobian(parameters);
+  return static_cast<double>(data_.samples()) * RG.transpose() * RG;
 }
 
 }  // namespace manipid

@@ -1,12 +1,13 @@
 // input_error.h — the paper's input-error cost (its eq. 5, discrete), in Gram form.
 //
 // With filtered signals q^f, q̇^f, q̈^f, τ^f (N' samples) and the regressor Y_t (regressor.h),
-//     J(θ) = Σ_j w_j · (1/N') Σ_t (Y_t β(θ) − τ^f_t)_j²  =  (β − β*)ᵀ A (β − β*) + J*,
-// where A = (1/N') Σ_t Y_tᵀ W Y_t, β* minimises the quadratic over all β (not only over the
-// products reachable from some θ), and J* is its residual. A, β* and J* are accumulated once,
-// so an evaluation (and its gradient 2 Gᵀ A (β − β*), G = ∂β/∂θ) costs O(dim β²) whatever
-// the number of samples. Writing J around β* rather than as βᵀAβ − 2bᵀβ + c avoids the
-// cancellation that would otherwise eat the digits of a small cost.
+//     J(θ) = Σ_j w_j · (1/N') Σ_t (Y_t β(θ) − τ^f_t)_j²  =  |R β(θ) − z|² + J⊥,
+// where QR = (1/√N') [√W Y_t]_t is a QR factorisation of the stacked weighted regressor,
+// z = Qᵀ(1/√N')[√W τ^f_t]_t, and J⊥ the part of the torque no β can reach. R (dim β square),
+// z and J⊥ are computed once, so an evaluation (and its gradient 2 Gᵀ Rᵀ (R β − z),
+// G = ∂β/∂θ) costs O(dim β²) whatever the number of samples. This is the Gram form
+// βᵀAβ − 2bᵀβ + c with A = RᵀR, kept factored: forming A squares its condition number, and
+// the paper's model makes A ill-conditioned enough to lose five digits of the cost that way.
 #pragma once
 
 #include "manipid/core/filters.h"
@@ -53,7 +54,8 @@ class InputErrorCost {
   double floor() const { return floor_; }
 
   const ParameterProducts& products() const { return products_; }
-  const Eigen::MatrixXd& gram() const { return gram_; }
+  /// A = RᵀR, the Gram matrix (1/N') Σ_t Y_tᵀ W Y_t.
+  Eigen::MatrixXd gram() const { return triangle_.transpose() * triangle_; }
   const Eigen::VectorXd& joint_weights() const { return weights_; }
   const FilteredData& data() const { return data_; }
   const RobotModel& model() const { return model_; }
@@ -63,9 +65,10 @@ class InputErrorCost {
   FilteredData data_;
   Eigen::VectorXd weights_;
   ParameterProducts products_;
-  Eigen::MatrixXd gram_;       // A
-  Eigen::VectorXd beta_star_;  // β*
-  double floor_ = 0.0;         // J*
+  Eigen::MatrixXd triangle_;   // R
+  Eigen::VectorXd rotated_;    // z
+  double orthogonal_ = 0.0;    // J⊥
+  double floor_ = 0.0;         // J* = J⊥ + min_β |R β − z|²
   double torque_mean_square_ = 0.0;
 };
 
