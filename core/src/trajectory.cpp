@@ -1,1 +1,95 @@
-// placeholder: being written
+// trajectory.cpp — consistency checks of sampled joint data (Trajectory::validate), so that
+// every algorithm downstream can assume matching sizes, finite values and a uniform clock.
+#include "manipid/core/trajectory.h"
+
+#include "manipid/core/model.h"
+
+#include <cmath>
+#include <sstream>
+#include <string>
+
+namespace manipid {
+namespace {
+
+// Samples are numbered from 1 in messages, like the joints ("q2 is NaN at sample 1" is
+// the first row), which is what a user counting rows of a table expects.
+std::string describe_sample(const Eigen::VectorXd& t, Eigen::Index index) {
+  std::ostringstream text;
+  text << "sample " << index + 1;
+  if (index < t.size() && std::isfinite(t[index])) text << " (t = " << t[index] << " s)";
+  return text.str();
+}
+
+void check_columns(const std::string& field, const Eigen::MatrixXd& values, int samples,
+                   int joints, bool optional) {
+  if (optional && values.cols() == 0) return;
+  if (values.cols() != joints) {
+    std::ostringstream text;
+    text << field << " has " << values.cols() << " columns but q has " << joints << " joints"
+         << (optional ? " (give all of them or none)" : "");
+    throw InputError(field, text.str());
+  }
+  if (values.rows() != samples) {
+    std::ostringstream text;
+    text << field << " has " << values.rows() << " samples but t has " << samples;
+    throw InputError(field, text.str());
+  }
+}
+
+void check_finite(const std::string& field, const Eigen::MatrixXd& values, const Eigen::VectorXd& t) {
+  // Column-major storage: scan each joint's contiguous signal.
+  for (Eigen::Index column = 0; column < values.cols(); ++column) {
+    for (Eigen::Index row = 0; row < values.rows(); ++row) {
+      const double value = values(row, column);
+      if (std::isfinite(value)) continue;
+      std::ostringstream text;
+      text << field << column + 1 << " is " << (std::isnan(value) ? "NaN" : "infinite") << " at "
+           << describe_sample(t, row);
+      throw InputError(field, text.str());
+    }
+  }
+}
+
+}  // namespace
+
+void Trajectory::validate() const {
+  if (q.cols() < 1) throw InputError("q", "q has no joint columns");
+  if (t.size() < 2) {
+    throw InputError("t", "a trajectory needs at least 2 samples, got " + std::to_string(t.size()));
+  }
+  const int sample_count = samples();
+  const int joints = joint_count();
+  check_columns("q", q, sample_count, joints, false);
+  check_columns("tau", tau, sample_count, joints, true);
+  check_columns("ref", ref, sample_count, joints, true);
+
+  for (Eigen::Index i = 0; i < t.size(); ++i) {
+    if (!std::isfinite(t[i])) {
+      throw InputError("t", std::string("t is ") + (std::isnan(t[i]) ? "NaN" : "infinite") + " at " +
+                                describe_sample(t, i));
+    }
+  }
+  // Every algorithm uses one sample period, so successive differences must all equal
+  // t[1] − t[0]; 1e-6 relative leaves room for times printed with limited digits.
+  const double period = t[1] - t[0];
+  const double tolerance = 1e-6 * period;
+  for (Eigen::Index i = 1; i < t.size(); ++i) {
+    const double step = t[i] - t[i - 1];
+    if (!(step > 0.0)) {
+      throw InputError("t", "t is not strictly increasing at " + describe_sample(t, i) +
+                                " (previous t = " + std::to_string(t[i - 1]) + " s)");
+    }
+    if (std::abs(step - period) > tolerance) {
+      std::ostringstream text;
+      text.precision(12);
+      text << "t is not uniformly sampled at " << describe_sample(t, i) << ": the step is " << step
+           << " s but t[1] - t[0] = " << period << " s";
+      throw InputError("t", text.str());
+    }
+  }
+  check_finite("q", q, t);
+  check_finite("tau", tau, t);
+  check_finite("ref", ref, t);
+}
+
+}  // namespace manipid
