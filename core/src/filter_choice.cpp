@@ -30,19 +30,35 @@ namespace {
 // the motion) plus noise (a band too wide for the derivatives of noisy q).
 double floor_for(const RobotModel& model, const Trajectory& data, const FilterSettings& settings, bool use_reference,
                  const std::optional<PdController>& controller, int stride) {
-  const FilteredData full = filter_for_input_error(data, settings, use_reference, controller);
+  // Filter only the outputs kept (every stride-th): direct dot products with the taps.
+  const auto filter = cached_filter(settings);
+  const int outputs = filter->output_length(data.samples());
+  const int M = settings.half_length;
+  const int rows = (outputs + stride - 1) / stride;
+  const int n = data.joint_count();
   FilteredData thin;
   thin.filter = settings;
-  const int rows = (full.samples() + stride - 1) / stride;
-  auto take = [&](const Eigen::MatrixXd& m) {
-    Eigen::MatrixXd out(rows, m.cols());
-    for (int i = 0; i < rows; ++i) out.row(i) = m.row(i * stride);
-    return out;
-  };
-  thin.q = take(full.q);
-  thin.qd = take(full.qd);
-  thin.qdd = take(full.qdd);
-  thin.tau = take(full.tau);
+  thin.q.resize(rows, n);
+  thin.qd.resize(rows, n);
+  thin.qdd.resize(rows, n);
+  thin.tau.resize(rows, n);
+  const Eigen::VectorXd& c0 = filter->coefficients(FilterOrder::lowpass);
+  const Eigen::VectorXd& c1 = filter->coefficients(FilterOrder::derivative1);
+  const Eigen::VectorXd& c2 = filter->coefficients(FilterOrder::derivative2);
+  for (int j = 0; j < n; ++j) {
+    for (int r = 0; r < rows; ++r) {
+      const auto window = data.q.col(j).segment(static_cast<Eigen::Index>(r) * stride, 2 * M + 1);
+      thin.q(r, j) = c0.dot(window);
+      thin.qd(r, j) = c1.dot(window);
+      thin.qdd(r, j) = c2.dot(window);
+      if (use_reference) {
+        const double reference = c0.dot(data.ref.col(j).segment(static_cast<Eigen::Index>(r) * stride, 2 * M + 1));
+        thin.tau(r, j) = controller->kp[j] * (reference - thin.q(r, j)) - controller->kd[j] * thin.qd(r, j);
+      } else {
+        thin.tau(r, j) = c0.dot(data.tau.col(j).segment(static_cast<Eigen::Index>(r) * stride, 2 * M + 1));
+      }
+    }
+  }
   return InputErrorCost(model, thin).floor();
 }
 
@@ -67,7 +83,7 @@ FilterChoice choose_filter(const RobotModel& model, const Trajectory& data, cons
     if (data.samples() < 4 * (2 * length + 1)) continue;  // keep most of the data
     for (double band : bands) {
       const FilterSettings candidate{length, band, data.dt()};
-      const double value = floor_for(model, data, candidate, use_reference, options.controller, 4);
+      const double value = floor_for(model, data, candidate, use_reference, options.controller, 8);
       if (value < best) {
         best = value;
         choice.settings = candidate;

@@ -236,7 +236,11 @@ GaussNewtonOutcome gauss_newton_output_error(const OutputErrorCost& cost, const 
       reduced.col(r + j) = (moved - outcome.residual) / start_step;
     }
   };
-  bool jacobian_current = false;
+  // The finite-difference Jacobian costs r + n simulations; between recomputations Broyden's
+  // rank-one updates keep it current from the simulations the steps make anyway.
+  jacobian_at_current();
+  bool jacobian_fresh = true;
+  int failures = 0;
   double damping = 0.0;
   for (int iteration = 0; iteration < options.output_error_iterations; ++iteration) {
     if (options.cancel && options.cancel->load()) {
@@ -244,51 +248,59 @@ GaussNewtonOutcome gauss_newton_output_error(const OutputErrorCost& cost, const 
       outcome.stop_reason = "cancelled";
       break;
     }
-    jacobian_at_current();
-    jacobian_current = true;
     const Eigen::MatrixXd normal = reduced.transpose() * reduced;
     const Eigen::VectorXd gradient = reduced.transpose() * outcome.residual;
     const double largest = normal.diagonal().maxCoeff();
-    bool improved = false;
-    for (int attempt = 0; attempt < 8 && !improved; ++attempt) {
-      Eigen::MatrixXd damped = normal;
-      damped.diagonal() += damping * normal.diagonal() + Eigen::VectorXd::Constant(r + n, 1e-14 * largest);
-      Eigen::VectorXd step = -damped.ldlt().solve(gradient);
-      // Trust region: no parameter moves by more than 10 % in one step.
-      const Eigen::VectorXd relative = basis * step.head(r);
-      const double biggest = relative.cwiseAbs().maxCoeff();
-      if (biggest > 0.1) step *= 0.1 / biggest;
-      Eigen::VectorXd candidate = outcome.theta;
-      for (int a = 0; a < p; ++a) candidate[free_index[a]] += scale[a] * (basis.row(a) * step.head(r))(0);
-      candidate = candidate.cwiseMax(setup.lower).cwiseMin(setup.upper);
-      const Eigen::VectorXd candidate_start = outcome.start + step.tail(n);
-      Eigen::VectorXd residual;
-      const double value = evaluate(candidate, candidate_start, &residual);
-      record(value, candidate);
-      if (value < outcome.cost) {
-        const double change = (outcome.cost - value) / std::max(outcome.cost, 1e-300);
-        outcome.theta = candidate;
-        outcome.start = candidate_start;
-        outcome.residual = residual;
-        outcome.cost = value;
-        damping *= 0.1;
-        improved = true;
-        jacobian_current = false;
-        ++outcome.iterations;
-        if (change < 1e-7) {
-          outcome.stop_reason = "converged";
-          iteration = options.output_error_iterations;
-        }
-      } else {
-        damping = damping == 0.0 ? 1e-3 : damping * 10.0;
-      }
-    }
-    if (!improved) {
-      outcome.stop_reason = "converged";  // no step along the identifiable directions lowers the cost
+    // Statistically converged: the full Gauss–Newton step is under a tenth of a standard
+    // error (its Mahalanobis length under the residual variance), so further steps would
+    // only move the estimate within its own noise.
+    const Eigen::VectorXd full_step = -normal.ldlt().solve(gradient);
+    const double variance =
+        outcome.residual.squaredNorm() / std::max(1.0, static_cast<double>(outcome.residual.size() - r - n));
+    if (full_step.dot(normal * full_step) < 1e-2 * variance) {
+      outcome.stop_reason = "converged";
       break;
     }
+    Eigen::MatrixXd damped = normal;
+    damped.diagonal() += damping * normal.diagonal() + Eigen::VectorXd::Constant(r + n, 1e-14 * largest);
+    Eigen::VectorXd step = -damped.ldlt().solve(gradient);
+    // Trust region: no parameter moves by more than 10 % in one step.
+    const double biggest = (basis * step.head(r)).cwiseAbs().maxCoeff();
+    if (biggest > 0.1) step *= 0.1 / biggest;
+    Eigen::VectorXd candidate = outcome.theta;
+    for (int a = 0; a < p; ++a) candidate[free_index[a]] += scale[a] * (basis.row(a) * step.head(r))(0);
+    candidate = candidate.cwiseMax(setup.lower).cwiseMin(setup.upper);
+    const Eigen::VectorXd candidate_start = outcome.start + step.tail(n);
+    Eigen::VectorXd residual;
+    const double value = evaluate(candidate, candidate_start, &residual);
+    record(value, candidate);
+    if (value < outcome.cost) {
+      // Broyden: make the model reproduce the residual change this step actually produced.
+      // (Scale drift from the new θ is negligible within one step.)
+      if (residual.allFinite() && step.squaredNorm() > 0) {
+        reduced += ((residual - outcome.residual) - reduced * step) * step.transpose() / step.squaredNorm();
+      }
+      outcome.theta = candidate;
+      outcome.start = candidate_start;
+      outcome.residual = residual;
+      outcome.cost = value;
+      damping *= 0.1;
+      jacobian_fresh = false;
+      failures = 0;
+      ++outcome.iterations;
+    } else if (!jacobian_fresh) {
+      jacobian_at_current();  // the updated model misled the step: measure it again
+      jacobian_fresh = true;
+    } else {
+      damping = damping == 0.0 ? 1e-3 : damping * 10.0;
+      if (++failures >= 8) {
+        outcome.stop_reason = "converged";  // no step along the identifiable directions lowers the cost
+        break;
+      }
+    }
   }
-  if (!jacobian_current && !outcome.cancelled) jacobian_at_current();
+  // Standard errors need a measured Jacobian at the estimate, not an updated one.
+  if (!jacobian_fresh && !outcome.cancelled) jacobian_at_current();
   // ∂residual/∂θ = J_B Bᵀ D⁻¹ (B orthonormal); the start angles stay nuisance parameters.
   const Eigen::MatrixXd relative = reduced.leftCols(r) * basis.transpose();
   outcome.jacobian = Eigen::MatrixXd::Zero(outcome.residual.size(), outcome.theta.size());

@@ -24,7 +24,7 @@ OutputErrorCost::OutputErrorCost(const RobotModel& model, const Trajectory& data
   options_.dt = data.dt();
   options_.duration = data.t[data.samples() - 1] - data.t[0];
   options_.relative_tolerance = relative_tolerance;
-  options_.absolute_tolerance = relative_tolerance * 1e-2;
+  options_.absolute_tolerance = relative_tolerance;
   options_.q0 = data.q.row(0).transpose();
   options_.qd0 = Eigen::VectorXd::Zero(n);
 }

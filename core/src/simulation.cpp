@@ -352,6 +352,10 @@ void apply_measurement_noise(Trajectory& trajectory, const MeasurementNoise& noi
   if (!std::isfinite(noise.tau_sigma) || noise.tau_sigma < 0.0) {
     throw InputError("tau_sigma", "tau_sigma must be finite and non-negative, got " + number(noise.tau_sigma));
   }
+  if (!std::isfinite(noise.tau_relative_sigma) || noise.tau_relative_sigma < 0.0) {
+    throw InputError("tau_relative_sigma",
+                     "tau_relative_sigma must be finite and non-negative, got " + number(noise.tau_relative_sigma));
+  }
   if (noise.quantize_bits < 0 || noise.quantize_bits > 62) {
     throw InputError("quantize_bits", "quantize_bits must lie in 0..62 (0 = no quantisation), got " +
                                           std::to_string(noise.quantize_bits));
@@ -365,8 +369,15 @@ void apply_measurement_noise(Trajectory& trajectory, const MeasurementNoise& noi
   if (noise.q_sigma > 0.0) {
     for (Eigen::Index i = 0; i < trajectory.q.size(); ++i) q[i] += noise.q_sigma * gaussian(generator);
   }
-  if (noise.tau_sigma > 0.0) {
-    for (Eigen::Index i = 0; i < trajectory.tau.size(); ++i) tau[i] += noise.tau_sigma * gaussian(generator);
+  if (noise.tau_sigma > 0.0 || noise.tau_relative_sigma > 0.0) {
+    const Eigen::Index samples = trajectory.tau.rows();
+    for (Eigen::Index j = 0; j < trajectory.tau.cols(); ++j) {
+      // Each joint's noise: the absolute part plus a fraction of that joint's torque spread.
+      const auto column = trajectory.tau.col(j).array();
+      const double spread = samples > 0 ? std::sqrt((column - column.mean()).square().mean()) : 0.0;
+      const double sigma = std::hypot(noise.tau_sigma, noise.tau_relative_sigma * spread);
+      for (Eigen::Index i = 0; i < samples; ++i) tau[j * samples + i] += sigma * gaussian(generator);
+    }
   }
   if (noise.quantize_bits > 0) {
     const double resolution = 2.0 * std::numbers::pi / std::ldexp(1.0, noise.quantize_bits);

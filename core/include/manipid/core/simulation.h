@@ -61,10 +61,13 @@ struct SimulationOptions {
 struct MeasurementNoise {
   double q_sigma = 0.0;       ///< standard deviation of Gaussian noise on q, rad
   double tau_sigma = 0.0;     ///< standard deviation of Gaussian noise on τ, N·m
+  /// More noise on τ, as a fraction of each joint's torque standard deviation (0.01 = 1 %);
+  /// the two parts add in quadrature.
+  double tau_relative_sigma = 0.0;
   int quantize_bits = 0;      ///< encoder resolution 2π / 2^bits on q; 0 = none
   std::uint64_t seed = 1;
 
-  bool any() const { return q_sigma > 0 || tau_sigma > 0 || quantize_bits > 0; }
+  bool any() const { return q_sigma > 0 || tau_sigma > 0 || tau_relative_sigma > 0 || quantize_bits > 0; }
 };
 
 struct SimulationSummary {

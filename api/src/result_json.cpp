@@ -1,0 +1,87 @@
+// result_json.cpp — identification results to JSON (result_json.h).
+#include "manipid/api/result_json.h"
+
+#include <cmath>
+
+namespace manipid::api {
+namespace {
+
+nlohmann::json number(double value) { return std::isfinite(value) ? nlohmann::json(value) : nlohmann::json(nullptr); }
+
+nlohmann::json by_name(const std::vector<std::string>& names, const Eigen::VectorXd& values) {
+  nlohmann::json object = nlohmann::json::object();
+  for (std::size_t i = 0; i < names.size(); ++i) object[names[i]] = number(values[static_cast<Eigen::Index>(i)]);
+  return object;
+}
+
+const char* source_name(TorqueSource source) {
+  switch (source) {
+    case TorqueSource::reference: return "reference";
+    case TorqueSource::measured: return "measured";
+    default: return "automatic";
+  }
+}
+
+}  // namespace
+
+nlohmann::json result_to_json(const IdentificationResult& result) {
+  nlohmann::json free = nlohmann::json::array();
+  for (std::size_t i = 0; i < result.names.size(); ++i) {
+    if (result.free[i]) free.push_back(result.names[i]);
+  }
+  nlohmann::json matrix = nlohmann::json::array();
+  for (Eigen::Index a = 0; a < result.correlation.rows(); ++a) {
+    nlohmann::json row = nlohmann::json::array();
+    for (Eigen::Index b = 0; b < result.correlation.cols(); ++b) row.push_back(number(result.correlation(a, b)));
+    matrix.push_back(row);
+  }
+  const IdentifiabilityReport& report = result.identifiability;
+  nlohmann::json combinations = nlohmann::json::array();
+  for (const IdentifiableCombination& combination : report.combinations) {
+    combinations.push_back(
+        {{"name", combination.name}, {"value", number(combination.value)}, {"std_error", number(combination.std_error)}});
+  }
+  nlohmann::json singular = nlohmann::json::array();
+  for (Eigen::Index i = 0; i < report.singular_values.size(); ++i) singular.push_back(number(report.singular_values[i]));
+
+  return {
+      {"method", to_string(result.method)},
+      {"algorithm", result.algorithm},
+      {"estimates", by_name(result.names, result.estimate)},
+      {"std_errors", by_name(result.names, result.std_errors)},
+      {"initial", by_name(result.names, result.initial)},
+      {"free", free},
+      {"correlation", {{"parameters", free}, {"matrix", matrix}}},
+      {"identifiability",
+       {{"all_identifiable", report.all_identifiable()},
+        {"unidentifiable", report.unidentifiable},
+        {"combinations", combinations},
+        {"findings", report.findings},
+        {"singular_values", singular}}},
+      {"initial_cost", number(result.initial_cost)},
+      {"final_cost", number(result.final_cost)},
+      {"evaluations", result.evaluations},
+      {"simulations", result.simulations},
+      {"refinement_steps", result.refinement_steps},
+      {"wall_seconds", result.wall_seconds},
+      {"stop_reason", result.stop_reason},
+      {"cancelled", result.cancelled},
+      {"filter",
+       {{"half_length", result.filter.half_length},
+        {"band", result.filter.band},
+        {"dt", result.filter.dt},
+        {"automatic", result.filter_chosen_automatically}}},
+      {"torque_source", source_name(result.torque_source)},
+      {"warnings", result.warnings},
+  };
+}
+
+nlohmann::json history_to_json(const std::vector<HistoryRecord>& history, const std::vector<std::string>& names) {
+  nlohmann::json records = nlohmann::json::array();
+  for (const HistoryRecord& record : history) {
+    records.push_back({{"index", record.index}, {"cost", number(record.cost)}, {"parameters", by_name(names, record.theta)}});
+  }
+  return records;
+}
+
+}  // namespace manipid::api
