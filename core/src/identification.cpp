@@ -240,9 +240,11 @@ GaussNewtonOutcome gauss_newton_output_error(const OutputErrorCost& cost, const 
   // rank-one updates keep it current from the simulations the steps make anyway.
   jacobian_at_current();
   bool jacobian_fresh = true;
+  int updates_since_measured = 0;
   int failures = 0;
   double damping = 0.0;
-  for (int iteration = 0; iteration < options.output_error_iterations; ++iteration) {
+  for (int pass = 0; outcome.iterations < options.output_error_iterations && pass < 3 * options.output_error_iterations;
+       ++pass) {
     if (options.cancel && options.cancel->load()) {
       outcome.cancelled = true;
       outcome.stop_reason = "cancelled";
@@ -258,8 +260,13 @@ GaussNewtonOutcome gauss_newton_output_error(const OutputErrorCost& cost, const 
     const double variance =
         outcome.residual.squaredNorm() / std::max(1.0, static_cast<double>(outcome.residual.size() - r - n));
     if (full_step.dot(normal * full_step) < 1e-2 * variance) {
-      outcome.stop_reason = "converged";
-      break;
+      if (jacobian_fresh) {
+        outcome.stop_reason = "converged";
+        break;
+      }
+      jacobian_at_current();  // confirm with a measured Jacobian before stopping
+      jacobian_fresh = true;
+      continue;
     }
     Eigen::MatrixXd damped = normal;
     damped.diagonal() += damping * normal.diagonal() + Eigen::VectorXd::Constant(r + n, 1e-14 * largest);
@@ -275,6 +282,10 @@ GaussNewtonOutcome gauss_newton_output_error(const OutputErrorCost& cost, const 
     const double value = evaluate(candidate, candidate_start, &residual);
     record(value, candidate);
     if (value < outcome.cost) {
+      // How much of the reduction the linear model promised did the step deliver?
+      const double promised = outcome.residual.squaredNorm() - (outcome.residual + reduced * step).squaredNorm();
+      const double delivered = outcome.residual.squaredNorm() - residual.squaredNorm();
+      const bool model_was_good = promised > 0 && delivered >= 0.25 * promised;
       // Broyden: make the model reproduce the residual change this step actually produced.
       // (Scale drift from the new θ is negligible within one step.)
       if (residual.allFinite() && step.squaredNorm() > 0) {
@@ -288,9 +299,17 @@ GaussNewtonOutcome gauss_newton_output_error(const OutputErrorCost& cost, const 
       jacobian_fresh = false;
       failures = 0;
       ++outcome.iterations;
+      // An updated model that mispredicts, or that has drifted through several updates,
+      // only crawls along the narrow valleys of this problem: measure it again.
+      if (!model_was_good || ++updates_since_measured >= 3) {
+        jacobian_at_current();
+        jacobian_fresh = true;
+        updates_since_measured = 0;
+      }
     } else if (!jacobian_fresh) {
       jacobian_at_current();  // the updated model misled the step: measure it again
       jacobian_fresh = true;
+      damping = 0.0;
     } else {
       damping = damping == 0.0 ? 1e-3 : damping * 10.0;
       if (++failures >= 8) {
