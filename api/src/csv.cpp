@@ -1,1 +1,403 @@
-// placeholder: being written
+// csv.cpp — the CSV codec behind api/csv.h: strict parsing of numeric tables with
+// line-numbered errors, shortest round-trip formatting, and the trajectory column layout.
+//
+// Parsing works on string_views into the caller's text and converts with std::from_chars,
+// so no field allocates; values go into one row-major buffer (the text's layout) that is
+// transposed into the column-major table once at the end. Each row first takes a fast path
+// that only accepts plain finite numbers; anything else is re-read field by field by the
+// careful path, which either accepts it (a '+' sign, a value that underflows) or throws the
+// error that names the line and column.
+#include "manipid/api/csv.h"
+
+#include <algorithm>
+#include <charconv>
+#include <cmath>
+#include <cstdlib>
+#include <cstring>
+#include <string>
+#include <system_error>
+#include <unordered_set>
+
+namespace manipid::api {
+namespace {
+
+constexpr std::string_view structure_field = "csv";
+// Quoted field text is cut to this length so a runaway field cannot flood the message.
+constexpr std::size_t max_quoted_field = 40;
+
+std::string line_prefix(std::size_t line) { return "line " + std::to_string(line); }
+
+std::string quote_field(std::string_view text) {
+  // Built by append: g++ 12 -O3 warns falsely (-Wrestrict, PR 105329) on "'" + std::string.
+  std::string quoted(1, '\'');
+  quoted.append(text.substr(0, max_quoted_field));
+  quoted.append(text.size() > max_quoted_field ? "...'" : "'");
+  return quoted;
+}
+
+bool is_blank_character(char c) { return c == ' ' || c == '\t'; }
+
+std::string_view trim(std::string_view text) {
+  while (!text.empty() && is_blank_character(text.front())) text.remove_prefix(1);
+  while (!text.empty() && is_blank_character(text.back())) text.remove_suffix(1);
+  return text;
+}
+
+/// Splits text into lines on '\n', dropping a '\r' before it (CRLF files), and tracks
+/// the 1-based line number for messages.
+class LineReader {
+ public:
+  explicit LineReader(std::string_view text) : text_(text) {}
+
+  /// The next line that has something other than blanks on it, or false at the end.
+  bool next_nonblank(std::string_view& line, std::size_t& line_number) {
+    while (position_ < text_.size()) {
+      const std::size_t end = text_.find('\n', position_);
+      const std::size_t stop = end == std::string_view::npos ? text_.size() : end;
+      std::string_view current = text_.substr(position_, stop - position_);
+      position_ = end == std::string_view::npos ? text_.size() : end + 1;
+      ++line_number_;
+      if (!current.empty() && current.back() == '\r') current.remove_suffix(1);
+      if (trim(current).empty()) continue;
+      line = current;
+      line_number = line_number_;
+      return true;
+    }
+    return false;
+  }
+
+ private:
+  std::string_view text_;
+  std::size_t position_ = 0;
+  std::size_t line_number_ = 0;
+};
+
+std::size_t count_fields(std::string_view line) {
+  return static_cast<std::size_t>(std::count(line.begin(), line.end(), ',')) + 1;
+}
+
+/// Parses one trimmed field as a finite double, or explains why it is not one.
+/// Returns an empty string on success.
+std::string parse_number(std::string_view field, double& value) {
+  if (field.empty()) return "empty field (every field must be a number)";
+  std::string_view digits = field;
+  // from_chars rejects a leading '+', which spreadsheets and printf("%+g") produce.
+  if (digits.size() > 1 && digits.front() == '+' && digits[1] != '-' && digits[1] != '+') {
+    digits.remove_prefix(1);
+  }
+  const char* first = digits.data();
+  const char* last = first + digits.size();
+  const auto [end, error] = std::from_chars(first, last, value, std::chars_format::general);
+  if (error == std::errc::result_out_of_range && end == last) {
+    // from_chars reports underflow and overflow alike; tiny magnitudes are just zero.
+    const std::string copy(digits);
+    const double approximate = std::strtod(copy.c_str(), nullptr);
+    if (std::isfinite(approximate) && std::abs(approximate) < 1.0) {
+      value = approximate;
+      return {};
+    }
+    return quote_field(field) + " is out of range for a double";
+  }
+  if (error != std::errc() || end != last) return quote_field(field) + " is not a number";
+  if (!std::isfinite(value)) return quote_field(field) + " is not a finite number";
+  return {};
+}
+
+/// The common case: every field a plain finite number. Returns false on anything else
+/// (including a '+' sign or NaN), leaving the verdict to parse_row_careful.
+bool parse_row_fast(std::string_view line, double* out, std::size_t column_count) {
+  const char* position = line.data();
+  const char* const end = position + line.size();
+  for (std::size_t column = 0; column < column_count; ++column) {
+    while (position != end && is_blank_character(*position)) ++position;
+    const auto [stop, error] = std::from_chars(position, end, out[column], std::chars_format::general);
+    if (error != std::errc() || stop == position || !std::isfinite(out[column])) return false;
+    position = stop;
+    while (position != end && is_blank_character(*position)) ++position;
+    if (column + 1 < column_count) {
+      if (position == end || *position != ',') return false;
+      ++position;
+    }
+  }
+  return position == end;
+}
+
+/// Parses a row field by field with full checks; throws the InputError that describes the
+/// first problem (wrong field count first, then the leftmost bad field).
+void parse_row_careful(std::string_view line, std::size_t line_number,
+                       const std::vector<std::string>& columns, double* out) {
+  const std::size_t column_count = columns.size();
+  const std::size_t field_count = count_fields(line);
+  if (field_count != column_count) {
+    throw InputError(std::string(structure_field),
+                     line_prefix(line_number) + ": expected " + std::to_string(column_count) +
+                         " fields, got " + std::to_string(field_count));
+  }
+  std::size_t start = 0;
+  for (std::size_t column = 0; column < column_count; ++column) {
+    const std::size_t comma = line.find(',', start);
+    const std::size_t stop = comma == std::string_view::npos ? line.size() : comma;
+    const std::string problem = parse_number(trim(line.substr(start, stop - start)), out[column]);
+    if (!problem.empty()) {
+      throw InputError(columns[column],
+                       line_prefix(line_number) + ", column " + columns[column] + ": " + problem);
+    }
+    start = stop + 1;
+  }
+}
+
+void check_column_name(std::string_view name, std::size_t column, std::size_t line) {
+  if (name.empty()) {
+    throw InputError(std::string(structure_field),
+                     line_prefix(line) + ": column " + std::to_string(column + 1) +
+                         " of the header has an empty name");
+  }
+}
+
+std::vector<std::string> parse_header(std::string_view line, std::size_t line_number,
+                                      const CsvLimits& limits) {
+  const std::size_t field_count = count_fields(line);
+  if (field_count > limits.max_columns) {
+    throw InputError(std::string(structure_field),
+                     line_prefix(line_number) + ": " + std::to_string(field_count) +
+                         " columns exceed the limit of " + std::to_string(limits.max_columns));
+  }
+  std::vector<std::string> names;
+  names.reserve(field_count);
+  std::unordered_set<std::string_view> seen;
+  std::size_t start = 0;
+  for (std::size_t column = 0; column < field_count; ++column) {
+    const std::size_t comma = line.find(',', start);
+    const std::size_t stop = comma == std::string_view::npos ? line.size() : comma;
+    std::string_view name = trim(line.substr(start, stop - start));
+    // Some tools (R's write.csv) quote header names; accept a plain "name".
+    if (name.size() >= 2 && name.front() == '"' && name.back() == '"') {
+      name = trim(name.substr(1, name.size() - 2));
+    }
+    check_column_name(name, column, line_number);
+    if (!seen.insert(name).second) {
+      throw InputError(std::string(name), line_prefix(line_number) + ": duplicate column name " +
+                                              quote_field(name));
+    }
+    names.emplace_back(name);
+    start = stop + 1;
+  }
+  return names;
+}
+
+}  // namespace
+
+int CsvTable::column_index(std::string_view name) const {
+  const auto found = std::find(columns.begin(), columns.end(), name);
+  return found == columns.end() ? -1 : static_cast<int>(found - columns.begin());
+}
+
+Eigen::VectorXd CsvTable::column(std::string_view name) const {
+  const int index = column_index(name);
+  if (index < 0) throw InputError(std::string(name), "missing column " + std::string(name));
+  return data.col(index);
+}
+
+CsvTable parse_csv(std::string_view text, const CsvLimits& limits) {
+  // A UTF-8 byte-order mark (Excel's "CSV UTF-8") is not part of the first name.
+  if (text.substr(0, 3) == "\xEF\xBB\xBF") text.remove_prefix(3);
+
+  LineReader reader(text);
+  std::string_view line;
+  std::size_t line_number = 0;
+  if (!reader.next_nonblank(line, line_number)) {
+    throw InputError(std::string(structure_field), "empty input: expected a header line of column names");
+  }
+  CsvTable table;
+  table.columns = parse_header(line, line_number, limits);
+  const std::size_t column_count = table.columns.size();
+
+  // Row-major, as the text is laid out; the newline count bounds the number of rows.
+  std::vector<double> values;
+  const std::size_t line_estimate = static_cast<std::size_t>(std::count(text.begin(), text.end(), '\n')) + 1;
+  values.reserve(std::min(line_estimate, limits.max_rows) * column_count);
+
+  std::size_t row_count = 0;
+  while (reader.next_nonblank(line, line_number)) {
+    if (row_count == limits.max_rows) {
+      throw InputError(std::string(structure_field),
+                       line_prefix(line_number) + ": more than " + std::to_string(limits.max_rows) +
+                           " data rows (the limit)");
+    }
+    const std::size_t row_start = values.size();
+    values.resize(row_start + column_count);
+    if (!parse_row_fast(line, values.data() + row_start, column_count)) {
+      parse_row_careful(line, line_number, table.columns, values.data() + row_start);
+    }
+    ++row_count;
+  }
+
+  using RowMajor = Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor>;
+  table.data = Eigen::Map<const RowMajor>(values.data(), static_cast<Eigen::Index>(row_count),
+                                          static_cast<Eigen::Index>(column_count));
+  return table;
+}
+
+std::string format_csv(const CsvTable& table) {
+  const auto column_count = static_cast<std::size_t>(table.data.cols());
+  if (table.columns.size() != column_count) {
+    throw InputError(std::string(structure_field),
+                     "table has " + std::to_string(table.columns.size()) + " column names but " +
+                         std::to_string(column_count) + " data columns");
+  }
+  std::string text;
+  for (std::size_t column = 0; column < column_count; ++column) {
+    const std::string& name = table.columns[column];
+    if (name.empty() || name.find_first_of(",\r\n") != std::string::npos ||
+        trim(name).size() != name.size()) {
+      throw InputError(name, "column name " + quote_field(name) + " cannot be written to CSV");
+    }
+    if (column > 0) text += ',';
+    text += name;
+  }
+  text += '\n';
+
+  // 24 characters hold any shortest double ("-2.2250738585072014e-308" is the longest).
+  constexpr std::size_t max_number_length = 24;
+  text.reserve(text.size() + static_cast<std::size_t>(table.data.size()) * (max_number_length + 1));
+  char buffer[max_number_length + 8];
+  for (Eigen::Index row = 0; row < table.data.rows(); ++row) {
+    for (Eigen::Index column = 0; column < table.data.cols(); ++column) {
+      const double value = table.data(row, column);
+      if (!std::isfinite(value)) {
+        // The parser rejects NaN and Inf, so writing them would produce an unreadable file.
+        throw InputError(table.columns[static_cast<std::size_t>(column)],
+                         "row " + std::to_string(row + 1) + ", column " +
+                             table.columns[static_cast<std::size_t>(column)] + ": value is not finite");
+      }
+      const auto result = std::to_chars(buffer, buffer + sizeof buffer, value);
+      if (column > 0) text += ',';
+      text.append(buffer, result.ptr);
+    }
+    text += '\n';
+  }
+  return text;
+}
+
+namespace {
+
+/// Number of consecutive columns prefix1, prefix2, ... present in the table.
+int count_numbered(const CsvTable& table, std::string_view prefix) {
+  int count = 0;
+  while (table.column_index(std::string(prefix) + std::to_string(count + 1)) >= 0) ++count;
+  return count;
+}
+
+/// Largest k such that a column named prefix<k> exists (k ≥ 1 written without leading zeros),
+/// or 0. Finds strays beyond a gap, such as q4 with no q3.
+int highest_numbered(const CsvTable& table, std::string_view prefix) {
+  int highest = 0;
+  for (const std::string& name : table.columns) {
+    if (name.size() <= prefix.size() || name.compare(0, prefix.size(), prefix) != 0) continue;
+    const std::string_view digits = std::string_view(name).substr(prefix.size());
+    if (digits.front() == '0') continue;
+    int number = 0;
+    const auto [end, error] = std::from_chars(digits.data(), digits.data() + digits.size(), number);
+    if (error == std::errc() && end == digits.data() + digits.size()) highest = std::max(highest, number);
+  }
+  return highest;
+}
+
+std::string numbered(std::string_view prefix, int number) {
+  return std::string(prefix) + std::to_string(number);
+}
+
+/// The group prefix1..prefixN: its size, or 0 when absent. Throws when the group has a gap
+/// or, when `expected` > 0, a size other than `expected`.
+int numbered_group(const CsvTable& table, std::string_view prefix, int expected) {
+  const int count = count_numbered(table, prefix);
+  const int highest = highest_numbered(table, prefix);
+  if (highest > count) {
+    throw InputError(numbered(prefix, count + 1),
+                     "missing column " + numbered(prefix, count + 1) + " (column " +
+                         numbered(prefix, highest) + " is present; numbering must be consecutive from " +
+                         numbered(prefix, 1) + ")");
+  }
+  if (expected > 0 && count > 0 && count != expected) {
+    const std::string range = numbered(prefix, 1) + ".." + numbered(prefix, expected);
+    if (count < expected) {
+      throw InputError(numbered(prefix, count + 1),
+                       "missing column " + numbered(prefix, count + 1) + ": expected " + range +
+                           " to match q1..q" + std::to_string(expected) + ", got " +
+                           std::to_string(count) + " " + std::string(prefix) + " columns");
+    }
+    throw InputError(numbered(prefix, expected + 1),
+                     "column " + numbered(prefix, expected + 1) + " has no matching q" +
+                         std::to_string(expected + 1) + ": expected " + range + " to match q1..q" +
+                         std::to_string(expected));
+  }
+  return count;
+}
+
+Eigen::MatrixXd gather(const CsvTable& table, std::string_view prefix, int count) {
+  Eigen::MatrixXd result(table.data.rows(), count);
+  for (int joint = 0; joint < count; ++joint) {
+    result.col(joint) = table.data.col(table.column_index(numbered(prefix, joint + 1)));
+  }
+  return result;
+}
+
+}  // namespace
+
+Trajectory trajectory_from_csv(const CsvTable& table, bool require_torque) {
+  if (table.column_index("t") < 0) throw InputError("t", "missing column t");
+  const int joint_count = numbered_group(table, "q", 0);
+  if (joint_count == 0) throw InputError("q1", "missing column q1 (joint angles q1..qn)");
+  const int torque_count = numbered_group(table, "tau", joint_count);
+  if (require_torque && torque_count == 0) {
+    throw InputError("tau1", "missing column tau1 (joint torques tau1..tau" +
+                                 std::to_string(joint_count) + " are required)");
+  }
+  const int reference_count = numbered_group(table, "ref", joint_count);
+
+  Trajectory trajectory;
+  trajectory.t = table.column("t");
+  trajectory.q = gather(table, "q", joint_count);
+  trajectory.tau = gather(table, "tau", torque_count);
+  trajectory.ref = gather(table, "ref", reference_count);
+  trajectory.validate();
+  return trajectory;
+}
+
+CsvTable trajectory_to_csv(const Trajectory& trajectory) {
+  const int joint_count = trajectory.joint_count();
+  const Eigen::Index samples = trajectory.t.size();
+  const auto check_rows = [&](const Eigen::MatrixXd& block, const char* name) {
+    if (block.cols() > 0 && (block.rows() != samples || block.cols() != joint_count)) {
+      throw InputError(name, std::string("trajectory ") + name + " is " + std::to_string(block.rows()) +
+                                 "x" + std::to_string(block.cols()) + ", expected " +
+                                 std::to_string(samples) + "x" + std::to_string(joint_count));
+    }
+  };
+  check_rows(trajectory.q, "q");
+  check_rows(trajectory.tau, "tau");
+  check_rows(trajectory.ref, "ref");
+
+  CsvTable table;
+  table.columns.emplace_back("t");
+  for (int joint = 1; joint <= joint_count; ++joint) table.columns.push_back(numbered("q", joint));
+  if (trajectory.has_torque()) {
+    for (int joint = 1; joint <= joint_count; ++joint) table.columns.push_back(numbered("tau", joint));
+  }
+  if (trajectory.has_reference()) {
+    for (int joint = 1; joint <= joint_count; ++joint) table.columns.push_back(numbered("ref", joint));
+  }
+  table.data.resize(samples, static_cast<Eigen::Index>(table.columns.size()));
+  Eigen::Index column = 0;
+  table.data.col(column++) = trajectory.t;
+  table.data.middleCols(column, joint_count) = trajectory.q;
+  column += joint_count;
+  if (trajectory.has_torque()) {
+    table.data.middleCols(column, joint_count) = trajectory.tau;
+    column += joint_count;
+  }
+  if (trajectory.has_reference()) table.data.middleCols(column, joint_count) = trajectory.ref;
+  return table;
+}
+
+}  // namespace manipid::api

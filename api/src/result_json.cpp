@@ -6,10 +6,10 @@
 namespace manipid::api {
 namespace {
 
-nlohmann::json number(double value) { return std::isfinite(value) ? nlohmann::json(value) : nlohmann::json(nullptr); }
+nlohmann::ordered_json number(double value) { return std::isfinite(value) ? nlohmann::ordered_json(value) : nlohmann::ordered_json(nullptr); }
 
-nlohmann::json by_name(const std::vector<std::string>& names, const Eigen::VectorXd& values) {
-  nlohmann::json object = nlohmann::json::object();
+nlohmann::ordered_json by_name(const std::vector<std::string>& names, const Eigen::VectorXd& values) {
+  nlohmann::ordered_json object = nlohmann::ordered_json::object();
   for (std::size_t i = 0; i < names.size(); ++i) object[names[i]] = number(values[static_cast<Eigen::Index>(i)]);
   return object;
 }
@@ -24,24 +24,24 @@ const char* source_name(TorqueSource source) {
 
 }  // namespace
 
-nlohmann::json result_to_json(const IdentificationResult& result) {
-  nlohmann::json free = nlohmann::json::array();
+nlohmann::ordered_json result_to_json(const IdentificationResult& result) {
+  nlohmann::ordered_json free = nlohmann::ordered_json::array();
   for (std::size_t i = 0; i < result.names.size(); ++i) {
     if (result.free[i]) free.push_back(result.names[i]);
   }
-  nlohmann::json matrix = nlohmann::json::array();
+  nlohmann::ordered_json matrix = nlohmann::ordered_json::array();
   for (Eigen::Index a = 0; a < result.correlation.rows(); ++a) {
-    nlohmann::json row = nlohmann::json::array();
+    nlohmann::ordered_json row = nlohmann::ordered_json::array();
     for (Eigen::Index b = 0; b < result.correlation.cols(); ++b) row.push_back(number(result.correlation(a, b)));
     matrix.push_back(row);
   }
   const IdentifiabilityReport& report = result.identifiability;
-  nlohmann::json combinations = nlohmann::json::array();
+  nlohmann::ordered_json combinations = nlohmann::ordered_json::array();
   for (const IdentifiableCombination& combination : report.combinations) {
     combinations.push_back(
         {{"name", combination.name}, {"value", number(combination.value)}, {"std_error", number(combination.std_error)}});
   }
-  nlohmann::json singular = nlohmann::json::array();
+  nlohmann::ordered_json singular = nlohmann::ordered_json::array();
   for (Eigen::Index i = 0; i < report.singular_values.size(); ++i) singular.push_back(number(report.singular_values[i]));
 
   return {
@@ -76,8 +76,8 @@ nlohmann::json result_to_json(const IdentificationResult& result) {
   };
 }
 
-nlohmann::json history_to_json(const std::vector<HistoryRecord>& history, const std::vector<std::string>& names) {
-  nlohmann::json records = nlohmann::json::array();
+nlohmann::ordered_json history_to_json(const std::vector<HistoryRecord>& history, const std::vector<std::string>& names) {
+  nlohmann::ordered_json records = nlohmann::ordered_json::array();
   for (const HistoryRecord& record : history) {
     records.push_back({{"index", record.index}, {"cost", number(record.cost)}, {"parameters", by_name(names, record.theta)}});
   }

@@ -1,2 +1,287 @@
 #!/usr/bin/env bash
-echo "cli tests: not yet written"; exit 0
+# cli_test.sh — whole-process tests of the `manipid` command line, driven as a user would:
+# the real binary, real files in a temporary directory. Run by ctest as
+#     bash cli_test.sh /path/to/manipid
+# Prints one line per check and a final "N passed, M failed"; exits non-zero on any failure.
+set -u
+
+manipid=${1:?usage: bash cli_test.sh /path/to/manipid}
+[[ -x $manipid ]] || { echo "cli_test.sh: $manipid is not an executable"; exit 2; }
+manipid=$(realpath "$manipid")  # the tests run inside a temporary directory
+work=$(mktemp -d)
+trap 'rm -rf "$work"' EXIT
+cd "$work" || exit 2
+
+passed=0
+failed=0
+pass() { passed=$((passed + 1)); echo "ok   $1"; }
+fail() { failed=$((failed + 1)); echo "FAIL $1${2:+: $2}"; }
+# check NAME COMMAND...: passes when the command succeeds.
+check() {
+  local name=$1
+  shift
+  if "$@"; then pass "$name"; else fail "$name"; fi
+}
+
+# expect_error NAME STATUS TEXT COMMAND...: the command must exit with STATUS and print exactly
+# one line, "manipid: error: ...", that contains TEXT (a fixed string), and nothing on stdout.
+expect_error() {
+  local name=$1 status=$2 text=$3
+  shift 3
+  "$@" >stdout.txt 2>stderr.txt
+  local actual=$?
+  local lines
+  lines=$(wc -l <stderr.txt)
+  if [[ $actual -ne $status ]]; then
+    fail "$name" "exit status $actual, expected $status; stderr: $(cat stderr.txt)"
+  elif [[ $lines -ne 1 ]] || ! grep -q '^manipid: error: ' stderr.txt; then
+    fail "$name" "expected one 'manipid: error:' line, got: $(cat stderr.txt)"
+  elif ! grep -qF -- "$text" stderr.txt; then
+    fail "$name" "message lacks '$text': $(cat stderr.txt)"
+  elif [[ -s stdout.txt ]]; then
+    fail "$name" "wrote to stdout on failure"
+  else
+    pass "$name"
+  fi
+}
+
+# differ A B: both files have data and are not identical.
+differ() { [[ -s $1 && -s $2 ]] && ! cmp -s "$1" "$2"; }
+
+# near VALUE EXPECTED TOLERANCE: |VALUE − EXPECTED| ≤ TOLERANCE.
+near() {
+  [[ -n $1 ]] || return 1
+  awk -v v="$1" -v e="$2" -v tol="$3" 'BEGIN { d = v - e; if (d < 0) d = -d; exit !(d <= tol) }'
+}
+
+# column FILE NAME: the values of a named CSV column, one per line.
+column() {
+  awk -F, -v name="$2" 'NR == 1 { for (i = 1; i <= NF; i++) if ($i == name) c = i; next }
+                        c { print $c }' "$1"
+}
+
+# field FILE ROW NAME: one value (ROW counts data rows from 1).
+field() { column "$1" "$3" | sed -n "$2p"; }
+
+# all_near FILE NAME EXPECTED TOLERANCE: every value of the column within tolerance.
+all_near() {
+  column "$1" "$2" | awk -v e="$3" -v tol="$4" '
+    { d = $1 - e; if (d < 0) d = -d; if (d > tol) bad++; n++ }
+    END { exit !(n > 0 && bad == 0) }'
+}
+
+header="t,q1,q2,q3,q4,tau1,tau2,tau3,tau4,ref1,ref2,ref3,ref4"
+
+# ---- version and help ----------------------------------------------------------------------
+
+check "--version prints the version" bash -c "'$manipid' --version | grep -Eq '^manipid [0-9]+\.[0-9]+\.[0-9]+$'"
+check "--help lists the commands" bash -c "'$manipid' --help | grep -q simulate && '$manipid' --help | grep -q torque && '$manipid' --help | grep -q filter"
+check "simulate --help lists its options" bash -c "'$manipid' simulate --help | grep -q -- --noise-q"
+
+# ---- simulate: the paper's scenario ---------------------------------------------------------
+
+"$manipid" simulate --out run.csv 2>summary.txt
+check "simulate exits 0" test $? -eq 0
+check "simulate header" test "$(head -1 run.csv)" = "$header"
+check "simulate writes 9,701 data rows (0..9.7 s every 1 ms)" test "$(($(wc -l <run.csv) - 1))" -eq 9701
+check "simulate starts at rest at t = 0" test "$(sed -n 2p run.csv)" = "0,0,0,0,0,0,0,0,0,0,0,0,0"
+check "simulate ends at t = 9.7" near "$(field run.csv 9701 t)" 9.7 1e-9
+check "simulate: t steps by 0.001" near "$(field run.csv 2 t)" 0.001 1e-15
+check "simulate: q1 has followed its 0.5 rad step" near "$(field run.csv 9701 q1)" 0.5 0.01
+check "simulate: the reference ends at 0.5 rad" near "$(field run.csv 9701 ref4)" 0.5 1e-9
+check "simulate prints a one-line summary" bash -c "test \$(wc -l <summary.txt) -eq 1 && grep -q '9701 samples' summary.txt"
+
+"$manipid" simulate >stdout.csv 2>/dev/null
+check "simulate without --out writes the same CSV to stdout" cmp -s run.csv stdout.csv
+"$manipid" simulate --out - >dash.csv 2>/dev/null
+check "simulate --out - writes to stdout" cmp -s run.csv dash.csv
+
+# ---- simulate: measurement noise is reproducible ---------------------------------------------
+
+noise=(--duration 2 --noise-q 1e-4 --noise-tau 0.5)
+"$manipid" simulate "${noise[@]}" --seed 7 --out noise_a.csv 2>/dev/null
+"$manipid" simulate "${noise[@]}" --seed 7 --out noise_b.csv 2>/dev/null
+"$manipid" simulate "${noise[@]}" --seed 8 --out noise_c.csv 2>/dev/null
+"$manipid" simulate --duration 2 --out clean.csv 2>/dev/null
+check "noise: same seed, identical files" cmp -s noise_a.csv noise_b.csv
+check "noise: different seed, different files" differ noise_a.csv noise_c.csv
+check "noise: differs from the clean run" differ noise_a.csv clean.csv
+check "noise: 2001 rows for --duration 2" test "$(($(wc -l <noise_a.csv) - 1))" -eq 2001
+check "noise: t and ref are untouched" \
+  cmp -s <(cut -d, -f1,10-13 noise_a.csv) <(cut -d, -f1,10-13 clean.csv)
+
+"$manipid" simulate --duration 1 --quantize-q 12 --seed 3 --out quantized.csv 2>/dev/null
+check "--quantize-q 12: q is a multiple of 2*pi/4096" bash -c "
+  awk -F, 'NR > 1 { for (j = 2; j <= 5; j++) { k = \$j / (6.283185307179586 / 4096);
+                    r = k - int(k + (k < 0 ? -0.5 : 0.5)); if (r < 0) r = -r; if (r > 1e-6) bad++ } }
+           END { exit bad > 0 }' quantized.csv"
+
+# ---- simulate: parameters and kinetic energy --------------------------------------------------
+
+"$manipid" simulate --duration 2 --param m2=24 --out m2.csv 2>/dev/null
+check "--param m2=24 changes the output" differ m2.csv clean.csv
+"$manipid" simulate --duration 2 --param m2=25,l3=0.6 --param m4=5 --out same.csv 2>/dev/null
+check "--param with the true values changes nothing" cmp -s same.csv clean.csv
+"$manipid" simulate --duration 2 --kinetic-energy paper --out paper.csv 2>/dev/null
+check "--kinetic-energy paper changes the output" differ paper.csv clean.csv
+
+# ---- torque: gravity at rest, checked by hand ---------------------------------------------------
+# cedro2009 at q = 0: links 2..4 lie along the base x axis in the vertical x-z plane, gravity is
+# (0,0,+9.81) with V = -sum m_k g z_k, so tau = dV/dq:
+#   tau1 = 0
+#   tau2 = -g [(m2+m3+m4) l2 + (m3+m4) l3 + m4 l4] = -9.81 (45*0.8 + 20*0.6 + 5*0.2) = -480.69
+#   tau3 = -g [(m3+m4) l3 + m4 l4]                 = -9.81 (20*0.6 + 5*0.2)          = -127.53
+#   tau4 = -g m4 l4                                = -9.81 (5*0.2)                   = -9.81
+# Row 2 adds qdd4 = 1 rad/s^2: tau += M(0) e4 with M44 = m4 l4^2 (1 + 1/12) = 0.21667,
+# M34 = m4 l4 (l3 + l4) = 0.8, M24 = m4 l4 (l2 + l3 + l4) = 1.6 (complete kinetic energy; the
+# paper's variant drops the cross terms M24, M34). Row 3: q2 = pi/2 points the arm up: no torque.
+cat >states.csv <<'EOF'
+t,q1,q2,q3,q4,qd1,qd2,qd3,qd4,qdd1,qdd2,qdd3,qdd4
+0,0,0,0,0,0,0,0,0,0,0,0,0
+0.001,0,0,0,0,0,0,0,0,0,0,0,1
+0.002,0.3,1.5707963267948966,0,0,0,0,0,0,0,0,0,0
+EOF
+"$manipid" torque --in states.csv --out tau.csv 2>/dev/null
+check "torque exits 0" test $? -eq 0
+check "torque header keeps t" test "$(head -1 tau.csv)" = "t,tau1,tau2,tau3,tau4"
+check "torque passes t through" test "$(column tau.csv t | tr '\n' ' ')" = "0 0.001 0.002 "
+check "torque at rest: tau1 = 0" near "$(field tau.csv 1 tau1)" 0 1e-9
+check "torque at rest: tau2 = -480.69" near "$(field tau.csv 1 tau2)" -480.69 1e-9
+check "torque at rest: tau3 = -127.53" near "$(field tau.csv 1 tau3)" -127.53 1e-9
+check "torque at rest: tau4 = -9.81" near "$(field tau.csv 1 tau4)" -9.81 1e-9
+check "torque with qdd4 = 1: tau2 = -480.69 + 1.6" near "$(field tau.csv 2 tau2)" -479.09 1e-9
+check "torque with qdd4 = 1: tau3 = -127.53 + 0.8" near "$(field tau.csv 2 tau3)" -126.73 1e-9
+check "torque with qdd4 = 1: tau4 = -9.81 + 0.216667" near "$(field tau.csv 2 tau4)" -9.593333333333333 1e-9
+check "torque with the arm vertical: tau2 = 0" near "$(field tau.csv 3 tau2)" 0 1e-9
+"$manipid" torque --in states.csv --kinetic-energy paper --out tau_paper.csv 2>/dev/null
+check "torque, paper kinetic energy: no cross term in tau3" near "$(field tau_paper.csv 2 tau3)" -127.53 1e-9
+"$manipid" torque --in states.csv --param m2=24 --out tau_m2.csv 2>/dev/null
+check "torque --param m2=24: tau2 = -9.81 * 48.2" near "$(field tau_m2.csv 1 tau2)" -472.842 1e-9
+cut -d, -f2- states.csv | "$manipid" torque --in - >tau_stdin.csv 2>/dev/null
+check "torque reads stdin; no t column in, none out" test "$(head -1 tau_stdin.csv)" = "tau1,tau2,tau3,tau4"
+check "torque from stdin matches" cmp -s <(cut -d, -f2- tau.csv) tau_stdin.csv
+
+# ---- simulate -> filter -> torque: the input-error method's premise ---------------------------
+# With filtered signals, tau(q^f, qd^f, qdd^f) ≈ tau^f (the paper's eq. 6): within 1% rms.
+"$manipid" filter --order 0 --in run.csv --out f0.csv 2>/dev/null
+"$manipid" filter --order 1 --in run.csv --out f1.csv 2>/dev/null
+"$manipid" filter --order 2 --in run.csv --out f2.csv 2>/dev/null
+paste -d, <(cut -d, -f1-5 f0.csv) <(cut -d, -f2-5 f1.csv | sed '1s/q/qd/g') \
+  <(cut -d, -f2-5 f2.csv | sed '1s/q/qdd/g') >filtered_states.csv
+"$manipid" torque --in filtered_states.csv --out filtered_tau.csv 2>/dev/null
+check "filtered round trip: t aligned" cmp -s <(cut -d, -f1 filtered_tau.csv) <(cut -d, -f1 f0.csv)
+check "filtered round trip: inverse dynamics of filtered motion matches filtered torque" bash -c "
+  paste -d, <(cut -d, -f2-5 filtered_tau.csv) <(cut -d, -f6-9 f0.csv) | awk -F, '
+    NR > 1 { for (j = 1; j <= 4; j++) { d = \$j - \$(j + 4); e[j] += d * d; s[j] += \$(j + 4)^2 } }
+    END { for (j = 1; j <= 4; j++) if (sqrt(e[j] / s[j]) > 0.01) exit 1 }'"
+
+# ---- filter: ramps and parabolas ------------------------------------------------------------
+awk 'BEGIN { print "t,x,y,c"; for (i = 0; i < 500; i++) { t = i * 0.001; printf "%.3f,%.17g,%.17g,4.5\n", t, 3 * t + 1, t * t } }' >ramp.csv
+"$manipid" filter --order 1 --half-length 20 --band 0.5 --in ramp.csv --out d1.csv 2>/dev/null
+check "filter exits 0" test $? -eq 0
+check "filter keeps the column names" test "$(head -1 d1.csv)" = "t,x,y,c"
+check "filter: 500 rows in, 500 - 2*20 - 1 = 459 out" test "$(($(wc -l <d1.csv) - 1))" -eq 459
+check "filter: t of output row 1 is input t[M] = 0.02" test "$(field d1.csv 1 t)" = "0.02"
+check "filter: t of the last output row is t[M + 458] = 0.478" test "$(field d1.csv 459 t)" = "0.478"
+check "filter --order 1 of 3t + 1 is 3" all_near d1.csv x 3 1e-9
+check "filter --order 1 of t^2 is 2t" bash -c "
+  cut -d, -f1,3 d1.csv |
+  awk -F, 'NR > 1 { d = \$2 - 2 * \$1; if (d < 0) d = -d; if (d > 1e-9) bad++ } END { exit bad > 0 }'"
+check "filter --order 1 of a constant is 0" all_near d1.csv c 0 1e-9
+"$manipid" filter --order 2 --half-length 20 --band 0.5 --in ramp.csv --out d2.csv 2>/dev/null
+check "filter --order 2 of t^2 is 2" all_near d2.csv y 2 1e-6
+"$manipid" filter --order 0 --half-length 20 --band 0.5 --in ramp.csv --out d0.csv 2>/dev/null
+check "filter --order 0 keeps a constant" all_near d0.csv c 4.5 1e-12
+"$manipid" filter --order 1 --half-length 20 --band 0.5 --dt 0.001 --in - <ramp.csv >d1_stdin.csv 2>/dev/null
+check "filter reads stdin, --dt consistent with t" cmp -s d1.csv d1_stdin.csv
+cut -d, -f2 ramp.csv >x_only.csv
+"$manipid" filter --order 1 --half-length 20 --band 0.5 --dt 0.001 --in x_only.csv --out x_d1.csv 2>/dev/null
+check "filter without t uses --dt" all_near x_d1.csv x 3 1e-9
+check "filter without t writes no t" test "$(head -1 x_d1.csv)" = "x"
+
+# ---- errors: one line, the problem named, status 2 (1 when output cannot be written) ---------
+printf 'q1,q2,q3,q4,qd1,qd2,qd4,qdd1,qdd2,qdd3,qdd4\n0,0,0,0,0,0,0,0,0,0,0\n' >no_qd3.csv
+expect_error "missing column" 2 "no_qd3.csv: missing column qd3" "$manipid" torque --in no_qd3.csv
+{ head -12 run.csv; echo "1,2,3,4,5,6,7,8,9,10,11,12"; } >ragged.csv
+expect_error "ragged row" 2 "ragged.csv line 13: expected 13 fields, got 12" "$manipid" filter --order 0 --half-length 2 --in ragged.csv
+{ head -40 run.csv; echo "0.039,0,0,0,0,0,0,0,abc,0,0,0,0"; } >text.csv
+expect_error "non-number" 2 "text.csv line 41, column tau4: 'abc' is not a number" "$manipid" filter --order 0 --half-length 2 --in text.csv
+printf 't,x\n0,1\n0.001,nan\n' >nan.csv
+expect_error "NaN field" 2 "nan.csv line 3, column x: 'nan' is not a finite number" "$manipid" filter --order 0 --in nan.csv
+printf 't,x\n0,1\n0.001,\n' >empty_field.csv
+expect_error "empty field" 2 "line 3, column x: empty field" "$manipid" filter --order 0 --in empty_field.csv
+printf 't,x,x\n0,1,2\n' >duplicate.csv
+expect_error "duplicate column" 2 "duplicate column name 'x'" "$manipid" filter --order 0 --in duplicate.csv
+: >empty.csv
+expect_error "empty file" 2 "empty.csv: empty input" "$manipid" filter --order 0 --in empty.csv
+printf 'q1,q2,q3,q4,q5,qd1,qd2,qd3,qd4,qdd1,qdd2,qdd3,qdd4\n0,0,0,0,0,0,0,0,0,0,0,0,0\n' >five.csv
+expect_error "too many joints for the robot" 2 "unexpected column q5" "$manipid" torque --in five.csv
+expect_error "unknown preset" 2 "unknown preset 'puma560'" "$manipid" simulate --preset puma560
+expect_error "unknown preset (torque)" 2 "--preset" "$manipid" torque --preset nope --in states.csv
+expect_error "unknown parameter" 2 "unknown parameter 'm5'" "$manipid" simulate --param m5=3
+expect_error "parameter value not a number" 2 "'abc' is not a finite number" "$manipid" simulate --param m2=abc
+expect_error "parameter without value" 2 "expected NAME=VALUE" "$manipid" torque --param m2 --in states.csv
+expect_error "negative mass" 2 "m2 must not be negative" "$manipid" simulate --param m2=-1
+expect_error "unknown kinetic energy" 2 "unknown kinetic energy 'exact'" "$manipid" simulate --kinetic-energy exact
+expect_error "too few samples for the filter" 2 "needs at least 2M+2 = 202 rows, got 50" \
+  "$manipid" filter --order 1 --in <(head -51 ramp.csv)
+expect_error "unreadable file" 2 "cannot read missing.csv: No such file or directory" "$manipid" filter --order 1 --in missing.csv
+expect_error "directory as input" 2 "Is a directory" "$manipid" torque --in "$work"
+expect_error "unwritable output" 1 "cannot write no/such/dir/out.csv" "$manipid" simulate --duration 0.01 --out no/such/dir/out.csv
+expect_error "negative noise" 2 "--noise-q: expected a number >= 0, got '-1'" "$manipid" simulate --noise-q -1
+expect_error "NaN option" 2 "--noise-tau: expected a number >= 0, got 'nan'" "$manipid" simulate --noise-tau nan
+expect_error "quantization out of range" 2 "--quantize-q: expected an integer in 0..62" "$manipid" simulate --quantize-q 63
+expect_error "negative seed" 2 "--seed" "$manipid" simulate --seed -1
+expect_error "bad tolerance text" 2 "--rtol: expected a positive number, got 'abc'" "$manipid" simulate --rtol abc
+expect_error "tolerance out of range" 2 "--rtol: relative_tolerance must lie in" "$manipid" simulate --rtol 2
+expect_error "duration shorter than a sample" 2 "--duration" "$manipid" simulate --duration 0.0001
+expect_error "filter order 3" 2 "--order: expected an integer in 0..2, got '3'" "$manipid" filter --order 3 --in ramp.csv
+expect_error "filter order missing" 2 "--order is required" "$manipid" filter --in ramp.csv
+expect_error "filter band beyond pi" 2 "--band" "$manipid" filter --order 1 --band 4 --in ramp.csv
+expect_error "filter half-length 1" 2 "--half-length" "$manipid" filter --order 1 --half-length 1 --in ramp.csv
+expect_error "filter --dt contradicts t" 2 "--dt 0.002 s does not match the spacing of the t column" \
+  "$manipid" filter --order 1 --half-length 20 --dt 0.002 --in ramp.csv
+expect_error "filter without t or --dt" 2 "--dt is required when the input has no t column" \
+  "$manipid" filter --order 1 --half-length 20 --in x_only.csv
+printf 't,x\n0,1\n0.001,1\n0.003,1\n0.004,1\n0.005,1\n0.006,1\n0.007,1\n' >jumpy.csv
+expect_error "filter: non-uniform t" 2 "jumpy.csv: t is not uniformly sampled at data row 3" \
+  "$manipid" filter --order 0 --half-length 2 --in jumpy.csv
+expect_error "filter: only t" 2 "no columns to filter" "$manipid" filter --order 0 --in <(printf 't\n0\n')
+expect_error "torque without --in" 2 "--in is required" "$manipid" torque
+expect_error "unknown option" 2 "--bogus" "$manipid" simulate --bogus
+expect_error "unknown command" 2 "unknown command 'frobnicate'" "$manipid" frobnicate
+expect_error "no command" 2 "no command given" "$manipid"
+
+# ---- identify --------------------------------------------------------------------------------
+"$manipid" simulate --out paper.csv 2>/dev/null
+"$manipid" identify paper.csv --preset cedro2009 --history history.csv >table.txt 2>identify.err
+check "identify: exit 0" [ $? -eq 0 ]
+check "identify: m1 and l1 not printed as numbers" grep -Eq '^m1 +50.1 +not alone' table.txt
+check "identify: reports m1*l1^2" grep -q 'enter the model only as m1\*l1\^2' table.txt
+check "identify: the filter was chosen from the data" grep -q 'chosen from the data' table.txt
+m2=$(awk '$1 == "m2" { print $3 }' table.txt)
+check "identify: m2 within 0.1 % of 25 (noise-free, complete model)" near "$m2" 25 0.025
+check "identify: history CSV has the header" grep -q '^index,cost,m1,m2,m3,m4,l1,l2,l3,l4$' history.csv
+check "identify: history starts at evaluation 0" near "$(sed -n 2p history.csv | cut -d, -f1)" 0 0
+"$manipid" identify paper.csv --json --half-length 100 --band 0.2 --algorithm LD_SLSQP >result.json
+check "identify --json: estimates by name" grep -q '"m2": 24.9' result.json
+check "identify --json: m1 has no standard error" grep -q '"m1": null' result.json
+check "identify --json: the filter it used" grep -q '"band": 0.2' result.json
+"$manipid" simulate --kinetic-energy paper --out paper_model.csv 2>/dev/null
+"$manipid" identify paper_model.csv --kinetic-energy paper --half-length 100 --band 0.2 \
+  --torque-source reference --json >paper.json
+cost=$(grep -o '"final_cost": [0-9.e+-]*' paper.json | awk '{print $2}')
+check "identify: reproduces the paper's cost (J <= 0.0223076)" awk -v c="$cost" 'BEGIN { exit !(c <= 0.0223076) }'
+expect_error "identify: unknown free parameter" 2 "unknown parameter 'm9' in the free list" \
+  "$manipid" identify paper.csv --free m2,m9
+expect_error "identify: bad initial value" 2 "--init m2=abc: 'abc' is not a finite number" \
+  "$manipid" identify paper.csv --init m2=abc
+expect_error "identify: wrong gain count" 2 "--kp needs 4 comma-separated values" \
+  "$manipid" identify paper.csv --kp 1,2,3
+expect_error "identify: too few samples for the filter" 2 "the data has" \
+  "$manipid" identify <(head -100 paper.csv) --half-length 100 --band 0.2
+expect_error "identify: output-error without ref" 2 "no ref columns" \
+  "$manipid" identify <(cut -d, -f1-9 paper.csv) --method output-error
+
+echo "$passed passed, $failed failed"
+[[ $failed -eq 0 ]]

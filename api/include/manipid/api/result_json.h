@@ -23,8 +23,8 @@
 
 namespace manipid::api {
 
-nlohmann::json result_to_json(const IdentificationResult& result);
+nlohmann::ordered_json result_to_json(const IdentificationResult& result);
 /// History records as {"index", "cost", "parameters": {"m1": ...}} objects.
-nlohmann::json history_to_json(const std::vector<HistoryRecord>& history, const std::vector<std::string>& names);
+nlohmann::ordered_json history_to_json(const std::vector<HistoryRecord>& history, const std::vector<std::string>& names);
 
 }  // namespace manipid::api

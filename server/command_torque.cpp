@@ -1,0 +1,91 @@
+// command_torque.cpp — `manipid torque`: inverse dynamics τ(q, q̇, q̈, θ) row by row for a
+// CSV of states with columns q1..qn, qd1..qdn, qdd1..qddn; writes [t,] tau1..taun.
+#include "commands.h"
+
+#include "manipid/api/csv.h"
+#include "manipid/core/dynamics.h"
+
+#include <cstdio>
+#include <string>
+#include <vector>
+
+namespace manipid::server {
+namespace {
+
+/// Column indices of prefix1..prefixN; throws InputError for a missing column or for a
+/// column beyond the robot's joints (q5 for a 4-joint robot is a wrong robot, not extra data).
+std::vector<int> joint_columns(const api::CsvTable& table, const std::string& prefix, int joint_count,
+                               const std::string& needs) {
+  std::vector<int> indices;
+  for (int joint = 1; joint <= joint_count; ++joint) {
+    const std::string name = prefix + std::to_string(joint);
+    const int index = table.column_index(name);
+    if (index < 0) throw InputError(name, "missing column " + name + " (" + needs + ")");
+    indices.push_back(index);
+  }
+  const std::string beyond = prefix + std::to_string(joint_count + 1);
+  if (table.column_index(beyond) >= 0) {
+    throw InputError(beyond, "unexpected column " + beyond + " (" + needs + ")");
+  }
+  return indices;
+}
+
+}  // namespace
+
+CLI::App* add_torque_command(CLI::App& app, TorqueOptions& options) {
+  CLI::App* command = app.add_subcommand(
+      "torque",
+      "Inverse dynamics: read q1..qn, qd1..qdn, qdd1..qddn (rad, rad/s, rad/s^2) per row and "
+      "write tau1..taun (N*m); a t column is passed through.");
+  add_robot_options(*command, options.robot);
+  command->add_option("--in", options.input, "Input CSV file of states, '-' for stdin")->required();
+  command->add_option("--out", options.output, "Output CSV file, '-' for stdout")->capture_default_str();
+  return command;
+}
+
+int run_torque(const TorqueOptions& options) {
+  const Robot robot = resolve_robot(options.robot);
+  const RobotModel& model = robot.preset.model;
+  const int joint_count = model.joint_count();
+  const api::CsvTable states = read_table(options.input);
+
+  const std::string last = std::to_string(joint_count);
+  const std::string needs = "the " + std::to_string(joint_count) + "-joint " + robot.preset.name +
+                            " robot needs q1..q" + last + ", qd1..qd" + last + ", qdd1..qdd" + last;
+  std::vector<int> q_columns, qd_columns, qdd_columns;
+  try {
+    q_columns = joint_columns(states, "q", joint_count, needs);
+    qd_columns = joint_columns(states, "qd", joint_count, needs);
+    qdd_columns = joint_columns(states, "qdd", joint_count, needs);
+  } catch (const InputError& error) {
+    rethrow_with_source(error, input_name(options.input));
+  }
+  const int time_column = states.column_index("t");
+
+  api::CsvTable torques;
+  if (time_column >= 0) torques.columns.emplace_back("t");
+  for (int joint = 1; joint <= joint_count; ++joint) torques.columns.push_back("tau" + std::to_string(joint));
+  const int first_torque = time_column >= 0 ? 1 : 0;
+  torques.data.resize(states.rows(), static_cast<Eigen::Index>(torques.columns.size()));
+
+  // One workspace for all rows: inverse_dynamics does not allocate once it exists.
+  DynamicsWorkspace workspace(model);
+  Eigen::VectorXd q(joint_count), qd(joint_count), qdd(joint_count), tau(joint_count);
+  for (int row = 0; row < states.rows(); ++row) {
+    for (int joint = 0; joint < joint_count; ++joint) {
+      q[joint] = states.data(row, q_columns[joint]);
+      qd[joint] = states.data(row, qd_columns[joint]);
+      qdd[joint] = states.data(row, qdd_columns[joint]);
+    }
+    inverse_dynamics(model, robot.parameters, workspace, q, qd, qdd, tau);
+    if (time_column >= 0) torques.data(row, 0) = states.data(row, time_column);
+    torques.data.row(row).segment(first_torque, joint_count) = tau.transpose();
+  }
+
+  write_table(options.output, torques);
+  std::fprintf(stderr, "manipid torque: %s, %s kinetic energy: %d rows -> %s\n", robot.preset.name.c_str(),
+               to_string(model.kinetic_energy), states.rows(), output_name(options.output).c_str());
+  return exit_success;
+}
+
+}  // namespace manipid::server
