@@ -87,6 +87,9 @@ void print_table(const IdentificationResult& result, const Parameters& truth) {
   std::printf(" in %.3f s; stopped: %s", result.wall_seconds, result.stop_reason.c_str());
   if (result.refinement_steps) std::printf(" (+%d Gauss-Newton polish steps)", result.refinement_steps);
   std::printf("\n");
+  if (result.method == IdentificationMethod::two_stage) {
+    std::printf("(the first cost is input-error's, N*m^2; the final one the output error, rad^2)\n");
+  }
   if (!result.identifiability.findings.empty()) {
     std::printf("\nidentifiability:\n");
     for (const std::string& finding : result.identifiability.findings) std::printf("  - %s\n", finding.c_str());

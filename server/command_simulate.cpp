@@ -19,6 +19,7 @@ std::string option_for_field(const std::string& field) {
   if (field == "duration") return "--duration";
   if (field == "q_sigma") return "--noise-q";
   if (field == "tau_sigma") return "--noise-tau";
+  if (field == "tau_relative_sigma") return "--noise-tau-relative";
   if (field == "quantize_bits") return "--quantize-q";
   return "simulate";
 }
@@ -35,6 +36,10 @@ CLI::App* add_simulate_command(CLI::App& app, SimulateOptions& options) {
       ->check(non_negative_number());
   command->add_option("--noise-tau", options.noise_tau, "Gaussian noise on tau, standard deviation in N*m")
       ->check(non_negative_number());
+  command
+      ->add_option("--noise-tau-relative", options.noise_tau_relative,
+                   "More Gaussian noise on tau, as a fraction of each joint's torque standard deviation (0.01 = 1 %)")
+      ->check(non_negative_number());
   command->add_option("--quantize-q", options.quantize_bits, "Encoder resolution 2*pi/2^BITS on q (0 = none)")
       ->check(integer_between(0, 62));
   command->add_option("--seed", options.seed, "Seed of the measurement noise (same seed, same data)")
@@ -46,7 +51,7 @@ CLI::App* add_simulate_command(CLI::App& app, SimulateOptions& options) {
       ->check(positive_number());
   command
       ->add_option("--atol", options.absolute_tolerance,
-                   "Absolute tolerance of the integrator (preset: 1e-10)")
+                   "Absolute tolerance of the integrator (preset: 1e-8)")
       ->check(positive_number());
   command->add_option("--duration", options.duration, "Simulated time in s (preset: 9.7)")
       ->check(positive_number());
@@ -67,6 +72,7 @@ int run_simulate(const SimulateOptions& options) {
   MeasurementNoise noise;
   noise.q_sigma = options.noise_q;
   noise.tau_sigma = options.noise_tau;
+  noise.tau_relative_sigma = options.noise_tau_relative;
   noise.quantize_bits = options.quantize_bits;
   noise.seed = options.seed;
 

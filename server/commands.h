@@ -100,6 +100,7 @@ struct SimulateOptions {
   RobotOptions robot;
   double noise_q = 0.0;
   double noise_tau = 0.0;
+  double noise_tau_relative = 0.0;
   int quantize_bits = 0;
   std::uint64_t seed = 1;
   std::optional<double> relative_tolerance;

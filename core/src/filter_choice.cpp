@@ -83,7 +83,7 @@ FilterChoice choose_filter(const RobotModel& model, const Trajectory& data, cons
     if (data.samples() < 4 * (2 * length + 1)) continue;  // keep most of the data
     for (double band : bands) {
       const FilterSettings candidate{length, band, data.dt()};
-      const double value = floor_for(model, data, candidate, use_reference, options.controller, 8);
+      const double value = floor_for(model, data, candidate, use_reference, options.controller, 16);
       if (value < best) {
         best = value;
         choice.settings = candidate;
