@@ -104,6 +104,10 @@ constexpr Index block_size = 512;
 // keeps each output's operation order, so both versions give bit-identical results.
 // Define MANIPID_NO_FUNCTION_CLONES to build the generic version only. The kernels are kept
 // out of line either way: inlined into their callers they lose registers to spills.
+// ThreadSanitizer crashes in the clones' load-time resolvers, so TSan builds go generic.
+#if defined(__SANITIZE_THREAD__) && !defined(MANIPID_NO_FUNCTION_CLONES)
+#define MANIPID_NO_FUNCTION_CLONES
+#endif
 #if defined(__x86_64__) && defined(__GNUC__) && defined(__linux__) && !defined(MANIPID_NO_FUNCTION_CLONES)
 #define MANIPID_VECTOR_CLONES __attribute__((target_clones("avx2", "default"), noinline))
 #elif defined(__GNUC__)

@@ -248,8 +248,9 @@ TEST(ClosedLoop, DoesNotStepOverAShortReferencePulse) {
   const Trajectory trajectory =
       simulate_closed_loop(oscillator.model, oscillator.parameters, oscillator.controller, pulse, options);
   // The interpolant leaves 0 one sample before the pulse (the slope at sample 2999 is a
-  // central difference), so the arm is at rest (to rounding) only until t = 2.998 s.
-  EXPECT_LT(trajectory.q.topRows(2999).cwiseAbs().maxCoeff(), 1e-12);
+  // central difference), so the arm is at rest (to the dense output's interpolation error
+  // near the pulse, far below the integrator's 1e-8 tolerance) only until t = 2.998 s.
+  EXPECT_LT(trajectory.q.topRows(2999).cwiseAbs().maxCoeff(), 1e-10);
   EXPECT_GT(trajectory.q.cwiseAbs().maxCoeff(), 0.15);
 }
 
