@@ -63,16 +63,17 @@ void inverse_dynamics_complete(const RobotModel& model, const Parameters& parame
                                const Eigen::Ref<const Eigen::VectorXd>& qd,
                                const Eigen::Ref<const Eigen::VectorXd>& qdd, Eigen::Ref<Eigen::VectorXd> tau) {
   const int n = model.joint_count();
+  // Running values stay in registers; only what the backward pass needs is stored.
+  Eigen::Vector3d omega = Eigen::Vector3d::Zero();
+  Eigen::Vector3d omega_rate = Eigen::Vector3d::Zero();
+  Eigen::Vector3d acceleration = Eigen::Vector3d::Zero();
   for (int k = 1; k <= n; ++k) {
     const Eigen::Vector3d axis = w.rotation[k - 1].col(2);
     const Eigen::Vector3d arm = w.origin[k] - w.origin[k - 1];
-    const Eigen::Vector3d& omega_prev = w.angular_velocity[k - 1];
-    w.angular_velocity[k] = omega_prev + qd[k - 1] * axis;
-    w.angular_acceleration[k] =
-        w.angular_acceleration[k - 1] + qdd[k - 1] * axis + qd[k - 1] * omega_prev.cross(axis);
-    const Eigen::Vector3d& omega = w.angular_velocity[k];
-    w.acceleration[k] =
-        w.acceleration[k - 1] + w.angular_acceleration[k].cross(arm) + omega.cross(omega.cross(arm));
+    omega_rate += qdd[k - 1] * axis + qd[k - 1] * omega.cross(axis);
+    omega += qd[k - 1] * axis;
+    acceleration += omega_rate.cross(arm) + omega.cross(omega.cross(arm));
+    w.acceleration[k] = acceleration;
   }
   Eigen::Vector3d force = Eigen::Vector3d::Zero();   // Σ_{k≥j} m_k (ö_k − g)
   Eigen::Vector3d moment = Eigen::Vector3d::Zero();  // about o_{j-1}
@@ -140,6 +141,8 @@ DynamicsWorkspace::DynamicsWorkspace(const RobotModel& model) {
   angular_acceleration.assign(n + 1, Eigen::Vector3d::Zero());
   jacobian.setZero(3, n * n);
   twist_cos.resize(n);
+  joint_cos.setZero(n);
+  joint_sin.setZero(n);
   twist_sin.resize(n);
   for (int k = 0; k < n; ++k) {
     twist_cos[k] = std::cos(model.joints[k].alpha);
@@ -154,12 +157,22 @@ void forward_kinematics(const RobotModel& model, const Parameters& parameters, D
                         const Eigen::Ref<const Eigen::VectorXd>& q) {
   const int n = model.joint_count();
   check_state_size(model, q.size(), "q");
+  // One loop of sin and cos of the same angle: the compiler fuses each pair into sincos.
+  for (int k = 0; k < n; ++k) {
+    w.joint_cos[k] = std::cos(q[k]);
+    w.joint_sin[k] = std::sin(q[k]);
+  }
+  Eigen::Matrix3d rotation = w.rotation[0];
+  Eigen::Vector3d origin = w.origin[0];
   for (int k = 1; k <= n; ++k) {
-    detail::update_rotation(w.rotation[k - 1], q[k - 1], w.twist_cos[k - 1], w.twist_sin[k - 1], w.rotation[k]);
+    const Eigen::Vector3d z = rotation.col(2);
+    detail::update_rotation(rotation, w.joint_cos[k - 1], w.joint_sin[k - 1], w.twist_cos[k - 1], w.twist_sin[k - 1], rotation);
     double a = 0.0;
     double d = 0.0;
     offsets(model, parameters, k - 1, a, d);
-    w.origin[k] = w.origin[k - 1] + d * w.rotation[k - 1].col(2) + a * w.rotation[k].col(0);
+    origin += d * z + a * rotation.col(0);
+    w.rotation[k] = rotation;
+    w.origin[k] = origin;
   }
 }
 

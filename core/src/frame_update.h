@@ -7,12 +7,11 @@
 
 namespace manipid::detail {
 
-/// rotation = previous · Rz(q) · Rx(alpha), given cos/sin of the (constant) twist alpha;
+/// rotation = previous · Rz(q) · Rx(alpha), given c = cos q, s = sin q and cos/sin of the
+/// (constant) twist alpha;
 /// the new x axis (along which offset a runs) is unchanged by the twist.
-inline void update_rotation(const Eigen::Matrix3d& previous, double q, double cos_alpha, double sin_alpha,
+inline void update_rotation(const Eigen::Matrix3d& previous, double c, double s, double cos_alpha, double sin_alpha,
                             Eigen::Matrix3d& rotation) {
-  const double c = std::cos(q);
-  const double s = std::sin(q);
   const Eigen::Vector3d x = c * previous.col(0) + s * previous.col(1);
   const Eigen::Vector3d y = c * previous.col(1) - s * previous.col(0);
   const Eigen::Vector3d z = previous.col(2);

@@ -49,8 +49,12 @@ void rotational_kinematics(const RobotModel& model, DynamicsWorkspace& w, const 
                            const Eigen::Ref<const Eigen::VectorXd>& qd,
                            const Eigen::Ref<const Eigen::VectorXd>& qdd) {
   const int n = model.joint_count();
+  for (int k = 0; k < n; ++k) {
+    w.joint_cos[k] = std::cos(q[k]);
+    w.joint_sin[k] = std::sin(q[k]);
+  }
   for (int k = 1; k <= n; ++k) {
-    detail::update_rotation(w.rotation[k - 1], q[k - 1], w.twist_cos[k - 1], w.twist_sin[k - 1], w.rotation[k]);
+    detail::update_rotation(w.rotation[k - 1], w.joint_cos[k - 1], w.joint_sin[k - 1], w.twist_cos[k - 1], w.twist_sin[k - 1], w.rotation[k]);
     const Eigen::Vector3d z = w.rotation[k - 1].col(2);
     const Eigen::Vector3d& omega_prev = w.angular_velocity[k - 1];
     w.angular_velocity[k] = omega_prev + qd[k - 1] * z;
@@ -129,10 +133,12 @@ int ParameterProducts::column(int mass, int first, int second) const {
 
 std::string ParameterProducts::name(int column) const {
   const Term& term = terms.at(column);
-  std::string text = "m" + std::to_string(term.mass + 1);
-  if (term.first >= 0 && term.first == term.second) return text + "*l" + std::to_string(term.first + 1) + "^2";
-  if (term.first >= 0) text += "*l" + std::to_string(term.first + 1);
-  if (term.second >= 0) text += "*l" + std::to_string(term.second + 1);
+  // Appends rather than "m" + to_string(...): g++ 12 warns falsely on that at -O3 (bug 105329).
+  std::string text = "m";
+  text.append(std::to_string(term.mass + 1));
+  if (term.first >= 0 && term.first == term.second) return text.append("*l").append(std::to_string(term.first + 1)).append("^2");
+  if (term.first >= 0) text.append("*l").append(std::to_string(term.first + 1));
+  if (term.second >= 0) text.append("*l").append(std::to_string(term.second + 1));
   return text;
 }
 

@@ -24,6 +24,8 @@ struct DynamicsWorkspace {
 
   // cos and sin of each joint's constant twist, computed once.
   Eigen::VectorXd twist_cos, twist_sin;
+  // cos and sin of the current joint angles.
+  Eigen::VectorXd joint_cos, joint_sin;
 
   // Kinematics of frames 0..n (index 0 is the base), world coordinates.
   std::vector<Eigen::Matrix3d> rotation;       // R_k
