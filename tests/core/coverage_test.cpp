@@ -44,7 +44,7 @@ Coverage measure(IdentificationMethod method, std::vector<std::string>* warnings
     IdentificationOptions options;
     options.method = method;
     options.initial = preset.initial_parameters;
-    options.controller = preset.controller;
+    options.controller.emplace(preset.controller);
     const IdentificationResult result = identify(preset.model, noisy_run(clean, seed), options);
     if (warnings && seed == 1) *warnings = result.warnings;
     for (int i = 0; i < truth.size(); ++i) {
