@@ -78,7 +78,6 @@ InputErrorCost::InputErrorCost(const RobotModel& model, const FilteredData& data
   const double root_samples = std::sqrt(static_cast<double>(samples));
   stacked /= root_samples;
   torque /= root_samples;
-  torque_mean_square_ = torque.squaredNorm();
   const Eigen::HouseholderQR<Eigen::MatrixXd> qr(stacked);
   const Eigen::VectorXd rotated = qr.householderQ().adjoint() * torque;
   const Eigen::Index kept = std::min<Eigen::Index>(p, rotated.size());

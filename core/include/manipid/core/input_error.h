@@ -47,16 +47,12 @@ class InputErrorCost {
 
   /// Gauss–Newton Hessian of the sum of squares, J_rᵀ J_r = N' Gᵀ A G (2n × 2n).
   Eigen::MatrixXd gauss_newton_matrix(const Parameters& parameters) const;
-  /// Residual count N'·n, and the mean square of the weighted filtered torque (Σ_j w_j mean τ_j²).
+  /// Residual count N'·n.
   long residual_count() const { return static_cast<long>(data_.samples()) * model_.joint_count(); }
-  double torque_mean_square() const { return torque_mean_square_; }
   /// The smallest cost any β reaches (J*): what no parameter value can explain.
   double floor() const { return floor_; }
 
   const ParameterProducts& products() const { return products_; }
-  /// A = RᵀR, the Gram matrix (1/N') Σ_t Y_tᵀ W Y_t.
-  Eigen::MatrixXd gram() const { return triangle_.transpose() * triangle_; }
-  const Eigen::VectorXd& joint_weights() const { return weights_; }
   const FilteredData& data() const { return data_; }
   const RobotModel& model() const { return model_; }
 
@@ -69,7 +65,6 @@ class InputErrorCost {
   Eigen::VectorXd rotated_;    // z
   double orthogonal_ = 0.0;    // J⊥
   double floor_ = 0.0;         // J* = J⊥ + min_β |R β − z|²
-  double torque_mean_square_ = 0.0;
 };
 
 }  // namespace manipid
