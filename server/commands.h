@@ -157,4 +157,20 @@ struct IdentifyOptions {
 CLI::App* add_identify_command(CLI::App& app, IdentifyOptions& options);
 int run_identify(const IdentifyOptions& options);
 
+// ---- serve -------------------------------------------------------------------------------
+
+struct ServeOptions {
+  std::string host = "127.0.0.1";
+  int port = 8080;
+  std::string database = "./manipid.db";
+  int workers = 0;            ///< 0 = hardware threads
+  int queue_limit = 10000;
+  std::string max_body = "64MiB";
+  std::string token;
+  double job_timeout = 3600.0;
+  int http_threads = 32;
+};
+CLI::App* add_serve_command(CLI::App& app, ServeOptions& options);
+int run_serve(const ServeOptions& options);
+
 }  // namespace manipid::server

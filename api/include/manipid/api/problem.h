@@ -1,0 +1,62 @@
+// problem.h — every error the service answers with, as RFC 9457 problem details.
+//
+// One table (problem.cpp) maps each failure kind to its HTTP status, a stable `code`
+// (UPPER_SNAKE, the contract scripts can switch on), a fixed `title` and a `type` URI
+// "/problems/<code in kebab case>". `detail` is free text for people; `field` names the
+// offending input ("q3", "initial.m2", "half_length", "body") whenever there is one.
+#pragma once
+
+#include "manipid/core/model.h"
+
+#include <nlohmann/json.hpp>
+
+#include <stdexcept>
+#include <string>
+
+namespace manipid::api {
+
+enum class ProblemKind {
+  malformed_body,        ///< 400 the body is not JSON / CSV at all (syntax)
+  invalid_field,         ///< 422 a field's value is wrong (unknown name, NaN, ragged, bounds, ...)
+  unsupported_media,     ///< 415 Content-Type or Content-Encoding the route does not take
+  length_required,       ///< 411 chunked or length-less upload
+  payload_too_large,     ///< 413 body over --max-body
+  unauthorized,          ///< 401 missing or wrong bearer token
+  not_found,             ///< 404 unknown dataset, job or route
+  method_not_allowed,    ///< 405
+  conflict,              ///< 409 the resource is in the wrong state for the request
+  idempotency_mismatch,  ///< 422 an Idempotency-Key reused with a different request
+  queue_full,            ///< 429 the job queue is at --queue-limit (with Retry-After)
+  shutting_down,         ///< 503 the server is stopping
+  internal,              ///< 500 a bug; the detail never carries internals
+};
+
+struct Problem {
+  ProblemKind kind = ProblemKind::internal;
+  std::string detail;
+  std::string field;  ///< empty when no single input is at fault
+};
+
+int status_of(ProblemKind kind);
+const char* code_of(ProblemKind kind);   ///< e.g. "INVALID_FIELD"
+const char* title_of(ProblemKind kind);  ///< e.g. "A field of the request is invalid"
+
+/// {"type", "title", "status", "detail", "code"[, "field"][, "instance"]}
+nlohmann::json problem_to_json(const Problem& problem, const std::string& instance = "");
+
+/// Thrown by api/ and server/ code that wants a specific answer; routes turn it into the
+/// response. InputError from the core becomes invalid_field with the same field.
+class ApiError : public std::runtime_error {
+ public:
+  ApiError(ProblemKind kind, std::string detail, std::string field = "")
+      : std::runtime_error(detail), problem_{kind, std::move(detail), std::move(field)} {}
+  const Problem& problem() const { return problem_; }
+
+ private:
+  Problem problem_;
+};
+
+/// InputError("q3", "...") → Problem{invalid_field, "...", "q3"}.
+Problem problem_from(const InputError& error);
+
+}  // namespace manipid::api

@@ -1,0 +1,78 @@
+// records.h — what the service keeps and answers with: datasets, jobs, cost-history entries
+// and pages of them. Plain structs shared by the routes (api/) and the store (server/).
+#pragma once
+
+#include <optional>
+#include <string>
+#include <string_view>
+#include <vector>
+
+namespace manipid::api {
+
+enum class JobState { queued, running, succeeded, failed, cancelled };
+const char* to_string(JobState state);
+std::optional<JobState> parse_job_state(std::string_view text);
+inline bool is_terminal(JobState state) {
+  return state == JobState::succeeded || state == JobState::failed || state == JobState::cancelled;
+}
+
+enum class JobKind { simulation, identification };
+const char* to_string(JobKind kind);
+std::optional<JobKind> parse_job_kind(std::string_view text);
+
+struct DatasetInfo {
+  std::string id;           ///< "ds_" + 16 hex digits
+  std::string name;
+  std::string created_at;   ///< RFC 3339 UTC, millisecond precision
+  std::string source_job;   ///< the simulation job that made it, else empty
+  int joints = 0;
+  int samples = 0;
+  double dt = 0.0;          ///< s
+  bool has_torque = false;
+  bool has_reference = false;
+};
+
+struct JobInfo {
+  std::string id;           ///< "job_" + 16 hex digits
+  JobKind kind = JobKind::identification;
+  JobState state = JobState::queued;
+  std::string created_at, started_at, finished_at;  ///< RFC 3339 UTC; empty until it happens
+  std::string request;      ///< the request body as accepted (JSON text)
+  std::string dataset_id;   ///< input (identification) or output (simulation); may be empty
+  long evaluations = 0;     ///< progress: cost evaluations so far
+  std::optional<double> best_cost;
+  bool cancel_requested = false;
+  int attempts = 0;         ///< times a worker started it (> 1 after a restart)
+  std::string result;       ///< JSON text when succeeded
+  std::string error;        ///< problem JSON text when failed
+};
+
+struct HistoryEntry {
+  long index = 0;
+  double cost = 0.0;
+  std::vector<double> theta;  ///< all parameters, θ order (m1..mn, l1..ln)
+};
+
+struct PageRequest {
+  int page_size = 50;        ///< 1..1000 (0 means 50)
+  std::string page_token;    ///< opaque; empty = first page
+};
+
+template <class T>
+struct Page {
+  std::vector<T> items;
+  std::string next_page_token;  ///< empty only on the last page
+};
+
+struct JobFilter {
+  std::optional<JobState> state;
+  std::optional<JobKind> kind;
+};
+
+/// An Idempotency-Key header with the fingerprint (SHA-256 hex) of the request it came with.
+struct IdempotencyKey {
+  std::string key;
+  std::string fingerprint;
+};
+
+}  // namespace manipid::api

@@ -1,0 +1,31 @@
+// resources_json.h — how datasets, jobs and cost histories look on the wire (JSON, and CSV for
+// histories). The routes use these; so can anything else that must answer in the same shape.
+#pragma once
+
+#include "manipid/api/records.h"
+
+#include <nlohmann/json.hpp>
+
+#include <string>
+
+namespace manipid::api {
+
+/// {"id", "name", "created_at", "joints", "samples", "dt", "has_torque", "has_reference",
+///  "source_job" (null unless a simulation made it), "links": {"self", "data"}}
+nlohmann::ordered_json dataset_to_json(const DatasetInfo& dataset);
+
+/// {"id", "kind", "state", "created_at", "started_at", "finished_at" (null until then),
+///  "attempts", "dataset_id" (null when none yet), "cancel_requested",
+///  "progress": {"evaluations", "best_cost"}, "request": {...},
+///  "result": {...} (succeeded; also cancelled identifications: the best point reached),
+///  "error": {problem} (failed), "links": {"self", "history", "cancel", "dataset"?}}
+nlohmann::ordered_json job_to_json(const JobInfo& job);
+
+/// Parameter names for a θ of `size` entries: m1..mn, l1..ln.
+std::vector<std::string> history_parameter_names(std::size_t size);
+/// {"items": [{"index", "cost", "parameters": {"m1": ...}}], "next_page_token"?}
+nlohmann::ordered_json history_page_to_json(const Page<HistoryEntry>& page);
+/// "index,cost,m1,...,ln" then one row per entry (the format `manipid identify --history` writes).
+std::string history_to_csv(const std::vector<HistoryEntry>& entries);
+
+}  // namespace manipid::api

@@ -1,0 +1,33 @@
+// routes.h — the HTTP surface of `manipid serve`: registers every route on a cpp-httplib
+// server over a Service (service.h), plus the cross-cutting parts every request passes
+// through: bearer-token check, upload guards (length required, no compressed bodies, size
+// limit), problem+json for every error, one log line per request, request counters for
+// /metrics. The table of routes is in api/openapi.yaml (served at GET /openapi.json).
+#pragma once
+
+#include "manipid/api/service.h"
+
+#include <cstddef>
+#include <functional>
+#include <string>
+
+namespace httplib {
+class Server;
+}
+
+namespace manipid::api {
+
+struct RouteOptions {
+  std::size_t max_body = 64u << 20;  ///< bytes; larger bodies get 413
+  std::string token;                 ///< when set, every /v1 request needs "Authorization: Bearer <token>"
+  double max_wait_seconds = 30.0;    ///< cap of ?wait= long-polls
+  std::function<void(const std::string& line)> log;  ///< one line per request; empty = silent
+};
+
+/// Registers the routes and handlers. `service` must outlive `server`'s listening.
+void register_routes(httplib::Server& server, Service& service, RouteOptions options);
+
+/// api/openapi.yaml as JSON text (generated at build time).
+const char* openapi_json();
+
+}  // namespace manipid::api

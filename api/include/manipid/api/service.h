@@ -1,0 +1,62 @@
+// service.h — what the HTTP routes need from the process behind them. server/ implements it
+// over the job store and the worker pool; the routes (routes.h) only map HTTP to these calls,
+// so they can be tested against a fake.
+//
+// Errors a caller can fix come back as ApiError (problem.h): queue full, idempotency-key
+// mismatch, wrong state. "Not there" is an empty optional.
+#pragma once
+
+#include "manipid/api/records.h"
+#include "manipid/api/requests.h"
+
+#include <optional>
+#include <string>
+
+namespace manipid::api {
+
+enum class DeleteOutcome { deleted, not_found, conflict };
+
+struct SubmitResult {
+  JobInfo job;
+  bool replayed = false;  ///< the Idempotency-Key matched an earlier submission
+};
+
+struct DatasetCreated {
+  DatasetInfo dataset;
+  bool replayed = false;
+};
+
+class Service {
+ public:
+  virtual ~Service() = default;
+
+  virtual DatasetCreated create_dataset(const DatasetUpload& upload, const std::optional<IdempotencyKey>& key) = 0;
+  virtual std::optional<DatasetInfo> dataset(const std::string& id) = 0;
+  virtual std::optional<Trajectory> dataset_data(const std::string& id) = 0;
+  virtual Page<DatasetInfo> datasets(const PageRequest& page) = 0;
+  virtual DeleteOutcome delete_dataset(const std::string& id) = 0;
+
+  /// Queues a job whose request was validated already. `dataset_id` is the identification's
+  /// input dataset (empty for simulations and simulate+identify requests).
+  virtual SubmitResult submit(JobKind kind, const std::string& request_json, const std::string& dataset_id,
+                              const std::optional<IdempotencyKey>& key) = 0;
+  /// The job with its live progress.
+  virtual std::optional<JobInfo> job(const std::string& id) = 0;
+  /// As job(), but first waits up to `seconds` for it to reach a terminal state.
+  virtual std::optional<JobInfo> wait(const std::string& id, double seconds) = 0;
+  virtual Page<JobInfo> jobs(const JobFilter& filter, const PageRequest& page) = 0;
+  /// The cost history in index order, a page at a time; empty optional if no such job.
+  virtual std::optional<Page<HistoryEntry>> history(const std::string& id, const PageRequest& page) = 0;
+  /// Best effort and idempotent: a queued job ends cancelled at once, a running one at its
+  /// next cost evaluation; a finished job is returned unchanged.
+  virtual std::optional<JobInfo> cancel(const std::string& id) = 0;
+  /// Finished jobs only (conflict while queued or running).
+  virtual DeleteOutcome delete_job(const std::string& id) = 0;
+
+  /// Prometheus text for the job side (jobs by state, queue depth, job durations).
+  virtual std::string metrics() = 0;
+  /// False once the server is shutting down.
+  virtual bool accepting() const = 0;
+};
+
+}  // namespace manipid::api

@@ -1,0 +1,116 @@
+// problem.cpp — the error table behind problem.h: each ProblemKind's HTTP status, stable code
+// and title, and the RFC 9457 problem+json object built from them.
+#include "manipid/api/problem.h"
+
+#include <cstddef>
+#include <string_view>
+
+namespace manipid::api {
+namespace {
+
+struct ProblemEntry {
+  int status;
+  const char* code;
+  const char* title;
+};
+
+// One row per ProblemKind, in declaration order. The codes are a public contract: scripts
+// switch on them, so they never change once released.
+ProblemEntry entry_of(ProblemKind kind) {
+  switch (kind) {
+    case ProblemKind::malformed_body: return {400, "MALFORMED_BODY", "The request body is malformed"};
+    case ProblemKind::invalid_field: return {422, "INVALID_FIELD", "A field of the request is invalid"};
+    case ProblemKind::unsupported_media: return {415, "UNSUPPORTED_MEDIA", "The media type is not supported"};
+    case ProblemKind::length_required: return {411, "LENGTH_REQUIRED", "A Content-Length is required"};
+    case ProblemKind::payload_too_large: return {413, "PAYLOAD_TOO_LARGE", "The request body is too large"};
+    case ProblemKind::unauthorized: return {401, "UNAUTHORIZED", "Authentication is required"};
+    case ProblemKind::not_found: return {404, "NOT_FOUND", "The resource was not found"};
+    case ProblemKind::method_not_allowed: return {405, "METHOD_NOT_ALLOWED", "The method is not allowed"};
+    case ProblemKind::conflict: return {409, "CONFLICT", "The resource is in the wrong state for the request"};
+    case ProblemKind::idempotency_mismatch:
+      return {422, "IDEMPOTENCY_MISMATCH", "The Idempotency-Key was used with a different request"};
+    case ProblemKind::queue_full: return {429, "QUEUE_FULL", "The job queue is full"};
+    case ProblemKind::shutting_down: return {503, "SHUTTING_DOWN", "The server is shutting down"};
+    case ProblemKind::internal: break;
+  }
+  // Also the answer for a value outside the enum: never a crash while reporting an error.
+  return {500, "INTERNAL", "Internal server error"};
+}
+
+/// "INVALID_FIELD" → "invalid-field", for the type URI.
+std::string kebab_case(std::string_view code) {
+  std::string text(code);
+  for (char& c : text) c = c == '_' ? '-' : static_cast<char>(c >= 'A' && c <= 'Z' ? c - 'A' + 'a' : c);
+  return text;
+}
+
+/// Length of the valid UTF-8 sequence starting at text[i], or 0 when it is not one.
+std::size_t utf8_sequence_length(std::string_view text, std::size_t i) {
+  const auto byte = [&](std::size_t k) { return static_cast<unsigned char>(text[k]); };
+  const unsigned char lead = byte(i);
+  if (lead < 0x80) return 1;
+  std::size_t length = 0;
+  unsigned int low = 0x80, high = 0xBF;  // allowed range of the second byte (no overlongs, no surrogates)
+  if (lead >= 0xC2 && lead <= 0xDF) length = 2;
+  else if (lead >= 0xE0 && lead <= 0xEF) {
+    length = 3;
+    if (lead == 0xE0) low = 0xA0;
+    if (lead == 0xED) high = 0x9F;
+  } else if (lead >= 0xF0 && lead <= 0xF4) {
+    length = 4;
+    if (lead == 0xF0) low = 0x90;
+    if (lead == 0xF4) high = 0x8F;
+  } else {
+    return 0;
+  }
+  if (i + length > text.size()) return 0;
+  if (byte(i + 1) < low || byte(i + 1) > high) return 0;
+  for (std::size_t k = 2; k < length; ++k) {
+    if (byte(i + k) < 0x80 || byte(i + k) > 0xBF) return 0;
+  }
+  return length;
+}
+
+/// Details and fields can quote user input (a CSV header, a file name); nlohmann::json::dump
+/// throws on invalid UTF-8, which would turn an error answer into a crash. Bad bytes become U+FFFD.
+std::string valid_utf8(std::string_view text) {
+  std::string result;
+  result.reserve(text.size());
+  for (std::size_t i = 0; i < text.size();) {
+    const std::size_t length = utf8_sequence_length(text, i);
+    if (length == 0) {
+      result += "\xEF\xBF\xBD";
+      ++i;
+    } else {
+      result.append(text.substr(i, length));
+      i += length;
+    }
+  }
+  return result;
+}
+
+}  // namespace
+
+int status_of(ProblemKind kind) { return entry_of(kind).status; }
+const char* code_of(ProblemKind kind) { return entry_of(kind).code; }
+const char* title_of(ProblemKind kind) { return entry_of(kind).title; }
+
+nlohmann::json problem_to_json(const Problem& problem, const std::string& instance) {
+  const ProblemEntry entry = entry_of(problem.kind);
+  nlohmann::json body;
+  body["type"] = "/problems/" + kebab_case(entry.code);
+  body["title"] = entry.title;
+  body["status"] = entry.status;
+  // RFC 9457 makes detail optional, but clients print it: never leave it empty.
+  body["detail"] = problem.detail.empty() ? std::string(entry.title) : valid_utf8(problem.detail);
+  body["code"] = entry.code;
+  if (!problem.field.empty()) body["field"] = valid_utf8(problem.field);
+  if (!instance.empty()) body["instance"] = valid_utf8(instance);
+  return body;
+}
+
+Problem problem_from(const InputError& error) {
+  return Problem{ProblemKind::invalid_field, error.what(), error.field()};
+}
+
+}  // namespace manipid::api

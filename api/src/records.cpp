@@ -1,0 +1,36 @@
+// records.cpp — the names of job states and kinds as they appear in JSON, query strings and
+// the store (records.h). Parsing is exact (lower case, no trimming): these are API tokens.
+#include "manipid/api/records.h"
+
+namespace manipid::api {
+
+const char* to_string(JobState state) {
+  switch (state) {
+    case JobState::queued: return "queued";
+    case JobState::running: return "running";
+    case JobState::succeeded: return "succeeded";
+    case JobState::failed: return "failed";
+    case JobState::cancelled: return "cancelled";
+  }
+  return "failed";  // unreachable for valid enumerators
+}
+
+std::optional<JobState> parse_job_state(std::string_view text) {
+  for (JobState state : {JobState::queued, JobState::running, JobState::succeeded, JobState::failed,
+                         JobState::cancelled}) {
+    if (text == to_string(state)) return state;
+  }
+  return std::nullopt;
+}
+
+const char* to_string(JobKind kind) {
+  return kind == JobKind::simulation ? "simulation" : "identification";
+}
+
+std::optional<JobKind> parse_job_kind(std::string_view text) {
+  if (text == "simulation") return JobKind::simulation;
+  if (text == "identification") return JobKind::identification;
+  return std::nullopt;
+}
+
+}  // namespace manipid::api

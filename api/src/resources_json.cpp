@@ -1,0 +1,95 @@
+// resources_json.cpp — datasets, jobs and histories as JSON and CSV (resources_json.h).
+#include "manipid/api/resources_json.h"
+
+#include "manipid/api/csv.h"
+#include "manipid/core/model.h"
+
+#include <cmath>
+
+namespace manipid::api {
+namespace {
+
+using Json = nlohmann::ordered_json;
+
+Json text_or_null(const std::string& text) { return text.empty() ? Json(nullptr) : Json(text); }
+Json number(double value) { return std::isfinite(value) ? Json(value) : Json(nullptr); }
+
+/// Stored JSON text back to JSON; text that does not parse (never written by manipid) is
+/// passed on as a string rather than failing the whole response.
+Json embedded(const std::string& text) {
+  Json parsed = Json::parse(text, nullptr, false);
+  return parsed.is_discarded() ? Json(text) : parsed;
+}
+
+}  // namespace
+
+nlohmann::ordered_json dataset_to_json(const DatasetInfo& dataset) {
+  const std::string self = "/v1/datasets/" + dataset.id;
+  return {{"id", dataset.id},
+          {"name", dataset.name},
+          {"created_at", dataset.created_at},
+          {"joints", dataset.joints},
+          {"samples", dataset.samples},
+          {"dt", dataset.dt},
+          {"has_torque", dataset.has_torque},
+          {"has_reference", dataset.has_reference},
+          {"source_job", text_or_null(dataset.source_job)},
+          {"links", {{"self", self}, {"data", self + "?format=csv"}}}};
+}
+
+nlohmann::ordered_json job_to_json(const JobInfo& job) {
+  const std::string self = "/v1/jobs/" + job.id;
+  Json json = {{"id", job.id},
+               {"kind", to_string(job.kind)},
+               {"state", to_string(job.state)},
+               {"created_at", job.created_at},
+               {"started_at", text_or_null(job.started_at)},
+               {"finished_at", text_or_null(job.finished_at)},
+               {"attempts", job.attempts},
+               {"dataset_id", text_or_null(job.dataset_id)},
+               {"cancel_requested", job.cancel_requested},
+               {"progress", {{"evaluations", job.evaluations}, {"best_cost", job.best_cost ? number(*job.best_cost) : Json(nullptr)}}},
+               {"request", embedded(job.request)}};
+  if (!job.result.empty()) json["result"] = embedded(job.result);
+  if (!job.error.empty()) json["error"] = embedded(job.error);
+  Json links = {{"self", self}, {"history", self + "/history"}, {"cancel", self + "/cancel"}};
+  if (!job.dataset_id.empty()) links["dataset"] = "/v1/datasets/" + job.dataset_id;
+  json["links"] = links;
+  return json;
+}
+
+std::vector<std::string> history_parameter_names(std::size_t size) {
+  return parameter_names(static_cast<int>(size / 2));
+}
+
+nlohmann::ordered_json history_page_to_json(const Page<HistoryEntry>& page) {
+  Json items = Json::array();
+  for (const HistoryEntry& entry : page.items) {
+    const std::vector<std::string> names = history_parameter_names(entry.theta.size());
+    Json parameters = Json::object();
+    for (std::size_t i = 0; i < names.size() && i < entry.theta.size(); ++i) parameters[names[i]] = number(entry.theta[i]);
+    items.push_back({{"index", entry.index}, {"cost", number(entry.cost)}, {"parameters", parameters}});
+  }
+  Json json = {{"items", items}};
+  if (!page.next_page_token.empty()) json["next_page_token"] = page.next_page_token;
+  return json;
+}
+
+std::string history_to_csv(const std::vector<HistoryEntry>& entries) {
+  CsvTable table;
+  table.columns = {"index", "cost"};
+  const std::size_t size = entries.empty() ? 0 : entries.front().theta.size();
+  for (const std::string& name : history_parameter_names(size)) table.columns.push_back(name);
+  table.data.resize(static_cast<Eigen::Index>(entries.size()), static_cast<Eigen::Index>(table.columns.size()));
+  for (std::size_t r = 0; r < entries.size(); ++r) {
+    const auto row = static_cast<Eigen::Index>(r);
+    table.data(row, 0) = static_cast<double>(entries[r].index);
+    table.data(row, 1) = entries[r].cost;
+    for (std::size_t i = 0; i < size && i < entries[r].theta.size(); ++i) {
+      table.data(row, static_cast<Eigen::Index>(2 + i)) = entries[r].theta[i];
+    }
+  }
+  return format_csv(table);
+}
+
+}  // namespace manipid::api

@@ -1,0 +1,95 @@
+#!/usr/bin/env bash
+# Builds the libFuzzer targets of tests/fuzz/ (JSON and CSV request parsers of api/) with clang,
+# ASan and UBSan into build/fuzz, and fuzzes each for SECONDS (default 20) on a copy of its seed
+# corpus (build/fuzz/corpus-<target>; the repository's corpus is never modified), together with
+# the reproducers kept in tests/fuzz/regressions/<target>/. Targets run side by side when there
+# are at least two CPUs. Prints one summary line per target; exits non-zero if any target
+# crashes, leaks, times out or runs out of memory (the input is saved as
+# build/fuzz/artifacts-<target>/crash-*, oom-*, leak-* or timeout-*).
+# Installs nothing: run scripts/setup.sh first (needs the Debian packages clang and
+# libclang-rt-14-dev). Usage: bash scripts/fuzz.sh [SECONDS_PER_TARGET]
+set -euo pipefail
+cd "$(dirname "${BASH_SOURCE[0]}")/.."
+
+seconds=${1:-20}
+if ! [[ "$seconds" =~ ^[1-9][0-9]*$ ]]; then
+  echo "usage: scripts/fuzz.sh [SECONDS_PER_TARGET]  (a positive whole number, got '$seconds')" >&2
+  exit 2
+fi
+command -v clang++ >/dev/null || { echo "fuzz: clang++ not found; run scripts/setup.sh" >&2; exit 2; }
+
+build=build/fuzz
+jobs=$(nproc)
+started=$SECONDS
+CC=clang CXX=clang++ cmake -S tests/fuzz -B "$build" >/dev/null
+cmake --build "$build" -j "$jobs"
+echo "== fuzz: built in $((SECONDS - started)) s; fuzzing each target for $seconds s"
+
+# target, corpus and dictionary name, longest input in bytes
+targets=("json_fuzz json 4096" "csv_fuzz csv 4096")
+
+run_target() {
+  local target=$1 name=$2 max_len=$3
+  local corpus=$build/corpus-$target artifacts=$build/artifacts-$target
+  rm -rf "$corpus" "$artifacts"
+  mkdir -p "$corpus" "$artifacts"
+  cp tests/fuzz/corpus/"$name"/* "$corpus"/
+  local inputs=("$corpus")
+  local regressions=tests/fuzz/regressions/$target
+  if [[ -d "$regressions" ]] && compgen -G "$regressions/*" >/dev/null; then inputs+=("$regressions"); fi
+  # The first directory receives the new units; the others (regressions) are only read.
+  UBSAN_OPTIONS=print_stacktrace=1:halt_on_error=1 "$build/$target" \
+    -max_total_time="$seconds" -timeout=5 -rss_limit_mb=2048 -max_len="$max_len" \
+    -dict=tests/fuzz/"$name".dict -artifact_prefix="$artifacts"/ -print_final_stats=1 \
+    "${inputs[@]}" >"$build/$target.log" 2>&1
+}
+
+summarize() {
+  local target=$1 status=$2 log=$build/$1.log
+  local execs rate cov ft corpus rss
+  execs=$(sed -n 's/^stat::number_of_executed_units: *//p' "$log" | tail -1)
+  rate=$(sed -n 's/^stat::average_exec_per_sec: *//p' "$log" | tail -1)
+  rss=$(sed -n 's/^stat::peak_rss_mb: *//p' "$log" | tail -1)
+  # The last progress line ("#12345 DONE cov: 1234 ft: 5678 corp: 90/12Kb ...") has the coverage.
+  local progress
+  progress=$(grep -E '^#[0-9]+.*cov: [0-9]+' "$log" | tail -1 || true)
+  cov=$(sed -nE 's/.*cov: ([0-9]+).*/\1/p' <<<"$progress")
+  ft=$(sed -nE 's/.* ft: ([0-9]+).*/\1/p' <<<"$progress")
+  corpus=$(sed -nE 's/.* corp: ([0-9]+\/[0-9]+[a-zA-Z]*).*/\1/p' <<<"$progress")
+  local verdict=ok
+  [[ "$status" -eq 0 ]] || verdict="FAILED (exit $status; log $log)"
+  printf '%-10s %10s execs  %7s exec/s  cov %-5s ft %-6s corpus %-12s peak RSS %s MB  %s\n' \
+    "$target" "${execs:-?}" "${rate:-?}" "${cov:-?}" "${ft:-?}" "${corpus:-?}" "${rss:-?}" "$verdict"
+}
+
+declare -A status
+if [[ "$jobs" -ge 2 ]]; then
+  declare -A pid
+  for entry in "${targets[@]}"; do
+    read -r target name max_len <<<"$entry"
+    run_target "$target" "$name" "$max_len" &
+    pid[$target]=$!
+  done
+  for entry in "${targets[@]}"; do
+    read -r target _ _ <<<"$entry"
+    if wait "${pid[$target]}"; then status[$target]=0; else status[$target]=$?; fi
+  done
+else
+  for entry in "${targets[@]}"; do
+    read -r target name max_len <<<"$entry"
+    if run_target "$target" "$name" "$max_len"; then status[$target]=0; else status[$target]=$?; fi
+  done
+fi
+
+failed=0
+echo "== fuzz: results (execs, exec/s, edge coverage, features, corpus units/bytes)"
+for entry in "${targets[@]}"; do
+  read -r target _ _ <<<"$entry"
+  summarize "$target" "${status[$target]}"
+  if [[ "${status[$target]}" -ne 0 ]]; then
+    failed=1
+    # The sanitizer's report and the saved input.
+    grep -E -A40 '^==[0-9]+==ERROR|runtime error|^SUMMARY|deadly signal|Test unit written' "$build/$target.log" | head -60 >&2 || true
+  fi
+done
+exit "$failed"

@@ -1,0 +1,171 @@
+// job_runner.cpp — one job from its stored request to its outcome (job_runner.h).
+#include "job_runner.h"
+
+#include "manipid/api/problem.h"
+#include "manipid/api/requests.h"
+#include "manipid/api/result_json.h"
+#include "manipid/core/identification.h"
+
+#include <nlohmann/json.hpp>
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <exception>
+#include <new>
+
+namespace manipid::server {
+namespace {
+
+using Clock = std::chrono::steady_clock;
+
+std::string job_failed(const std::string& detail) {
+  // A computation that could not finish (a diverging simulation, a store failure): the
+  // request was valid, so this is not one of the request's problem kinds.
+  return nlohmann::json{{"type", "/problems/job-failed"},
+                        {"title", "The job could not be completed"},
+                        {"status", 500},
+                        {"code", "JOB_FAILED"},
+                        {"detail", detail}}
+      .dump();
+}
+
+JobOutcome failed(std::string error) {
+  JobOutcome outcome;
+  outcome.state = api::JobState::failed;
+  outcome.error = std::move(error);
+  return outcome;
+}
+
+/// The dataset a simulation makes, stored idempotently under the job's id so a job re-run
+/// after a crash finds the dataset its first run stored instead of making a second one.
+api::DatasetInfo store_simulated(Store& store, const api::JobInfo& job, const api::SimulationSpec& spec) {
+  const Trajectory data = api::run_simulation(spec);
+  const api::IdempotencyKey key{"job-output:" + job.id, job.id};
+  const std::string name = spec.name.empty() ? "simulation " + spec.preset.name + " (" + job.id + ")" : spec.name;
+  return store.insert_dataset(name, data, job.id, key).dataset;
+}
+
+JobOutcome run_simulation_job(const api::JobInfo& job, Store& store) {
+  const auto started = Clock::now();
+  const api::SimulationSpec spec = api::simulation_from_json(nlohmann::json::parse(job.request));
+  const api::DatasetInfo dataset = store_simulated(store, job, spec);
+  JobOutcome outcome;
+  outcome.state = api::JobState::succeeded;
+  outcome.dataset_id = dataset.id;
+  outcome.result = nlohmann::ordered_json{
+      {"dataset_id", dataset.id},
+      {"joints", dataset.joints},
+      {"samples", dataset.samples},
+      {"dt", dataset.dt},
+      {"has_torque", dataset.has_torque},
+      {"has_reference", dataset.has_reference},
+      {"wall_seconds", std::chrono::duration<double>(Clock::now() - started).count()},
+  }.dump();
+  return outcome;
+}
+
+/// Collects every evaluation and writes them to the store in batches.
+class HistoryWriter {
+ public:
+  HistoryWriter(Store& store, const api::JobInfo& job, LiveJob& live, const RunnerOptions& options)
+      : store_(store), job_(job), live_(live), options_(options), last_flush_(Clock::now()) {}
+
+  void add(long index, double cost, const Eigen::VectorXd& theta) {
+    batch_.push_back({index, cost, std::vector<double>(theta.data(), theta.data() + theta.size())});
+    live_.evaluations.store(index + 1, std::memory_order_relaxed);
+    if (std::isfinite(cost) && cost < live_.best_cost.load(std::memory_order_relaxed)) {
+      live_.best_cost.store(cost, std::memory_order_relaxed);
+    }
+    if (static_cast<int>(batch_.size()) >= options_.history_batch ||
+        std::chrono::duration<double>(Clock::now() - last_flush_).count() >= options_.history_flush_seconds) {
+      flush();
+    }
+  }
+
+  void flush() {
+    const double best = live_.best_cost.load(std::memory_order_relaxed);
+    store_.record_progress(job_.id, live_.evaluations.load(std::memory_order_relaxed),
+                           std::isfinite(best) ? std::optional<double>(best) : std::nullopt, batch_);
+    batch_.clear();
+    last_flush_ = Clock::now();
+  }
+
+ private:
+  Store& store_;
+  const api::JobInfo& job_;
+  LiveJob& live_;
+  const RunnerOptions& options_;
+  std::vector<api::HistoryEntry> batch_;
+  Clock::time_point last_flush_;
+};
+
+JobOutcome run_identification_job(const api::JobInfo& job, Store& store, LiveJob& live, const RunnerOptions& options) {
+  api::IdentificationSpec spec = api::identification_from_json(nlohmann::json::parse(job.request));
+  std::string dataset_id = spec.dataset_id;
+  std::optional<Trajectory> data;
+  if (spec.simulation) {
+    dataset_id = store_simulated(store, job, *spec.simulation).id;
+  }
+  data = store.load_dataset(dataset_id);
+  if (!data) {
+    JobOutcome outcome = failed(api::problem_to_json({api::ProblemKind::not_found,
+                                                      "dataset " + dataset_id + " was deleted before the job ran",
+                                                      "dataset_id"})
+                                    .dump());
+    outcome.dataset_id = dataset_id;
+    return outcome;
+  }
+  api::check_against_data(spec, data->joint_count(), data->samples(), data->has_torque(), data->has_reference());
+
+  HistoryWriter history(store, job, live, options);
+  IdentificationOptions& identification = spec.options;
+  identification.max_seconds = std::min(identification.max_seconds, options.job_time_limit_seconds);
+  identification.cancel = &live.cancel;
+  identification.on_evaluation = [&history](long index, double cost, const Eigen::VectorXd& theta) {
+    history.add(index, cost, theta);
+  };
+  const IdentificationResult result = identify(spec.preset.model, *data, identification);
+  history.flush();
+
+  JobOutcome outcome;
+  outcome.dataset_id = dataset_id;
+  if (result.cancelled && live.shutdown.load()) {
+    outcome.requeue = true;
+    return outcome;
+  }
+  outcome.state = result.cancelled ? api::JobState::cancelled : api::JobState::succeeded;
+  nlohmann::ordered_json json = api::result_to_json(result);
+  json["dataset_id"] = dataset_id;
+  outcome.result = json.dump();
+  for (std::size_t i = 0; i < result.names.size(); ++i) {
+    if (!result.free[i]) continue;
+    const double error = result.std_errors[static_cast<Eigen::Index>(i)];
+    outcome.estimates.push_back({result.names[i], result.estimate[static_cast<Eigen::Index>(i)],
+                                 std::isfinite(error) ? std::optional<double>(error) : std::nullopt});
+  }
+  return outcome;
+}
+
+}  // namespace
+
+JobOutcome run_job(const api::JobInfo& job, Store& store, LiveJob& live, const RunnerOptions& options) {
+  try {
+    if (job.kind == api::JobKind::simulation) return run_simulation_job(job, store);
+    return run_identification_job(job, store, live, options);
+  } catch (const InputError& error) {
+    // Submission validated the request against the data it knew; this catches what only the
+    // run can see (a dataset replaced in between, a model that rejects the data).
+    return failed(api::problem_to_json(api::problem_from(error)).dump());
+  } catch (const api::ApiError& error) {
+    return failed(api::problem_to_json(error.problem()).dump());
+  } catch (const std::bad_alloc&) {
+    return failed(job_failed("out of memory"));
+  } catch (const std::exception& error) {
+    return failed(job_failed(error.what()));
+  } catch (...) {
+    return failed(job_failed("unknown error"));
+  }
+}
+
+}  // namespace manipid::server

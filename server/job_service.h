@@ -1,0 +1,52 @@
+// job_service.h — the Service the HTTP routes call (api/service.h), made of the store and the
+// worker pool: submissions go to the store and wake a worker; reads merge the store's row
+// with the pool's live progress; long-polls sleep on the pool's change signal.
+#pragma once
+
+#include "manipid/api/service.h"
+#include "store.h"
+#include "worker_pool.h"
+
+#include <atomic>
+
+namespace manipid::server {
+
+struct JobServiceOptions {
+  int queue_limit = 10000;  ///< queued jobs at most; more → 429 (≤ 0: no limit)
+};
+
+class JobService : public api::Service {
+ public:
+  JobService(Store& store, WorkerPool& pool, JobServiceOptions options);
+
+  api::DatasetCreated create_dataset(const api::DatasetUpload& upload,
+                                     const std::optional<api::IdempotencyKey>& key) override;
+  std::optional<api::DatasetInfo> dataset(const std::string& id) override;
+  std::optional<Trajectory> dataset_data(const std::string& id) override;
+  api::Page<api::DatasetInfo> datasets(const api::PageRequest& page) override;
+  api::DeleteOutcome delete_dataset(const std::string& id) override;
+
+  api::SubmitResult submit(api::JobKind kind, const std::string& request_json, const std::string& dataset_id,
+                           const std::optional<api::IdempotencyKey>& key) override;
+  std::optional<api::JobInfo> job(const std::string& id) override;
+  std::optional<api::JobInfo> wait(const std::string& id, double seconds) override;
+  api::Page<api::JobInfo> jobs(const api::JobFilter& filter, const api::PageRequest& page) override;
+  std::optional<api::Page<api::HistoryEntry>> history(const std::string& id, const api::PageRequest& page) override;
+  std::optional<api::JobInfo> cancel(const std::string& id) override;
+  api::DeleteOutcome delete_job(const std::string& id) override;
+
+  std::string metrics() override;
+  bool accepting() const override { return accepting_.load(); }
+  /// Refuse new submissions from now on (shutdown has begun).
+  void stop_accepting() { accepting_ = false; }
+
+ private:
+  api::JobInfo with_live_progress(api::JobInfo job) const;
+
+  Store& store_;
+  WorkerPool& pool_;
+  JobServiceOptions options_;
+  std::atomic<bool> accepting_{true};
+};
+
+}  // namespace manipid::server

@@ -1,0 +1,116 @@
+// sqlite_rows.cpp — shared row reads and writes of the SQLite store (see sqlite_rows.h).
+#include "sqlite_rows.h"
+
+#include "sqlite_encoding.h"
+
+namespace manipid::server::sqlite {
+
+const std::string kJobColumns =
+    "id, kind, state, created_at, started_at, finished_at, request, dataset_id, evaluations, best_cost, "
+    "cancel_requested, attempts, result, error, seq";
+const std::string kDatasetColumns =
+    "id, name, created_at, source_job, joints, samples, dt, has_torque, has_reference, seq";
+
+api::JobInfo read_job(const Statement& row) {
+  api::JobInfo job;
+  job.id = row.text(0);
+  const auto kind = kind_from_text(row.text(1));
+  const auto state = state_from_text(row.text(2));
+  if (!kind || !state) throw StoreError("job " + job.id + " has an unknown kind or state in the database");
+  job.kind = *kind;
+  job.state = *state;
+  job.created_at = row.text(3);
+  job.started_at = row.text(4);
+  job.finished_at = row.text(5);
+  job.request = row.text(6);
+  job.dataset_id = row.text(7);
+  job.evaluations = static_cast<long>(row.integer(8));
+  job.best_cost = row.real_or_null(9);
+  job.cancel_requested = row.integer(10) != 0;
+  job.attempts = static_cast<int>(row.integer(11));
+  job.result = row.text(12);
+  job.error = row.text(13);
+  return job;
+}
+
+api::DatasetInfo read_dataset(const Statement& row) {
+  api::DatasetInfo dataset;
+  dataset.id = row.text(0);
+  dataset.name = row.text(1);
+  dataset.created_at = row.text(2);
+  dataset.source_job = row.text(3);
+  dataset.joints = static_cast<int>(row.integer(4));
+  dataset.samples = static_cast<int>(row.integer(5));
+  dataset.dt = row.real(6);
+  dataset.has_torque = row.integer(7) != 0;
+  dataset.has_reference = row.integer(8) != 0;
+  return dataset;
+}
+
+std::optional<api::JobInfo> select_job(Connection& connection, const std::string& id) {
+  auto statement = connection.prepare("SELECT " + kJobColumns + " FROM jobs WHERE id = ?1");
+  statement.bind_text(1, id);
+  if (!statement.step()) return std::nullopt;
+  return read_job(statement);
+}
+
+std::optional<api::DatasetInfo> select_dataset(Connection& connection, const std::string& id) {
+  auto statement = connection.prepare("SELECT " + kDatasetColumns + " FROM datasets WHERE id = ?1");
+  statement.bind_text(1, id);
+  if (!statement.step()) return std::nullopt;
+  return read_dataset(statement);
+}
+
+std::optional<api::JobState> select_state(Connection& connection, const std::string& id) {
+  auto statement = connection.prepare("SELECT state FROM jobs WHERE id = ?1");
+  statement.bind_text(1, id);
+  if (!statement.step()) return std::nullopt;
+  const auto state = state_from_text(statement.text(0));
+  if (!state) throw StoreError("job " + id + " has an unknown state in the database");
+  return state;
+}
+
+// ---- idempotency keys ----
+
+std::optional<KeyRecord> select_key(Connection& connection, const char* scope, const std::string& key) {
+  auto statement =
+      connection.prepare("SELECT fingerprint, resource_id FROM idempotency_keys WHERE scope = ?1 AND key = ?2");
+  statement.bind_text(1, scope).bind_text(2, key);
+  if (!statement.step()) return std::nullopt;
+  return KeyRecord{statement.text(0), statement.text(1)};
+}
+
+void store_key(Connection& connection, const char* scope, const api::IdempotencyKey& key, const std::string& id,
+               const std::string& now) {
+  auto statement = connection.prepare(
+      "INSERT OR REPLACE INTO idempotency_keys (scope, key, fingerprint, resource_id, created_at) "
+      "VALUES (?1, ?2, ?3, ?4, ?5)");
+  statement.bind_text(1, scope).bind_text(2, key.key).bind_text(3, key.fingerprint).bind_text(4, id).bind_text(5, now);
+  statement.run();
+}
+
+void forget_keys_of(Connection& connection, const char* scope, const std::string& id) {
+  auto statement = connection.prepare("DELETE FROM idempotency_keys WHERE scope = ?1 AND resource_id = ?2");
+  statement.bind_text(1, scope).bind_text(2, id);
+  statement.run();
+}
+
+std::string unused_id(Connection& connection, const char* prefix, const std::string& exists_sql) {
+  for (;;) {
+    std::string id = random_id(prefix);
+    auto statement = connection.prepare(exists_sql);
+    statement.bind_text(1, id);
+    if (!statement.step()) return id;
+  }
+}
+
+void clear_progress(Connection& connection, const std::string& id) {
+  auto history = connection.prepare("DELETE FROM job_history WHERE job_id = ?1");
+  history.bind_text(1, id);
+  history.run();
+  auto estimates = connection.prepare("DELETE FROM estimates WHERE job_id = ?1");
+  estimates.bind_text(1, id);
+  estimates.run();
+}
+
+}  // namespace manipid::server::sqlite

@@ -1,0 +1,126 @@
+// sqlite_schema.cpp — the tables of the SQLite store and the migrations between versions.
+// A migration is appended, never edited: databases in the field have run the old ones.
+#include "sqlite_schema.h"
+
+#include <array>
+#include <string>
+
+namespace manipid::server::sqlite {
+
+namespace {
+
+// kMigrations[i] takes user_version i to i + 1, and sets it.
+constexpr std::array<const char*, 1> kMigrations = {
+    // 0 → 1: the first schema.
+    R"sql(
+    -- seq orders datasets newest first for keyset paging; AUTOINCREMENT never hands out a
+    -- seq again, even after the newest row is deleted. The blobs come last so that reading
+    -- the description (find/list) never touches their overflow pages.
+    CREATE TABLE datasets (
+      seq           INTEGER PRIMARY KEY AUTOINCREMENT,
+      id            TEXT    NOT NULL UNIQUE,
+      name          TEXT    NOT NULL,
+      created_at    TEXT    NOT NULL,
+      source_job    TEXT,
+      joints        INTEGER NOT NULL,
+      samples       INTEGER NOT NULL,
+      dt            REAL    NOT NULL,
+      has_torque    INTEGER NOT NULL,
+      has_reference INTEGER NOT NULL,
+      t   BLOB,   -- samples doubles, little-endian
+      q   BLOB,   -- samples x joints, column-major
+      tau BLOB,   -- NULL when has_torque = 0
+      ref BLOB    -- NULL when has_reference = 0
+    );
+
+    -- dataset_id has no foreign key: a job's record outlives the datasets it used or made.
+    CREATE TABLE jobs (
+      seq              INTEGER PRIMARY KEY AUTOINCREMENT,
+      id               TEXT    NOT NULL UNIQUE,
+      kind             TEXT    NOT NULL CHECK (kind IN ('simulation', 'identification')),
+      state            TEXT    NOT NULL
+                       CHECK (state IN ('queued', 'running', 'succeeded', 'failed', 'cancelled')),
+      request          TEXT    NOT NULL,
+      dataset_id       TEXT,
+      created_at       TEXT    NOT NULL,
+      started_at       TEXT,
+      finished_at      TEXT,
+      evaluations      INTEGER NOT NULL DEFAULT 0,
+      best_cost        REAL,
+      cancel_requested INTEGER NOT NULL DEFAULT 0,
+      attempts         INTEGER NOT NULL DEFAULT 0,
+      result           TEXT,
+      error            TEXT
+    );
+    CREATE INDEX jobs_by_state ON jobs (state, seq);  -- claim order, listing by state
+    CREATE INDEX jobs_by_kind ON jobs (kind, seq);    -- listing by kind
+
+    CREATE TABLE job_history (
+      job_id TEXT    NOT NULL REFERENCES jobs (id) ON DELETE CASCADE,
+      idx    INTEGER NOT NULL,
+      cost   REAL,           -- NULL stands for NaN (SQLite stores NaN as NULL)
+      theta  BLOB,           -- doubles, little-endian
+      PRIMARY KEY (job_id, idx)
+    ) WITHOUT ROWID;
+
+    CREATE TABLE estimates (
+      job_id    TEXT NOT NULL REFERENCES jobs (id) ON DELETE CASCADE,
+      name      TEXT NOT NULL,
+      value     REAL,
+      std_error REAL,
+      PRIMARY KEY (job_id, name)
+    ) WITHOUT ROWID;
+
+    CREATE TABLE idempotency_keys (
+      scope       TEXT NOT NULL CHECK (scope IN ('job', 'dataset')),
+      key         TEXT NOT NULL,
+      fingerprint TEXT NOT NULL,
+      resource_id TEXT NOT NULL,
+      created_at  TEXT NOT NULL,
+      PRIMARY KEY (scope, key)
+    ) WITHOUT ROWID;
+    CREATE INDEX idempotency_keys_by_resource ON idempotency_keys (resource_id);
+
+    PRAGMA user_version = 1;
+    )sql",
+};
+
+int read_user_version(Connection& connection) {
+  auto statement = connection.prepare("PRAGMA user_version");
+  return statement.step() ? static_cast<int>(statement.integer(0)) : 0;
+}
+
+}  // namespace
+
+int current_schema_version() { return static_cast<int>(kMigrations.size()); }
+
+void prepare_database(Connection& connection) {
+  // journal_mode is kept in the file, so only this first connection sets it.
+  std::string mode;
+  for (int attempt = 1;; ++attempt) {
+    try {
+      auto statement = connection.prepare("PRAGMA journal_mode = WAL");
+      mode = statement.step() ? statement.text(0) : "";
+      break;
+    } catch (const BusyError&) {
+      if (attempt >= kMaxAttempts) throw;
+      sleep_before_retry(attempt);
+    }
+  }
+  if (mode != "wal") {
+    throw StoreError("the database cannot use WAL journaling (journal_mode is '" + mode +
+                     "'); it must be a file on a local file system");
+  }
+
+  const int newest = current_schema_version();
+  run_transaction(connection, TransactionKind::write, [&] {
+    const int version = read_user_version(connection);
+    if (version > newest) {
+      throw StoreError("the database has schema version " + std::to_string(version) + ", newer than version " +
+                       std::to_string(newest) + " this manipid understands; use a newer manipid");
+    }
+    for (int step = version; step < newest; ++step) connection.execute(kMigrations[static_cast<std::size_t>(step)]);
+  });
+}
+
+}  // namespace manipid::server::sqlite

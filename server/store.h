@@ -1,0 +1,115 @@
+// store.h — where datasets, jobs, cost histories and estimates live: a small storage
+// interface, so the SQL dialect stays inside one backend (SQLite now; PostgreSQL for
+// multi-machine deployments later).
+//
+// Contract every backend keeps:
+//  - Each state change is one transaction; what a call returned as done survives a crash of
+//    the process (nothing acknowledged is lost).
+//  - Thread-safe: any thread may call any method at any time (backends keep their own
+//    connections per thread or a pool).
+//  - Jobs are claimed in submission order, each by exactly one worker.
+//  - Ids are random ("ds_"/"job_" + 16 hex digits), never reused.
+#pragma once
+
+#include "manipid/api/records.h"
+#include "manipid/core/trajectory.h"
+
+#include <map>
+#include <memory>
+#include <optional>
+#include <stdexcept>
+#include <string>
+#include <vector>
+
+namespace manipid::server {
+
+/// A storage failure the caller cannot fix (disk full, corrupt file, I/O error). The
+/// service answers 500 / marks the job failed; the message is for the log only.
+class StoreError : public std::runtime_error {
+ public:
+  using std::runtime_error::runtime_error;
+};
+
+struct NewJob {
+  api::JobKind kind = api::JobKind::identification;
+  std::string request;     ///< JSON text
+  std::string dataset_id;  ///< input dataset, may be empty
+};
+
+enum class SubmitStatus {
+  created,               ///< a new job (or dataset) was stored
+  replayed,              ///< same Idempotency-Key and fingerprint: the earlier one is returned
+  key_reused,            ///< same key, different fingerprint: nothing stored
+  queue_full,            ///< queued jobs ≥ queue_limit: nothing stored
+};
+
+struct SubmitOutcome {
+  SubmitStatus status = SubmitStatus::created;
+  api::JobInfo job;  ///< the new or earlier job (empty unless created/replayed)
+};
+
+struct DatasetOutcome {
+  SubmitStatus status = SubmitStatus::created;  ///< never queue_full
+  api::DatasetInfo dataset;
+};
+
+/// Estimates of a finished identification, one row per parameter (also kept in the result
+/// JSON; this table is for queries across jobs).
+struct EstimateRow {
+  std::string name;
+  double value = 0.0;
+  std::optional<double> std_error;
+};
+
+enum class CancelOutcome { not_found, cancelled_now, requested, already_finished };
+
+class Store {
+ public:
+  virtual ~Store() = default;
+
+  // ---- datasets ----
+  /// Stores the samples (as binary blobs, not text). `key`, when given, makes it idempotent.
+  virtual DatasetOutcome insert_dataset(const std::string& name, const Trajectory& data, const std::string& source_job,
+                                        const std::optional<api::IdempotencyKey>& key) = 0;
+  virtual std::optional<api::DatasetInfo> find_dataset(const std::string& id) = 0;
+  virtual std::optional<Trajectory> load_dataset(const std::string& id) = 0;
+  virtual api::Page<api::DatasetInfo> list_datasets(const api::PageRequest& page) = 0;  ///< newest first
+  virtual bool delete_dataset(const std::string& id) = 0;
+
+  // ---- jobs ----
+  /// Inserts a queued job unless the key replays or conflicts or the queue is full
+  /// (queue_limit ≤ 0: no limit). The key check, the count and the insert are one transaction.
+  virtual SubmitOutcome submit_job(const NewJob& job, const std::optional<api::IdempotencyKey>& key, int queue_limit) = 0;
+  virtual std::optional<api::JobInfo> find_job(const std::string& id) = 0;
+  virtual api::Page<api::JobInfo> list_jobs(const api::JobFilter& filter, const api::PageRequest& page) = 0;  ///< newest first
+  /// The oldest queued job, now running (started_at set, attempts + 1); nullopt when none.
+  virtual std::optional<api::JobInfo> claim_next_job() = 0;
+  /// Progress of a running job plus a batch of new history entries, in one transaction.
+  virtual void record_progress(const std::string& id, long evaluations, std::optional<double> best_cost,
+                               const std::vector<api::HistoryEntry>& batch) = 0;
+  /// A running job's end: state (succeeded, failed or cancelled), result JSON or problem
+  /// JSON, estimates (may be empty), the dataset it made or used.
+  virtual void finish_job(const std::string& id, api::JobState state, const std::string& result,
+                          const std::string& error, const std::vector<EstimateRow>& estimates,
+                          const std::string& dataset_id) = 0;
+  /// A running job back to queued with its history cleared (shutdown before it finished).
+  virtual void requeue_job(const std::string& id) = 0;
+  /// Queued → cancelled at once; running → cancel_requested set; finished → unchanged.
+  virtual CancelOutcome cancel_job(const std::string& id) = 0;
+  /// Finished jobs only; removes its history and estimates too.
+  virtual bool delete_job(const std::string& id, bool* was_active) = 0;
+  /// History entries in index order; the page token is opaque (keyset on index).
+  virtual std::optional<api::Page<api::HistoryEntry>> history(const std::string& id, const api::PageRequest& page) = 0;
+
+  // ---- the process's life ----
+  /// At start-up: every job left running by a dead process goes back to queued (history
+  /// cleared). Returns how many.
+  virtual int recover_interrupted_jobs() = 0;
+  virtual std::map<api::JobState, long> count_jobs_by_state() = 0;
+};
+
+/// Opens (creating if missing) a SQLite database file with the current schema, migrating an
+/// older one. Throws StoreError when the file cannot be opened or is from a newer manipid.
+std::unique_ptr<Store> open_sqlite_store(const std::string& path);
+
+}  // namespace manipid::server

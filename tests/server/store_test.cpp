@@ -1,0 +1,737 @@
+// store_test.cpp — the SQLite job store against real database files, one fresh temporary
+// directory per test: round trips, idempotency, the job life cycle, paging, recovery after a
+// restart, the schema version check and concurrent callers.
+#include "store.h"
+
+#include "manipid/api/problem.h"
+
+#include <gtest/gtest.h>
+#include <sqlite3.h>
+
+#include <algorithm>
+#include <atomic>
+#include <chrono>
+#include <cmath>
+#include <cstring>
+#include <filesystem>
+#include <limits>
+#include <random>
+#include <set>
+#include <string>
+#include <thread>
+#include <vector>
+
+namespace manipid::server {
+namespace {
+
+namespace fs = std::filesystem;
+using api::JobState;
+
+Trajectory make_trajectory(int samples, int joints, bool torque, bool reference) {
+  Trajectory data;
+  data.t.resize(samples);
+  for (int i = 0; i < samples; ++i) data.t[i] = 0.001 * i;
+  // Values whose last bits would not survive a trip through decimal text.
+  std::mt19937_64 generator(42);
+  std::uniform_real_distribution<double> any(-10.0, 10.0);
+  auto fill = [&](Eigen::MatrixXd& matrix) {
+    matrix.resize(samples, joints);
+    for (Eigen::Index i = 0; i < matrix.size(); ++i) matrix.data()[i] = any(generator) / 3.0;
+  };
+  fill(data.q);
+  if (samples > 2) {
+    data.q(0, 0) = -0.0;
+    data.q(1, 0) = std::numeric_limits<double>::denorm_min();
+    data.q(2, 0) = std::nextafter(1.0, 2.0);
+  }
+  if (torque) fill(data.tau);
+  if (reference) fill(data.ref);
+  return data;
+}
+
+bool same_bits(const Eigen::MatrixXd& left, const Eigen::MatrixXd& right) {
+  return left.rows() == right.rows() && left.cols() == right.cols() &&
+         (left.size() == 0 || std::memcmp(left.data(), right.data(), sizeof(double) * left.size()) == 0);
+}
+
+bool same_bits(const Eigen::VectorXd& left, const Eigen::VectorXd& right) {
+  return left.size() == right.size() &&
+         (left.size() == 0 || std::memcmp(left.data(), right.data(), sizeof(double) * left.size()) == 0);
+}
+
+NewJob identification_job(const std::string& request = R"({"upload_id":"ds_x"})") {
+  NewJob job;
+  job.kind = api::JobKind::identification;
+  job.request = request;
+  job.dataset_id = "ds_0123456789abcdef";
+  return job;
+}
+
+std::vector<api::HistoryEntry> history_batch(long first, long count) {
+  std::vector<api::HistoryEntry> batch;
+  for (long index = first; index < first + count; ++index) {
+    batch.push_back({index, 100.0 / (index + 1) + 1e-17, {1.0 / 3.0 + index, 2.0 / 7.0, -0.0}});
+  }
+  return batch;
+}
+
+template <class Call>
+void expect_invalid_field(Call call, const std::string& field) {
+  try {
+    call();
+    ADD_FAILURE() << "expected ApiError for " << field;
+  } catch (const api::ApiError& error) {
+    EXPECT_EQ(error.problem().kind, api::ProblemKind::invalid_field);
+    EXPECT_EQ(error.problem().field, field);
+  }
+}
+
+class StoreTest : public ::testing::Test {
+ protected:
+  void SetUp() override {
+    std::string pattern = (fs::temp_directory_path() / "manipid-store-XXXXXX").string();
+    ASSERT_NE(mkdtemp(pattern.data()), nullptr);
+    directory_ = pattern;
+    path_ = (directory_ / "manipid.db").string();
+    store_ = open_sqlite_store(path_);
+  }
+
+  void TearDown() override {
+    store_.reset();  // close every connection before the files go
+    fs::remove_all(directory_);
+  }
+
+  void reopen() {
+    store_.reset();
+    store_ = open_sqlite_store(path_);
+  }
+
+  std::string submit(const NewJob& job = identification_job()) {
+    auto outcome = store_->submit_job(job, std::nullopt, 0);
+    EXPECT_EQ(outcome.status, SubmitStatus::created);
+    return outcome.job.id;
+  }
+
+  fs::path directory_;
+  std::string path_;
+  std::unique_ptr<Store> store_;
+};
+
+// "2026-11-22T06:40:12.345Z": a digit where the template has 'd', a hex digit for 'x', the
+// rest literally. (Hand-written: <regex> trips GCC 12's -Wmaybe-uninitialized here.)
+bool matches_template(const std::string& text, const std::string& pattern) {
+  if (text.size() != pattern.size()) return false;
+  for (std::size_t i = 0; i < text.size(); ++i) {
+    const bool digit = text[i] >= '0' && text[i] <= '9';
+    const bool hex_digit = digit || (text[i] >= 'a' && text[i] <= 'f');
+    if (pattern[i] == 'd' ? !digit : pattern[i] == 'x' ? !hex_digit : text[i] != pattern[i]) return false;
+  }
+  return true;
+}
+
+bool is_time(const std::string& text) { return matches_template(text, "dddd-dd-ddTdd:dd:dd.dddZ"); }
+bool is_id(const std::string& text, const std::string& prefix) {
+  return text.starts_with(prefix) && matches_template(text.substr(prefix.size()), std::string(16, 'x'));
+}
+
+// ---- datasets ----
+
+TEST_F(StoreTest, DatasetRoundTripIsBitExact) {
+  const auto data = make_trajectory(257, 3, true, true);
+  const auto outcome = store_->insert_dataset("lab run 7", data, "job_00000000000000aa", std::nullopt);
+  ASSERT_EQ(outcome.status, SubmitStatus::created);
+  EXPECT_TRUE(is_id(outcome.dataset.id, "ds_"));
+  EXPECT_TRUE(is_time(outcome.dataset.created_at)) << outcome.dataset.created_at;
+
+  const auto info = store_->find_dataset(outcome.dataset.id);
+  ASSERT_TRUE(info);
+  EXPECT_EQ(info->name, "lab run 7");
+  EXPECT_EQ(info->source_job, "job_00000000000000aa");
+  EXPECT_EQ(info->joints, 3);
+  EXPECT_EQ(info->samples, 257);
+  EXPECT_EQ(info->dt, data.dt());
+  EXPECT_TRUE(info->has_torque);
+  EXPECT_TRUE(info->has_reference);
+  EXPECT_EQ(info->created_at, outcome.dataset.created_at);
+
+  const auto loaded = store_->load_dataset(outcome.dataset.id);
+  ASSERT_TRUE(loaded);
+  EXPECT_TRUE(same_bits(loaded->t, data.t));
+  EXPECT_TRUE(same_bits(loaded->q, data.q));
+  EXPECT_TRUE(same_bits(loaded->tau, data.tau));
+  EXPECT_TRUE(same_bits(loaded->ref, data.ref));
+  EXPECT_TRUE(std::signbit(loaded->q(0, 0)));
+}
+
+TEST_F(StoreTest, DatasetRoundTripWithoutTorqueOrReference) {
+  const auto data = make_trajectory(40, 2, false, false);
+  const auto id = store_->insert_dataset("q only", data, "", std::nullopt).dataset.id;
+  const auto info = store_->find_dataset(id);
+  ASSERT_TRUE(info);
+  EXPECT_FALSE(info->has_torque);
+  EXPECT_FALSE(info->has_reference);
+  EXPECT_EQ(info->source_job, "");
+  const auto loaded = store_->load_dataset(id);
+  ASSERT_TRUE(loaded);
+  EXPECT_TRUE(same_bits(loaded->t, data.t));
+  EXPECT_TRUE(same_bits(loaded->q, data.q));
+  EXPECT_EQ(loaded->tau.rows(), 40);
+  EXPECT_EQ(loaded->tau.cols(), 0);
+  EXPECT_EQ(loaded->ref.cols(), 0);
+  EXPECT_FALSE(loaded->has_torque());
+
+  // Torque without reference, the other mix.
+  const auto torque_only = make_trajectory(10, 2, true, false);
+  const auto loaded_torque = store_->load_dataset(store_->insert_dataset("tau", torque_only, "", std::nullopt).dataset.id);
+  ASSERT_TRUE(loaded_torque);
+  EXPECT_TRUE(same_bits(loaded_torque->tau, torque_only.tau));
+  EXPECT_EQ(loaded_torque->ref.cols(), 0);
+}
+
+TEST_F(StoreTest, UnknownDatasetIsAbsent) {
+  EXPECT_FALSE(store_->find_dataset("ds_0000000000000000"));
+  EXPECT_FALSE(store_->load_dataset("ds_0000000000000000"));
+  EXPECT_FALSE(store_->delete_dataset("ds_0000000000000000"));
+}
+
+TEST_F(StoreTest, MismatchedTrajectoryShapeIsRefused) {
+  auto data = make_trajectory(10, 2, true, false);
+  data.tau.resize(9, 2);
+  EXPECT_THROW(store_->insert_dataset("bad", data, "", std::nullopt), std::invalid_argument);
+  EXPECT_TRUE(store_->list_datasets({}).items.empty());
+}
+
+TEST_F(StoreTest, DatasetIdempotencyKey) {
+  const auto data = make_trajectory(20, 2, true, false);
+  const api::IdempotencyKey key{"upload-1", "fingerprint-a"};
+  const auto first = store_->insert_dataset("first", data, "", key);
+  ASSERT_EQ(first.status, SubmitStatus::created);
+
+  const auto replay = store_->insert_dataset("first", data, "", key);
+  EXPECT_EQ(replay.status, SubmitStatus::replayed);
+  EXPECT_EQ(replay.dataset.id, first.dataset.id);
+  EXPECT_EQ(replay.dataset.name, "first");
+
+  const auto conflict = store_->insert_dataset("other", data, "", api::IdempotencyKey{"upload-1", "fingerprint-b"});
+  EXPECT_EQ(conflict.status, SubmitStatus::key_reused);
+  EXPECT_TRUE(conflict.dataset.id.empty());
+  EXPECT_EQ(store_->list_datasets({}).items.size(), 1u);
+
+  // Deleting the dataset frees its key.
+  EXPECT_TRUE(store_->delete_dataset(first.dataset.id));
+  EXPECT_FALSE(store_->find_dataset(first.dataset.id));
+  const auto again = store_->insert_dataset("again", data, "", api::IdempotencyKey{"upload-1", "fingerprint-b"});
+  EXPECT_EQ(again.status, SubmitStatus::created);
+  EXPECT_NE(again.dataset.id, first.dataset.id);
+}
+
+TEST_F(StoreTest, ListDatasetsNewestFirstInPages) {
+  std::vector<std::string> ids;
+  for (int i = 0; i < 5; ++i) {
+    ids.push_back(store_->insert_dataset("d" + std::to_string(i), make_trajectory(3, 1, false, false), "",
+                                         std::nullopt)
+                      .dataset.id);
+  }
+  std::vector<std::string> seen;
+  api::PageRequest request{2, ""};
+  std::vector<std::size_t> sizes;
+  for (;;) {
+    const auto page = store_->list_datasets(request);
+    sizes.push_back(page.items.size());
+    for (const auto& dataset : page.items) seen.push_back(dataset.id);
+    if (page.next_page_token.empty()) break;
+    request.page_token = page.next_page_token;
+  }
+  EXPECT_EQ(sizes, (std::vector<std::size_t>{2, 2, 1}));
+  std::reverse(ids.begin(), ids.end());
+  EXPECT_EQ(seen, ids);
+  expect_invalid_field([&] { store_->list_datasets({2, "not-a-token"}); }, "page_token");
+}
+
+// ---- submitting and claiming ----
+
+TEST_F(StoreTest, SubmittedJobIsQueued) {
+  const auto outcome = store_->submit_job(identification_job(R"({"a":1})"), std::nullopt, 0);
+  ASSERT_EQ(outcome.status, SubmitStatus::created);
+  EXPECT_TRUE(is_id(outcome.job.id, "job_"));
+  const auto job = store_->find_job(outcome.job.id);
+  ASSERT_TRUE(job);
+  EXPECT_EQ(job->state, JobState::queued);
+  EXPECT_EQ(job->kind, api::JobKind::identification);
+  EXPECT_EQ(job->request, R"({"a":1})");
+  EXPECT_EQ(job->dataset_id, "ds_0123456789abcdef");
+  EXPECT_TRUE(is_time(job->created_at));
+  EXPECT_EQ(job->started_at, "");
+  EXPECT_EQ(job->finished_at, "");
+  EXPECT_EQ(job->attempts, 0);
+  EXPECT_EQ(job->evaluations, 0);
+  EXPECT_FALSE(job->best_cost);
+  EXPECT_FALSE(job->cancel_requested);
+  EXPECT_FALSE(store_->find_job("job_0000000000000000"));
+}
+
+TEST_F(StoreTest, JobIdempotencyKey) {
+  const api::IdempotencyKey key{"client-1:abc", "sha-1"};
+  const auto first = store_->submit_job(identification_job(), key, 0);
+  ASSERT_EQ(first.status, SubmitStatus::created);
+  const auto replay = store_->submit_job(identification_job(), key, 0);
+  EXPECT_EQ(replay.status, SubmitStatus::replayed);
+  EXPECT_EQ(replay.job.id, first.job.id);
+
+  const auto conflict = store_->submit_job(identification_job(R"({"other":2})"), {{"client-1:abc", "sha-2"}}, 0);
+  EXPECT_EQ(conflict.status, SubmitStatus::key_reused);
+  EXPECT_TRUE(conflict.job.id.empty());
+  EXPECT_EQ(store_->count_jobs_by_state()[JobState::queued], 1);
+
+  // A replay of a job that has since run shows its current state.
+  ASSERT_TRUE(store_->claim_next_job());
+  EXPECT_EQ(store_->submit_job(identification_job(), key, 0).job.state, JobState::running);
+}
+
+TEST_F(StoreTest, QueueLimit) {
+  const api::IdempotencyKey key{"k", "f"};
+  EXPECT_EQ(store_->submit_job(identification_job(), key, 2).status, SubmitStatus::created);
+  EXPECT_EQ(store_->submit_job(identification_job(), std::nullopt, 2).status, SubmitStatus::created);
+  const auto full = store_->submit_job(identification_job(), api::IdempotencyKey{"k2", "f"}, 2);
+  EXPECT_EQ(full.status, SubmitStatus::queue_full);
+  EXPECT_TRUE(full.job.id.empty());
+  EXPECT_EQ(store_->count_jobs_by_state()[JobState::queued], 2);
+  // The refused submission stored no key: it can be sent again later.
+  // A replay is answered even when the queue is full.
+  EXPECT_EQ(store_->submit_job(identification_job(), key, 2).status, SubmitStatus::replayed);
+  // No limit at 0 or below.
+  EXPECT_EQ(store_->submit_job(identification_job(), std::nullopt, 0).status, SubmitStatus::created);
+  EXPECT_EQ(store_->submit_job(identification_job(), std::nullopt, -1).status, SubmitStatus::created);
+  // Running jobs do not count against the queue.
+  for (int i = 0; i < 3; ++i) ASSERT_TRUE(store_->claim_next_job());
+  EXPECT_EQ(store_->submit_job(identification_job(), api::IdempotencyKey{"k2", "f"}, 2).status,
+            SubmitStatus::created);
+}
+
+TEST_F(StoreTest, ClaimOrderIsSubmissionOrder) {
+  std::vector<std::string> submitted;
+  for (int i = 0; i < 6; ++i) submitted.push_back(submit());
+  for (const auto& expected : submitted) {
+    const auto claimed = store_->claim_next_job();
+    ASSERT_TRUE(claimed);
+    EXPECT_EQ(claimed->id, expected);
+    EXPECT_EQ(claimed->state, JobState::running);
+    EXPECT_EQ(claimed->attempts, 1);
+    EXPECT_TRUE(is_time(claimed->started_at));
+  }
+  EXPECT_FALSE(store_->claim_next_job());
+  const auto counts = store_->count_jobs_by_state();
+  EXPECT_EQ(counts.at(JobState::running), 6);
+  EXPECT_EQ(counts.at(JobState::queued), 0);
+}
+
+TEST_F(StoreTest, EightThreadsNeverClaimTheSameJob) {
+  constexpr int kJobs = 60;
+  std::set<std::string> submitted;
+  for (int i = 0; i < kJobs; ++i) submitted.insert(submit());
+
+  std::vector<std::vector<std::string>> claimed(8);
+  std::atomic<int> failures{0};
+  std::vector<std::thread> threads;
+  for (int t = 0; t < 8; ++t) {
+    threads.emplace_back([&, t] {
+      try {
+        while (auto job = store_->claim_next_job()) claimed[t].push_back(job->id);
+      } catch (...) {
+        ++failures;
+      }
+    });
+  }
+  for (auto& thread : threads) thread.join();
+  EXPECT_EQ(failures.load(), 0);
+  std::multiset<std::string> all;
+  for (const auto& ids : claimed) all.insert(ids.begin(), ids.end());
+  EXPECT_EQ(all.size(), static_cast<std::size_t>(kJobs));
+  EXPECT_EQ(std::set<std::string>(all.begin(), all.end()), submitted);
+}
+
+// ---- progress and history ----
+
+TEST_F(StoreTest, ProgressAndHistoryPaging) {
+  const auto id = submit();
+  ASSERT_TRUE(store_->claim_next_job());
+  store_->record_progress(id, 60, 0.5, history_batch(0, 60));
+  store_->record_progress(id, 120, 0.25, history_batch(60, 60));
+  store_->record_progress(id, 120, 0.25, history_batch(60, 60));  // a re-sent batch is harmless
+
+  const auto job = store_->find_job(id);
+  ASSERT_TRUE(job);
+  EXPECT_EQ(job->evaluations, 120);
+  ASSERT_TRUE(job->best_cost);
+  EXPECT_EQ(*job->best_cost, 0.25);
+
+  std::vector<api::HistoryEntry> all;
+  std::vector<std::size_t> sizes;
+  api::PageRequest request{50, ""};
+  for (;;) {
+    const auto page = store_->history(id, request);
+    ASSERT_TRUE(page);
+    sizes.push_back(page->items.size());
+    all.insert(all.end(), page->items.begin(), page->items.end());
+    if (page->next_page_token.empty()) break;
+    request.page_token = page->next_page_token;
+  }
+  EXPECT_EQ(sizes, (std::vector<std::size_t>{50, 50, 20}));
+  const auto expected = history_batch(0, 120);
+  ASSERT_EQ(all.size(), expected.size());
+  for (std::size_t i = 0; i < all.size(); ++i) {
+    EXPECT_EQ(all[i].index, expected[i].index);
+    EXPECT_EQ(std::memcmp(&all[i].cost, &expected[i].cost, sizeof(double)), 0);
+    ASSERT_EQ(all[i].theta.size(), 3u);
+    EXPECT_EQ(std::memcmp(all[i].theta.data(), expected[i].theta.data(), 3 * sizeof(double)), 0);
+  }
+
+  EXPECT_EQ(store_->history(id, {0, ""})->items.size(), 50u);            // 0 → default 50
+  const auto everything = store_->history(id, {5000, ""});                // coerced to 1000
+  EXPECT_EQ(everything->items.size(), 120u);
+  EXPECT_TRUE(everything->next_page_token.empty());
+  const auto exact = store_->history(id, {120, ""});                      // exactly one full page
+  EXPECT_EQ(exact->items.size(), 120u);
+  EXPECT_TRUE(exact->next_page_token.empty());
+
+  const auto first = store_->history(id, {10, ""});
+  ASSERT_FALSE(first->next_page_token.empty());
+  const auto second = store_->history(id, {10, first->next_page_token});
+  EXPECT_EQ(second->items.front().index, 10);
+
+  std::string edited = first->next_page_token;
+  edited[3] = edited[3] == '1' ? '2' : '1';
+  expect_invalid_field([&] { store_->history(id, {10, "garbage"}); }, "page_token");
+  expect_invalid_field([&] { store_->history(id, {10, edited}); }, "page_token");
+  expect_invalid_field([&] { store_->history(id, {10, first->next_page_token + "0"}); }, "page_token");
+  expect_invalid_field([&] { store_->history(id, {-1, ""}); }, "page_size");
+  // A token is bound to its job.
+  const auto other = submit();
+  expect_invalid_field([&] { store_->history(other, {10, first->next_page_token}); }, "page_token");
+
+  EXPECT_FALSE(store_->history("job_0000000000000000", {}));
+  const auto empty = store_->history(other, {});
+  ASSERT_TRUE(empty);
+  EXPECT_TRUE(empty->items.empty());
+  EXPECT_TRUE(empty->next_page_token.empty());
+}
+
+TEST_F(StoreTest, ProgressOnlyForRunningJobs) {
+  const auto id = submit();
+  store_->record_progress(id, 5, 1.0, history_batch(0, 5));  // still queued: dropped
+  EXPECT_EQ(store_->find_job(id)->evaluations, 0);
+  EXPECT_TRUE(store_->history(id, {})->items.empty());
+}
+
+// ---- finishing, cancelling, deleting ----
+
+TEST_F(StoreTest, FinishJobKeepsOutcome) {
+  const auto id = submit();
+  ASSERT_TRUE(store_->claim_next_job());
+  store_->record_progress(id, 10, 0.1, history_batch(0, 10));
+  store_->finish_job(id, JobState::succeeded, R"({"theta":[1,2]})", "",
+                     {{"m1", 1.5, 0.01}, {"l1", 0.3, std::nullopt}}, "ds_aaaaaaaaaaaaaaaa");
+  auto job = store_->find_job(id);
+  ASSERT_TRUE(job);
+  EXPECT_EQ(job->state, JobState::succeeded);
+  EXPECT_EQ(job->result, R"({"theta":[1,2]})");
+  EXPECT_EQ(job->error, "");
+  EXPECT_EQ(job->dataset_id, "ds_aaaaaaaaaaaaaaaa");
+  EXPECT_TRUE(is_time(job->finished_at));
+  EXPECT_EQ(store_->history(id, {})->items.size(), 10u);  // the history stays with the result
+
+  // A second end does not overwrite the first; an empty dataset id keeps the input's.
+  store_->finish_job(id, JobState::failed, "", R"({"code":"INTERNAL"})", {}, "");
+  job = store_->find_job(id);
+  EXPECT_EQ(job->state, JobState::succeeded);
+  EXPECT_EQ(job->error, "");
+
+  const auto failed = submit();
+  ASSERT_TRUE(store_->claim_next_job());
+  store_->finish_job(failed, JobState::failed, "", R"({"code":"INTERNAL"})", {}, "");
+  job = store_->find_job(failed);
+  EXPECT_EQ(job->state, JobState::failed);
+  EXPECT_EQ(job->error, R"({"code":"INTERNAL"})");
+  EXPECT_EQ(job->dataset_id, "ds_0123456789abcdef");
+
+  EXPECT_THROW(store_->finish_job(failed, JobState::running, "", "", {}, ""), std::invalid_argument);
+}
+
+TEST_F(StoreTest, CancelRules) {
+  const auto queued = submit();
+  const auto running = submit();
+  EXPECT_EQ(store_->cancel_job(queued), CancelOutcome::cancelled_now);
+  auto job = store_->find_job(queued);
+  EXPECT_EQ(job->state, JobState::cancelled);
+  EXPECT_TRUE(is_time(job->finished_at));
+  EXPECT_EQ(store_->cancel_job(queued), CancelOutcome::already_finished);
+
+  ASSERT_EQ(store_->claim_next_job()->id, running);  // the cancelled one is skipped
+  EXPECT_EQ(store_->cancel_job(running), CancelOutcome::requested);
+  EXPECT_EQ(store_->cancel_job(running), CancelOutcome::requested);
+  job = store_->find_job(running);
+  EXPECT_EQ(job->state, JobState::running);
+  EXPECT_TRUE(job->cancel_requested);
+  store_->finish_job(running, JobState::cancelled, "", "", {}, "");
+  EXPECT_EQ(store_->cancel_job(running), CancelOutcome::already_finished);
+  EXPECT_EQ(store_->cancel_job("job_0000000000000000"), CancelOutcome::not_found);
+}
+
+TEST_F(StoreTest, DeleteRules) {
+  const api::IdempotencyKey key{"delete-me", "f"};
+  const auto queued = store_->submit_job(identification_job(), key, 0).job.id;
+  bool was_active = false;
+  EXPECT_FALSE(store_->delete_job(queued, &was_active));
+  EXPECT_TRUE(was_active);
+
+  ASSERT_TRUE(store_->claim_next_job());
+  was_active = false;
+  EXPECT_FALSE(store_->delete_job(queued, &was_active));
+  EXPECT_TRUE(was_active);
+
+  store_->record_progress(queued, 3, 1.0, history_batch(0, 3));
+  store_->finish_job(queued, JobState::succeeded, "{}", "", {{"m1", 1.0, std::nullopt}}, "");
+  was_active = true;
+  EXPECT_TRUE(store_->delete_job(queued, &was_active));
+  EXPECT_FALSE(was_active);
+  EXPECT_FALSE(store_->find_job(queued));
+  EXPECT_FALSE(store_->history(queued, {}));
+
+  was_active = true;
+  EXPECT_FALSE(store_->delete_job(queued, &was_active));
+  EXPECT_FALSE(was_active);
+  EXPECT_FALSE(store_->delete_job(queued, nullptr));
+
+  // The deleted job's key no longer replays.
+  const auto again = store_->submit_job(identification_job(), key, 0);
+  EXPECT_EQ(again.status, SubmitStatus::created);
+  EXPECT_NE(again.job.id, queued);
+}
+
+TEST_F(StoreTest, RequeueClearsProgressAndKeepsAttempts) {
+  const auto id = submit();
+  ASSERT_TRUE(store_->claim_next_job());
+  store_->record_progress(id, 7, 0.7, history_batch(0, 7));
+  store_->requeue_job(id);
+  auto job = store_->find_job(id);
+  EXPECT_EQ(job->state, JobState::queued);
+  EXPECT_EQ(job->started_at, "");
+  EXPECT_EQ(job->evaluations, 0);
+  EXPECT_FALSE(job->best_cost);
+  EXPECT_EQ(job->attempts, 1);
+  EXPECT_TRUE(store_->history(id, {})->items.empty());
+  const auto again = store_->claim_next_job();
+  ASSERT_TRUE(again);
+  EXPECT_EQ(again->id, id);
+  EXPECT_EQ(again->attempts, 2);
+
+  // A job whose cancellation was asked for is not run again.
+  EXPECT_EQ(store_->cancel_job(id), CancelOutcome::requested);
+  store_->requeue_job(id);
+  EXPECT_EQ(store_->find_job(id)->state, JobState::cancelled);
+  EXPECT_FALSE(store_->claim_next_job());
+}
+
+// ---- restarts ----
+
+TEST_F(StoreTest, RecoverInterruptedJobsAfterReopen) {
+  const auto interrupted = submit();
+  const auto cancelling = submit();
+  const auto waiting = submit();
+  ASSERT_EQ(store_->claim_next_job()->id, interrupted);
+  ASSERT_EQ(store_->claim_next_job()->id, cancelling);
+  store_->record_progress(interrupted, 30, 0.3, history_batch(0, 30));
+  ASSERT_EQ(store_->cancel_job(cancelling), CancelOutcome::requested);
+
+  reopen();  // as if the process had died with the jobs running
+  EXPECT_EQ(store_->recover_interrupted_jobs(), 2);
+  auto job = store_->find_job(interrupted);
+  EXPECT_EQ(job->state, JobState::queued);
+  EXPECT_EQ(job->attempts, 1);
+  EXPECT_EQ(job->started_at, "");
+  EXPECT_EQ(job->evaluations, 0);
+  EXPECT_TRUE(store_->history(interrupted, {})->items.empty());
+  EXPECT_EQ(store_->find_job(cancelling)->state, JobState::cancelled);
+  EXPECT_EQ(store_->find_job(waiting)->state, JobState::queued);
+  EXPECT_EQ(store_->recover_interrupted_jobs(), 0);
+
+  // Back in submission order; the interrupted job starts its second attempt.
+  const auto first = store_->claim_next_job();
+  ASSERT_TRUE(first);
+  EXPECT_EQ(first->id, interrupted);
+  EXPECT_EQ(first->attempts, 2);
+  EXPECT_EQ(store_->claim_next_job()->id, waiting);
+}
+
+TEST_F(StoreTest, EverythingSurvivesReopen) {
+  const auto data = make_trajectory(50, 2, true, true);
+  const auto dataset = store_->insert_dataset("kept", data, "", api::IdempotencyKey{"d", "f"}).dataset.id;
+  const auto job = store_->submit_job(identification_job(), api::IdempotencyKey{"j", "f"}, 0).job.id;
+  ASSERT_TRUE(store_->claim_next_job());
+  store_->record_progress(job, 12, 0.12, history_batch(0, 12));
+
+  reopen();
+  const auto loaded = store_->load_dataset(dataset);
+  ASSERT_TRUE(loaded);
+  EXPECT_TRUE(same_bits(loaded->q, data.q));
+  EXPECT_TRUE(same_bits(loaded->ref, data.ref));
+  const auto info = store_->find_job(job);
+  ASSERT_TRUE(info);
+  EXPECT_EQ(info->state, JobState::running);
+  EXPECT_EQ(info->evaluations, 12);
+  EXPECT_EQ(store_->history(job, {})->items.size(), 12u);
+  EXPECT_EQ(store_->submit_job(identification_job(), api::IdempotencyKey{"j", "f"}, 0).job.id, job);
+  EXPECT_EQ(store_->insert_dataset("kept", data, "", api::IdempotencyKey{"d", "f"}).status, SubmitStatus::replayed);
+  // New rows after the reopen list above the old ones.
+  const auto newer = submit();
+  const auto page = store_->list_jobs({}, {});
+  ASSERT_EQ(page.items.size(), 2u);
+  EXPECT_EQ(page.items[0].id, newer);
+}
+
+TEST_F(StoreTest, DatabaseFromNewerVersionIsRefused) {
+  store_.reset();
+  sqlite3* database = nullptr;
+  ASSERT_EQ(sqlite3_open(path_.c_str(), &database), SQLITE_OK);
+  ASSERT_EQ(sqlite3_exec(database, "PRAGMA user_version = 99", nullptr, nullptr, nullptr), SQLITE_OK);
+  sqlite3_close(database);
+  try {
+    open_sqlite_store(path_);
+    ADD_FAILURE() << "expected StoreError";
+  } catch (const StoreError& error) {
+    EXPECT_NE(std::string(error.what()).find("newer"), std::string::npos) << error.what();
+    EXPECT_NE(std::string(error.what()).find("99"), std::string::npos) << error.what();
+  }
+}
+
+TEST_F(StoreTest, UnusableFilesThrowStoreError) {
+  EXPECT_THROW(open_sqlite_store((directory_ / "missing-dir" / "x.db").string()), StoreError);
+  const auto garbage = directory_ / "garbage.db";
+  {
+    std::FILE* file = std::fopen(garbage.c_str(), "wb");
+    ASSERT_NE(file, nullptr);
+    for (int i = 0; i < 4096; ++i) std::fputc('x', file);
+    std::fclose(file);
+  }
+  EXPECT_THROW(open_sqlite_store(garbage.string()), StoreError);
+}
+
+// ---- listing and counting ----
+
+TEST_F(StoreTest, ListJobsNewestFirstWithFilters) {
+  NewJob simulation = identification_job();
+  simulation.kind = api::JobKind::simulation;
+  std::vector<std::string> ids;
+  for (int i = 0; i < 7; ++i) ids.push_back(submit(i % 2 == 0 ? simulation : identification_job()));
+  ASSERT_EQ(store_->claim_next_job()->id, ids[0]);  // a running simulation
+
+  std::vector<std::string> seen;
+  api::PageRequest request{3, ""};
+  for (;;) {
+    const auto page = store_->list_jobs({}, request);
+    for (const auto& job : page.items) seen.push_back(job.id);
+    if (page.next_page_token.empty()) break;
+    EXPECT_EQ(page.items.size(), 3u);
+    request.page_token = page.next_page_token;
+  }
+  EXPECT_EQ(seen, std::vector<std::string>(ids.rbegin(), ids.rend()));
+
+  const auto simulations = store_->list_jobs({std::nullopt, api::JobKind::simulation}, {});
+  ASSERT_EQ(simulations.items.size(), 4u);
+  EXPECT_EQ(simulations.items[0].id, ids[6]);
+  const auto queued_simulations = store_->list_jobs({JobState::queued, api::JobKind::simulation}, {});
+  EXPECT_EQ(queued_simulations.items.size(), 3u);
+  const auto running = store_->list_jobs({JobState::running, std::nullopt}, {});
+  ASSERT_EQ(running.items.size(), 1u);
+  EXPECT_EQ(running.items[0].id, ids[0]);
+
+  const auto first = store_->list_jobs({JobState::queued, std::nullopt}, {2, ""});
+  ASSERT_FALSE(first.next_page_token.empty());
+  EXPECT_EQ(store_->list_jobs({JobState::queued, std::nullopt}, {2, first.next_page_token}).items.size(), 2u);
+  // The token belongs to its filter.
+  expect_invalid_field([&] { store_->list_jobs({}, {2, first.next_page_token}); }, "page_token");
+  expect_invalid_field([&] { store_->list_jobs({}, {2, "j1.zz.00000000"}); }, "page_token");
+  expect_invalid_field([&] { store_->list_jobs({}, {2, "%%%"}); }, "page_token");
+}
+
+TEST_F(StoreTest, CountJobsByStateHasAllStates) {
+  auto counts = store_->count_jobs_by_state();
+  ASSERT_EQ(counts.size(), 5u);
+  for (const auto& [state, count] : counts) EXPECT_EQ(count, 0);
+  const auto cancelled = submit();
+  submit();
+  submit();
+  store_->cancel_job(cancelled);
+  store_->claim_next_job();
+  counts = store_->count_jobs_by_state();
+  EXPECT_EQ(counts.at(JobState::queued), 1);
+  EXPECT_EQ(counts.at(JobState::running), 1);
+  EXPECT_EQ(counts.at(JobState::cancelled), 1);
+  EXPECT_EQ(counts.at(JobState::succeeded), 0);
+  EXPECT_EQ(counts.at(JobState::failed), 0);
+}
+
+// ---- many callers at once ----
+
+TEST_F(StoreTest, WriterWaitsForAnotherConnectionsLockInsteadOfFailing) {
+  // Another connection (as another process would) holds the write lock for a while.
+  sqlite3* other = nullptr;
+  ASSERT_EQ(sqlite3_open(path_.c_str(), &other), SQLITE_OK);
+  ASSERT_EQ(sqlite3_exec(other, "BEGIN IMMEDIATE", nullptr, nullptr, nullptr), SQLITE_OK);
+  std::thread release([other] {
+    std::this_thread::sleep_for(std::chrono::milliseconds(300));
+    sqlite3_exec(other, "COMMIT", nullptr, nullptr, nullptr);
+  });
+  const auto start = std::chrono::steady_clock::now();
+  SubmitOutcome outcome;
+  EXPECT_NO_THROW(outcome = store_->submit_job(identification_job(), std::nullopt, 0));
+  const auto waited = std::chrono::steady_clock::now() - start;
+  release.join();
+  sqlite3_close(other);
+  EXPECT_EQ(outcome.status, SubmitStatus::created);
+  EXPECT_GE(waited, std::chrono::milliseconds(250));
+  // Readers are not blocked by a writer in WAL mode.
+  EXPECT_TRUE(store_->find_job(outcome.job.id));
+}
+
+TEST_F(StoreTest, ConcurrentSubmissionsWithSharedKeys) {
+  constexpr int kThreads = 8;
+  constexpr int kPerThread = 25;
+  // Every fifth submission of each thread uses a key shared by all threads: 5 keys, 40 sends.
+  std::atomic<int> failures{0}, created{0}, replayed{0};
+  std::vector<std::vector<std::pair<int, std::string>>> shared_ids(kThreads);
+  std::vector<std::thread> threads;
+  for (int t = 0; t < kThreads; ++t) {
+    threads.emplace_back([&, t] {
+      try {
+        for (int i = 0; i < kPerThread; ++i) {
+          std::optional<api::IdempotencyKey> key;
+          if (i % 5 == 0) {
+            key = api::IdempotencyKey{"shared-" + std::to_string(i), "same"};
+          } else if (i % 2 == 0) {
+            key = api::IdempotencyKey{"own-" + std::to_string(t) + "-" + std::to_string(i), "same"};
+          }
+          const auto outcome = store_->submit_job(identification_job(), key, 0);
+          if (outcome.status == SubmitStatus::created) ++created;
+          if (outcome.status == SubmitStatus::replayed) ++replayed;
+          if (i % 5 == 0) shared_ids[t].emplace_back(i, outcome.job.id);
+          // Readers interleaved with the writers.
+          if (!store_->find_job(outcome.job.id)) ++failures;
+        }
+      } catch (const std::exception& error) {
+        ADD_FAILURE() << error.what();
+        ++failures;
+      }
+    });
+  }
+  for (auto& thread : threads) thread.join();
+  EXPECT_EQ(failures.load(), 0);
+  EXPECT_EQ(created.load(), kThreads * kPerThread - 40 + 5);
+  EXPECT_EQ(replayed.load(), 35);
+  EXPECT_EQ(store_->count_jobs_by_state()[JobState::queued], kThreads * kPerThread - 40 + 5);
+  // Every thread got the same job for the same shared key.
+  for (int t = 1; t < kThreads; ++t) EXPECT_EQ(shared_ids[t], shared_ids[0]);
+}
+
+}  // namespace
+}  // namespace manipid::server
