@@ -5,33 +5,42 @@
 // × m_k (ö_k − gravity) + J_j q̈_j, evaluated by one forward (accelerations) and one backward
 // (forces, moments) pass. The paper's simplified kinetic energy has a diagonal, configuration-
 // dependent mass matrix; its Lagrange equations are written out from the position Jacobians.
+// The complete model's inverse and forward dynamics run in dynamics_kernels.h, specialised
+// on the joint count; the paper variant and the kinematics queries use the code here.
 #include "manipid/core/dynamics.h"
 
+#include "dynamics_kernels.h"
 #include "frame_update.h"
 
 #include <cmath>
 #include <string>
 
+// The complete model's two kernels are compiled twice, for baseline x86-64 and for AVX2,
+// and the loader picks one per machine (GNU ifunc). AVX's three-operand instructions drop
+// the register copies that SSE2 needs around every product: ~25 % faster on this host. The
+// AVX2 target does not include FMA, so no products are fused and both copies return the
+// same numbers bit for bit (compared on every output of bench/dynamics_count's calls).
+#if defined(__x86_64__) && defined(__GNUC__) && defined(__GLIBC__)
+#define MANIPID_AVX2_CLONE [[gnu::target_clones("avx2", "default")]]
+#else
+#define MANIPID_AVX2_CLONE
+#endif
+
 namespace manipid {
 namespace {
 
-void check_state_size(const RobotModel& model, Eigen::Index size, const char* field) {
-  if (size != model.joint_count()) {
-    throw InputError(field, std::string(field) + " has " + std::to_string(size) + " entries, the model has " +
-                                std::to_string(model.joint_count()) + " joints");
-  }
+[[noreturn, gnu::noinline, gnu::cold]] void throw_state_size_error(const RobotModel& model, Eigen::Index size,
+                                                                 const char* field) {
+  throw InputError(field, std::string(field) + " has " + std::to_string(size) + " entries, the model has " +
+                              std::to_string(model.joint_count()) + " joints");
 }
 
-double joint_inertia(const RobotModel& model, const Parameters& parameters, int k) {
-  return model.joint_inertia_factor * parameters.mass[k] * parameters.length[k] * parameters.length[k];
+// Inline, with the message built out of line: the check runs four times per dynamics call.
+inline void check_state_size(const RobotModel& model, Eigen::Index size, const char* field) {
+  if (size != model.joint_count()) [[unlikely]] throw_state_size_error(model, size, field);
 }
 
-// Translation offsets of joint k's DH row, with the length parameter substituted.
-void offsets(const RobotModel& model, const Parameters& parameters, int k, double& a, double& d) {
-  const JointDescription& joint = model.joints[k];
-  a = joint.length_role == LengthRole::a ? parameters.length[k] : joint.a;
-  d = joint.length_role == LengthRole::d ? parameters.length[k] : joint.d;
-}
+using detail::joint_inertia;
 
 // Velocities of the frames (ω_k, ȯ_k), needed by the paper variant; the complete variant
 // gets them inside its acceleration pass.
@@ -56,31 +65,6 @@ void position_jacobians(const RobotModel& model, DynamicsWorkspace& w) {
         w.jacobian.col(k * n + j) = w.rotation[j].col(2).cross(w.origin[k + 1] - w.origin[j]);
       }
     }
-  }
-}
-
-void inverse_dynamics_complete(const RobotModel& model, const Parameters& parameters, DynamicsWorkspace& w,
-                               const Eigen::Ref<const Eigen::VectorXd>& qd,
-                               const Eigen::Ref<const Eigen::VectorXd>& qdd, Eigen::Ref<Eigen::VectorXd> tau) {
-  const int n = model.joint_count();
-  // Running values stay in registers; only what the backward pass needs is stored.
-  Eigen::Vector3d omega = Eigen::Vector3d::Zero();
-  Eigen::Vector3d omega_rate = Eigen::Vector3d::Zero();
-  Eigen::Vector3d acceleration = Eigen::Vector3d::Zero();
-  for (int k = 1; k <= n; ++k) {
-    const Eigen::Vector3d axis = w.rotation[k - 1].col(2);
-    const Eigen::Vector3d arm = w.origin[k] - w.origin[k - 1];
-    omega_rate += qdd[k - 1] * axis + qd[k - 1] * omega.cross(axis);
-    omega += qd[k - 1] * axis;
-    acceleration += omega_rate.cross(arm) + omega.cross(omega.cross(arm));
-    w.acceleration[k] = acceleration;
-  }
-  Eigen::Vector3d force = Eigen::Vector3d::Zero();   // Σ_{k≥j} m_k (ö_k − g)
-  Eigen::Vector3d moment = Eigen::Vector3d::Zero();  // about o_{j-1}
-  for (int j = n; j >= 1; --j) {
-    force += parameters.mass[j - 1] * (w.acceleration[j] - model.gravity);
-    moment += (w.origin[j] - w.origin[j - 1]).cross(force);
-    tau[j - 1] = w.rotation[j - 1].col(2).dot(moment) + joint_inertia(model, parameters, j - 1) * qdd[j - 1];
   }
 }
 
@@ -119,13 +103,69 @@ void inverse_dynamics_paper(const RobotModel& model, const Parameters& parameter
   }
 }
 
-void inverse_dynamics_at_kinematics(const RobotModel& model, const Parameters& parameters, DynamicsWorkspace& w,
-                                    const Eigen::Ref<const Eigen::VectorXd>& qd,
-                                    const Eigen::Ref<const Eigen::VectorXd>& qdd, Eigen::Ref<Eigen::VectorXd> tau) {
-  if (model.kinetic_energy == KineticEnergy::complete) {
-    inverse_dynamics_complete(model, parameters, w, qd, qdd, tau);
+// The complete model through the kernel for N joints (Eigen::Dynamic: any number, with the
+// workspace's scratch). Always inlined, so that each copy below is compiled for its target.
+template <int N>
+[[gnu::always_inline]] inline void inverse_dynamics_sized(const RobotModel& model, const Parameters& parameters,
+                                                          DynamicsWorkspace& w, const double* q, const double* qd,
+                                                          const double* qdd, Eigen::Ref<Eigen::VectorXd>& tau) {
+  if constexpr (N == Eigen::Dynamic) {
+    detail::complete_inverse_dynamics<N>(model, parameters, w, q, qd, qdd, w.general, tau);
   } else {
-    inverse_dynamics_paper(model, parameters, w, qd, qdd, tau);
+    detail::FixedStorage<N> storage;
+    detail::complete_inverse_dynamics<N>(model, parameters, w, q, qd, qdd, storage, tau);
+  }
+}
+
+// Returns false when M is not positive definite, leaving M (lower triangle) in
+// w.mass_matrix and the bias in w.bias for the caller's fallback.
+template <int N>
+[[gnu::always_inline]] inline bool forward_dynamics_sized(const RobotModel& model, const Parameters& parameters,
+                                                          DynamicsWorkspace& w, const double* q, const double* qd,
+                                                          const double* tau, Eigen::Ref<Eigen::VectorXd>& qdd) {
+  if constexpr (N == Eigen::Dynamic) {
+    if (detail::complete_forward_dynamics<N>(model, parameters, w, q, qd, tau, w.general, qdd)) return true;
+    w.mass_matrix = w.general.mass_matrix;
+    w.bias = w.general.bias;
+  } else {
+    detail::FixedStorage<N> storage;
+    if (detail::complete_forward_dynamics<N>(model, parameters, w, q, qd, tau, storage, qdd)) return true;
+    w.mass_matrix = storage.mass_matrix;
+    w.bias = storage.bias;
+  }
+  return false;
+}
+
+// The kernels specialised for 1..6 joints, the general-size code otherwise or when the
+// workspace asks for it. Nothing here throws (the callers check sizes), as target_clones'
+// dispatcher requires.
+MANIPID_AVX2_CLONE
+void complete_inverse_dynamics(const RobotModel& model, const Parameters& parameters, DynamicsWorkspace& w,
+                               const double* q, const double* qd, const double* qdd,
+                               Eigen::Ref<Eigen::VectorXd>& tau) noexcept {
+  switch (w.fixed_size_kernels ? model.joint_count() : 0) {
+    case 1: return inverse_dynamics_sized<1>(model, parameters, w, q, qd, qdd, tau);
+    case 2: return inverse_dynamics_sized<2>(model, parameters, w, q, qd, qdd, tau);
+    case 3: return inverse_dynamics_sized<3>(model, parameters, w, q, qd, qdd, tau);
+    case 4: return inverse_dynamics_sized<4>(model, parameters, w, q, qd, qdd, tau);
+    case 5: return inverse_dynamics_sized<5>(model, parameters, w, q, qd, qdd, tau);
+    case 6: return inverse_dynamics_sized<6>(model, parameters, w, q, qd, qdd, tau);
+    default: return inverse_dynamics_sized<Eigen::Dynamic>(model, parameters, w, q, qd, qdd, tau);
+  }
+}
+
+MANIPID_AVX2_CLONE
+bool complete_forward_dynamics(const RobotModel& model, const Parameters& parameters, DynamicsWorkspace& w,
+                               const double* q, const double* qd, const double* tau,
+                               Eigen::Ref<Eigen::VectorXd>& qdd) noexcept {
+  switch (w.fixed_size_kernels ? model.joint_count() : 0) {
+    case 1: return forward_dynamics_sized<1>(model, parameters, w, q, qd, tau, qdd);
+    case 2: return forward_dynamics_sized<2>(model, parameters, w, q, qd, tau, qdd);
+    case 3: return forward_dynamics_sized<3>(model, parameters, w, q, qd, tau, qdd);
+    case 4: return forward_dynamics_sized<4>(model, parameters, w, q, qd, tau, qdd);
+    case 5: return forward_dynamics_sized<5>(model, parameters, w, q, qd, tau, qdd);
+    case 6: return forward_dynamics_sized<6>(model, parameters, w, q, qd, tau, qdd);
+    default: return forward_dynamics_sized<Eigen::Dynamic>(model, parameters, w, q, qd, tau, qdd);
   }
 }
 
@@ -151,17 +191,23 @@ DynamicsWorkspace::DynamicsWorkspace(const RobotModel& model) {
   mass_matrix.setZero(n, n);
   bias.setZero(n);
   factorization.compute(Eigen::MatrixXd::Identity(n, n));
+  for (Eigen::VectorXd* scalars : {&general.joint_sin, &general.joint_cos, &general.link_a, &general.link_d,
+                                   &general.bias}) {
+    scalars->setZero(n);
+  }
+  for (std::vector<Eigen::Vector3d>* vectors :
+       {&general.joint_axis, &general.link_arm, &general.mass_acceleration, &general.mass_jacobian}) {
+    vectors->assign(n, Eigen::Vector3d::Zero());
+  }
+  general.mass_matrix.setZero(n, n);
+  general.cholesky_factor.setZero(n, n);
 }
 
 void forward_kinematics(const RobotModel& model, const Parameters& parameters, DynamicsWorkspace& w,
                         const Eigen::Ref<const Eigen::VectorXd>& q) {
   const int n = model.joint_count();
   check_state_size(model, q.size(), "q");
-  // One loop of sin and cos of the same angle: the compiler fuses each pair into sincos.
-  for (int k = 0; k < n; ++k) {
-    w.joint_cos[k] = std::cos(q[k]);
-    w.joint_sin[k] = std::sin(q[k]);
-  }
+  for (int k = 0; k < n; ++k) detail::sine_cosine(q[k], w.joint_sin[k], w.joint_cos[k]);
   Eigen::Matrix3d rotation = w.rotation[0];
   Eigen::Vector3d origin = w.origin[0];
   for (int k = 1; k <= n; ++k) {
@@ -169,7 +215,7 @@ void forward_kinematics(const RobotModel& model, const Parameters& parameters, D
     detail::update_rotation(rotation, w.joint_cos[k - 1], w.joint_sin[k - 1], w.twist_cos[k - 1], w.twist_sin[k - 1], rotation);
     double a = 0.0;
     double d = 0.0;
-    offsets(model, parameters, k - 1, a, d);
+    detail::link_offsets(model, parameters, k - 1, a, d);
     origin += d * z + a * rotation.col(0);
     w.rotation[k] = rotation;
     w.origin[k] = origin;
@@ -190,8 +236,13 @@ void inverse_dynamics(const RobotModel& model, const Parameters& parameters, Dyn
   check_state_size(model, qd.size(), "qd");
   check_state_size(model, qdd.size(), "qdd");
   check_state_size(model, tau.size(), "tau");
-  forward_kinematics(model, parameters, workspace, q);
-  inverse_dynamics_at_kinematics(model, parameters, workspace, qd, qdd, tau);
+  if (model.kinetic_energy == KineticEnergy::paper) {
+    forward_kinematics(model, parameters, workspace, q);
+    inverse_dynamics_paper(model, parameters, workspace, qd, qdd, tau);
+    return;
+  }
+  check_state_size(model, q.size(), "q");
+  complete_inverse_dynamics(model, parameters, workspace, q.data(), qd.data(), qdd.data(), tau);
 }
 
 Eigen::VectorXd inverse_dynamics(const RobotModel& model, const Parameters& parameters, const Eigen::VectorXd& q,
@@ -250,14 +301,26 @@ void forward_dynamics(const RobotModel& model, const Parameters& parameters, Dyn
   check_state_size(model, qd.size(), "qd");
   check_state_size(model, tau.size(), "tau");
   check_state_size(model, qdd.size(), "qdd");
-  forward_kinematics(model, parameters, w, q);
-  // Bias c(q, q̇) + g(q) is the inverse dynamics at zero acceleration.
-  qdd.setZero();
-  inverse_dynamics_at_kinematics(model, parameters, w, qd, qdd, w.bias);
-  mass_matrix_at_kinematics(model, parameters, w, w.mass_matrix);
-  w.factorization.compute(w.mass_matrix);
-  qdd = tau - w.bias;
-  w.factorization.solveInPlace(qdd);
+  if (model.kinetic_energy == KineticEnergy::paper) {
+    forward_kinematics(model, parameters, w, q);
+    // Bias c(q, q̇) + g(q) is the inverse dynamics at zero acceleration.
+    qdd.setZero();
+    inverse_dynamics_paper(model, parameters, w, qd, qdd, w.bias);
+    mass_matrix_at_kinematics(model, parameters, w, w.mass_matrix);
+    w.factorization.compute(w.mass_matrix);
+    qdd = tau - w.bias;
+    w.factorization.solveInPlace(qdd);
+    return;
+  }
+  check_state_size(model, q.size(), "q");
+  if (!complete_forward_dynamics(model, parameters, w, q.data(), qd.data(), tau.data(), qdd)) {
+    // M is not positive definite (e.g. a negative mass from a user's parameters): a pivoting
+    // LDLT still solves what can be solved, as it always has.
+    w.mass_matrix.triangularView<Eigen::StrictlyUpper>() = w.mass_matrix.transpose();
+    w.factorization.compute(w.mass_matrix);
+    qdd = tau - w.bias;
+    w.factorization.solveInPlace(qdd);
+  }
 }
 
 Eigen::VectorXd forward_dynamics(const RobotModel& model, const Parameters& parameters, const Eigen::VectorXd& q,

@@ -211,6 +211,63 @@ TEST(Dynamics, EnergyIsConservedInFreeMotion) {
   }
 }
 
+// A chain of n joints cycling through the irregular model's rows (twists, d-type lengths,
+// fixed offsets), for the size-specialised kernels.
+RobotModel chain_of(int n) {
+  const RobotModel pattern = irregular_model(KineticEnergy::complete);
+  RobotModel model = pattern;
+  model.joints.clear();
+  for (int k = 0; k < n; ++k) model.joints.push_back(pattern.joints[k % pattern.joint_count()]);
+  return model;
+}
+
+// The kernels specialised for 1..6 joints and the general-size code give the same torques
+// and accelerations (n = 7 exercises the dispatch to the general code).
+TEST(Dynamics, FixedSizeKernelsMatchGeneralSize) {
+  std::mt19937_64 engine(11);
+  for (int n = 1; n <= 7; ++n) {
+    const RobotModel model = chain_of(n);
+    const Parameters parameters(random_vector(engine, n, 1.0).array().abs() + 0.5,
+                                random_vector(engine, n, 0.3).array().abs() + 0.1);
+    DynamicsWorkspace fixed(model);
+    DynamicsWorkspace general(model);
+    general.fixed_size_kernels = false;
+    for (int trial = 0; trial < 20; ++trial) {
+      const Eigen::VectorXd q = random_vector(engine, n, M_PI);
+      const Eigen::VectorXd qd = random_vector(engine, n, 2.0);
+      const Eigen::VectorXd qdd = random_vector(engine, n, 5.0);
+      Eigen::VectorXd tau_fixed(n), tau_general(n), qdd_fixed(n), qdd_general(n);
+      inverse_dynamics(model, parameters, fixed, q, qd, qdd, tau_fixed);
+      inverse_dynamics(model, parameters, general, q, qd, qdd, tau_general);
+      EXPECT_LE((tau_fixed - tau_general).norm(), 1e-12 * std::max(1.0, tau_general.norm())) << "n = " << n;
+      forward_dynamics(model, parameters, fixed, q, qd, tau_fixed, qdd_fixed);
+      forward_dynamics(model, parameters, general, q, qd, tau_fixed, qdd_general);
+      EXPECT_LE((qdd_fixed - qdd_general).norm(), 1e-12 * std::max(1.0, qdd_general.norm())) << "n = " << n;
+      EXPECT_LE((qdd_fixed - qdd).norm(), 1e-9 * std::max(1.0, qdd.norm())) << "n = " << n;
+    }
+  }
+}
+
+// A mass matrix that is not positive definite (a negative mass) falls back to the pivoting
+// LDLT in both code paths, and they agree.
+TEST(Dynamics, IndefiniteMassMatrixFallsBackToLdlt) {
+  const RobotModel model = chain_of(3);
+  Parameters parameters(Eigen::Vector3d(2.0, -1.5, 1.0), Eigen::Vector3d(0.4, 0.3, 0.2));
+  const Eigen::VectorXd q = Eigen::Vector3d(0.3, -0.8, 1.1);
+  const Eigen::VectorXd qd = Eigen::Vector3d(0.5, 0.2, -0.4);
+  const Eigen::VectorXd tau = Eigen::Vector3d(1.0, -2.0, 0.5);
+  const Eigen::MatrixXd M = mass_matrix(model, parameters, q);
+  ASSERT_LT(Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd>(M).eigenvalues().minCoeff(), 0.0);
+  for (bool fixed_size : {true, false}) {
+    DynamicsWorkspace workspace(model);
+    workspace.fixed_size_kernels = fixed_size;
+    Eigen::VectorXd qdd(3);
+    forward_dynamics(model, parameters, workspace, q, qd, tau, qdd);
+    const Eigen::VectorXd back = inverse_dynamics(model, parameters, q, qd, qdd);
+    EXPECT_LE((back - tau).norm(), 1e-9 * tau.norm()) << fixed_size;
+  }
+}
+
 TEST(Dynamics, WrongStateSizeIsAnInputError) {
   const Preset preset = cedro2009();
   try {

@@ -38,6 +38,17 @@ struct DynamicsWorkspace {
   Eigen::MatrixXd mass_matrix;                 // n × n
   Eigen::VectorXd bias;                        // n
   Eigen::LDLT<Eigen::MatrixXd> factorization;  // of the mass matrix
+
+  // The complete model's kernels run with the joint count fixed at compile time for 1..6
+  // joints and keep their scratch on the stack; for more joints, or when fixed_size_kernels
+  // is false (tests compare the two), they use this scratch (n entries each, see
+  // core/src/dynamics_kernels.h for the meaning).
+  bool fixed_size_kernels = true;
+  struct GeneralSizeScratch {
+    Eigen::VectorXd joint_sin, joint_cos, link_a, link_d, bias;
+    std::vector<Eigen::Vector3d> joint_axis, link_arm, mass_acceleration, mass_jacobian;
+    Eigen::MatrixXd mass_matrix, cholesky_factor;
+  } general;
 };
 
 /// Forward kinematics: fills workspace.rotation and workspace.origin for frames 0..n.
