@@ -119,6 +119,9 @@ int run_serve(const ServeOptions& options) {
   httplib::Server server;
   const int http_threads = options.http_threads;
   server.new_task_queue = [http_threads] { return new httplib::ThreadPool(static_cast<std::size_t>(http_threads)); };
+  // Without TCP_NODELAY, Nagle plus delayed ACKs hold each keep-alive answer (headers and
+  // body are two writes) for ~40 ms: 360 status requests/s instead of thousands.
+  server.set_tcp_nodelay(true);
   server.set_keep_alive_max_count(1000);
   server.set_keep_alive_timeout(2);
   server.set_read_timeout(30);
