@@ -114,7 +114,7 @@ int run_serve(const ServeOptions& options) {
   pool_options.workers = workers;
   pool_options.runner.job_time_limit_seconds = options.job_timeout;
   WorkerPool pool(*store, pool_options, log_line);
-  JobService service(*store, pool, JobServiceOptions{options.queue_limit});
+  JobService service(*store, pool, JobServiceOptions{options.queue_limit, log_line});
 
   httplib::Server server;
   const int http_threads = options.http_threads;

@@ -47,7 +47,10 @@ api::SubmitResult JobService::submit(api::JobKind kind, const std::string& reque
     case SubmitStatus::queue_full:
       throw api::ApiError(api::ProblemKind::queue_full, "the job queue is full (" + std::to_string(options_.queue_limit) +
                                                             " queued jobs); retry later");
-    case SubmitStatus::created: pool_.notify_submitted(); break;
+    case SubmitStatus::created:
+      if (options_.log) options_.log("job " + outcome.job.id + " " + api::to_string(kind) + ": queued");
+      pool_.notify_submitted();
+      break;
     case SubmitStatus::replayed: break;
   }
   return {with_live_progress(outcome.job), outcome.status == SubmitStatus::replayed};
@@ -94,8 +97,14 @@ std::optional<api::Page<api::HistoryEntry>> JobService::history(const std::strin
 std::optional<api::JobInfo> JobService::cancel(const std::string& id) {
   switch (store_.cancel_job(id)) {
     case CancelOutcome::not_found: return std::nullopt;
-    case CancelOutcome::cancelled_now: pool_.notify_changed(); break;
-    case CancelOutcome::requested: pool_.cancel(id); break;
+    case CancelOutcome::cancelled_now:
+      if (options_.log) options_.log("job " + id + ": cancelled (was queued)");
+      pool_.notify_changed();
+      break;
+    case CancelOutcome::requested:
+      if (options_.log) options_.log("job " + id + ": cancel requested");
+      pool_.cancel(id);
+      break;
     case CancelOutcome::already_finished: break;
   }
   return job(id);

@@ -8,11 +8,15 @@
 #include "worker_pool.h"
 
 #include <atomic>
+#include <functional>
+#include <string>
 
 namespace manipid::server {
 
 struct JobServiceOptions {
   int queue_limit = 10000;  ///< queued jobs at most; more → 429 (≤ 0: no limit)
+  /// Job transitions made here (queued, cancelled while queued); the pool logs the rest.
+  std::function<void(const std::string& line)> log;
 };
 
 class JobService : public api::Service {
