@@ -208,14 +208,19 @@ CsvTable parse_csv(std::string_view text, const CsvLimits& limits) {
   if (!reader.next_nonblank(line, line_number)) {
     throw InputError(std::string(structure_field), "empty input: expected a header line of column names");
   }
+  // ...nor is one after leading blank lines; a header of nothing but the mark is empty.
+  if (line.substr(0, 3) == "\xEF\xBB\xBF") line.remove_prefix(3);
   CsvTable table;
   table.columns = parse_header(line, line_number, limits);
   const std::size_t column_count = table.columns.size();
 
-  // Row-major, as the text is laid out; the newline count bounds the number of rows.
+  // Row-major, as the text is laid out. The newline count bounds the rows, and every field
+  // takes at least two bytes ("0,"), which bounds them better when lines are blank: a wide
+  // header over many empty lines must not reserve gigabytes.
   std::vector<double> values;
   const std::size_t line_estimate = static_cast<std::size_t>(std::count(text.begin(), text.end(), '\n')) + 1;
-  values.reserve(std::min(line_estimate, limits.max_rows) * column_count);
+  const std::size_t field_estimate = text.size() / 2 + 1;
+  values.reserve(std::min({line_estimate * column_count, limits.max_rows * column_count, field_estimate}));
 
   std::size_t row_count = 0;
   while (reader.next_nonblank(line, line_number)) {

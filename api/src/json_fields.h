@@ -78,6 +78,7 @@ double read_non_negative(const Json& value, const std::string& path);
 long long read_integer(const Json& value, const std::string& path, long long lowest, long long highest);
 /// A whole number in 0..2^64-1.
 std::uint64_t read_unsigned(const Json& value, const std::string& path);
+/// A name (preset, method, parameter, id): a string of at most 256 bytes.
 std::string read_string(const Json& value, const std::string& path);
 /// A string of at most `max_characters` characters (a label).
 std::string read_label(const Json& value, const std::string& path, std::size_t max_characters = max_name_characters);

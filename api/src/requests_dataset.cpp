@@ -39,6 +39,17 @@ Eigen::MatrixXd read_block(const Json& value, const std::string& path, int expec
     throw InputError(path, path + " has " + std::to_string(joints) + " joints, expected " +
                                std::to_string(expected_joints) + " (as q)");
   }
+  // Every joint's length is checked before anything is allocated: sizing the matrix from
+  // joint 0 alone let a 100 kB body (one long joint, many empty ones) ask for gigabytes.
+  for (std::size_t joint = 0; joint < joints; ++joint) {
+    if (value[joint].is_array() && value[joint].size() != value[0].size() && value[0].is_array()) {
+      const std::string joint_path = fields::element_path(path, joint);
+      std::string message = joint_path + " has " + samples_text(value[joint].size()) + ", expected " +
+                            std::to_string(value[0].size()) + " (as " + fields::element_path(path, 0) + ")";
+      if (joints == value[0].size()) message += "; " + path + " must hold one array per joint, not one per sample";
+      throw InputError(joint_path, message);
+    }
+  }
   Eigen::MatrixXd values;
   for (std::size_t joint = 0; joint < joints; ++joint) {
     const std::string joint_path = fields::element_path(path, joint);

@@ -116,6 +116,9 @@ ObjectFields::ObjectFields(const Json& value, std::string path, std::initializer
     std::string_view closest;
     std::size_t closest_distance = 3;
     for (std::string_view name : accepted) {
+      // The distance is at least the length difference: skip names that cannot be within 2
+      // (and a megabyte key costs nothing).
+      if (key.size() > name.size() + 2 || name.size() > key.size() + 2) continue;
       const std::size_t distance = edit_distance(key, name);
       if (distance < closest_distance) {
         closest = name;
@@ -130,7 +133,7 @@ ObjectFields::ObjectFields(const Json& value, std::string path, std::initializer
       message += name;
       first = false;
     }
-    throw InputError(member_path(path_, key), message);
+    throw InputError(member_path(path_, shortened(key)), message);
   }
 }
 
@@ -218,11 +221,19 @@ std::uint64_t read_unsigned(const Json& value, const std::string& path) {
 
 std::string read_string(const Json& value, const std::string& path) {
   if (!value.is_string()) throw_type(path, "a string", value);
+  // Every string field is a name; a bounded one keeps a megabyte "preset" out of the
+  // messages that quote it.
+  constexpr std::size_t max_bytes = 256;
+  if (value.get_ref<const std::string&>().size() > max_bytes) {
+    throw InputError(field_name(path), field_name(path) + " is " + std::to_string(value.get_ref<const std::string&>().size()) +
+                                           " bytes long, at most " + std::to_string(max_bytes) + " are allowed");
+  }
   return value.get<std::string>();
 }
 
 std::string read_label(const Json& value, const std::string& path, std::size_t max_characters) {
-  std::string text = read_string(value, path);
+  if (!value.is_string()) throw_type(path, "a string", value);
+  std::string text = value.get<std::string>();
   const std::size_t characters = character_count(text);
   if (characters > max_characters) {
     throw InputError(field_name(path), field_name(path) + " has " + std::to_string(characters) +

@@ -23,6 +23,7 @@
 #include <map>
 #include <memory>
 #include <mutex>
+#include <regex>
 #include <sstream>
 
 namespace manipid::api {
@@ -38,6 +39,7 @@ struct RouteState {
   RouteState(Service& service_, RouteOptions options_) : service(service_), options(std::move(options_)) {}
   Service& service;
   RouteOptions options;
+  std::weak_ptr<RouteState> self;  ///< for handlers called from the pre-routing hook
   std::mutex mutex;
   std::map<std::string, long> requests;  ///< "METHOD,status" → count
 };
@@ -196,6 +198,8 @@ void create_dataset(RouteState& state, const httplib::Request& request, httplib:
   DatasetUpload upload;
   if (type == "text/csv" || (unlabelled && !looks_like_json(request.body))) {
     upload = dataset_from_csv(request.body);
+    upload.name = request.get_param_value("name");  // CSV has no room for it: ?name=
+    if (upload.name.size() > 200) throw ApiError(ProblemKind::invalid_field, "name is longer than 200 bytes", "name");
   } else {
     upload = dataset_from_json(json_body(request));  // refuses other media types with 415
   }
@@ -399,6 +403,23 @@ httplib::Server::HandlerResponse before_routing(RouteState& state, const httplib
       return httplib::Server::HandlerResponse::Handled;
     }
   }
+  // cpp-httplib 0.11.4 reads a POST without Content-Length until the peer closes (curl -X POST
+  // sends none): answer a bodiless cancel here, before any read, and refuse other such POSTs.
+  if (request.method == "POST" && !request.has_header("Content-Length") && !request.has_header("Transfer-Encoding")) {
+    std::smatch match;
+    static const std::regex cancel_route(std::string("^/v1/jobs/") + id_pattern + "(?:/cancel|:cancel)$");
+    if (std::regex_match(request.path, match, cancel_route)) {
+      httplib::Request bodiless = request;
+      bodiless.matches = match;
+      guarded(state.self.lock(), [&state](const httplib::Request& r, httplib::Response& w) { cancel_job(state, r, w); })(
+          bodiless, response);
+    } else {
+      send_problem(response, {ProblemKind::length_required, "send the body with a Content-Length", "Content-Length"},
+                   request.path);
+      response.set_header("Connection", "close");
+    }
+    return httplib::Server::HandlerResponse::Handled;
+  }
   // cpp-httplib 0.11.4 bounds a body only by its Content-Length, and would inflate gzip or
   // brotli bodies without limit: refuse both kinds before any byte of the body is read.
   if (request.has_header("Transfer-Encoding")) {
@@ -443,6 +464,7 @@ httplib::Server::HandlerResponse on_error(const httplib::Request& request, httpl
 
 void register_routes(httplib::Server& server, Service& service, RouteOptions options) {
   auto state = std::make_shared<RouteState>(service, std::move(options));
+  state->self = state;
   const std::string id = id_pattern;
   auto route = [&state](void (*handler)(RouteState&, const httplib::Request&, httplib::Response&)) {
     return guarded(state, [state, handler](const httplib::Request& request, httplib::Response& response) {

@@ -284,6 +284,41 @@ TEST(DatasetJson, NameIsAtMost200Characters) {
   expect_dataset_error(with(body, "name", 7), "name", "must be a string");
 }
 
+// Found by tests/fuzz: small bodies that asked for gigabytes or seconds of CPU.
+TEST(HostileInput, RaggedJointsAreRefusedBeforeAnythingIsAllocated) {
+  json q = json::array();
+  q.push_back(json(std::vector<double>(20000, 0.0)));
+  for (int joint = 1; joint < 20000; ++joint) q.push_back(json::array());
+  expect_dataset_error({{"dt", 0.001}, {"q", q}}, "q[1]", "expected 20000 (as q[0])");
+}
+
+TEST(HostileInput, BlankLinesUnderAWideHeaderReserveNothing) {
+  std::string header;
+  for (int column = 1; column <= 1024; ++column) header += (column > 1 ? ",c" : "c") + std::to_string(column);
+  const CsvTable table = parse_csv(header + std::string(300000, '\n'));
+  EXPECT_EQ(table.rows(), 0);
+  EXPECT_EQ(table.columns.size(), 1024u);
+}
+
+TEST(HostileInput, LongKeysAndNamesAreCheapAndQuotedShort) {
+  const std::string key(1'000'000, 'x');
+  try {
+    simulation_from_json({{key, 1}});
+    ADD_FAILURE() << "expected InputError";
+  } catch (const InputError& error) {
+    EXPECT_LT(error.field().size(), 200u);
+    EXPECT_LT(std::string(error.what()).size(), 2000u);
+  }
+  expect_simulation_error({{"preset", std::string(100000, 'p')}}, "preset", "at most 256");
+  expect_identification_error(with(identify_dataset, "algorithm", std::string(300, 'a')), "algorithm", "at most 256");
+}
+
+TEST(HostileInput, ByteOrderMarkAfterBlankLinesIsNotPartOfTheName) {
+  const CsvTable table = parse_csv("\n\xEF\xBB\xBFt,q1\n0,1\n");
+  ASSERT_EQ(table.columns.size(), 2u);
+  EXPECT_EQ(table.columns[0], "t");
+}
+
 TEST(DatasetCsv, KeepsTheCsvReadersFields) {
   expect_error([] { dataset_from_csv("t,q1\n0,1\n0.001,x\n"); }, "q1", "line 3");
   expect_error([] { dataset_from_csv("t,q1,q2\n0,1\n"); }, "csv", "expected 3 fields, got 2");

@@ -1,0 +1,129 @@
+function result = manipid_result(url, job_id)
+%MANIPID_RESULT  The result of a finished job, with MATLAB-friendly shapes.
+%   R = MANIPID_RESULT(URL, JOB_ID) returns the result of an identification:
+%     R.estimates        struct of the estimates by name: R.estimates.m2 (kg), .l3 (m)
+%     R.std_errors       struct by name; NaN for fixed and unidentifiable parameters
+%     R.names, R.values, R.std_values
+%                        the same as a 1-by-n cell of names and two 1-by-n vectors
+%     R.identifiability  .all_identifiable (logical), .unidentifiable (cell, e.g.
+%                        {'m1','l1'}), .combinations (struct array: name, value,
+%                        std_error, e.g. 'm1*l1^2'), .findings (cell of sentences),
+%                        .singular_values
+%     R.correlation      .parameters (cell), .matrix (NaN where undefined)
+%     R.free, R.warnings (cells), R.initial (struct), R.initial_cost, R.final_cost,
+%     R.evaluations, R.simulations, R.stop_reason, R.cancelled, R.filter,
+%     R.method, R.algorithm, R.torque_source, R.wall_seconds, R.dataset_id
+%     R.job_id, R.state  the job's id and final state
+%   For a simulation job, R is its result (dataset_id, joints, samples, dt, ...).
+%   A cancelled identification returns the best point it reached (R.cancelled true).
+%
+%   JOB_ID is 'job_...' or a job struct; a finished job struct (from manipid_wait)
+%   is used as it is, without another request. A job still queued or running
+%   raises manipid:NOT_FINISHED; a failed one raises its error (manipid:JOB_FAILED).
+%
+%   Example:
+%       r = manipid_result(url, manipid_wait(url, job));
+%       fprintf('m2 = %.4f +- %.2g kg\n', r.estimates.m2, r.std_errors.m2);
+%
+%   See also manipid_wait, manipid_history, manipid_identify.
+if nargin < 2
+  error('manipid:usage', 'usage: r = manipid_result(url, job_id)');
+end
+if isstruct(job_id) && isfield(job_id, 'state') && isfield(job_id, 'result') ...
+    && any(strcmp(job_id.state, {'succeeded', 'cancelled'}))
+  job = job_id;
+else
+  job = manipid_job(url, job_id);
+end
+switch job.state
+  case {'queued', 'running'}
+    manipid_error('NOT_FINISHED', 'id', sprintf('job %s is %s: call manipid_wait first', job.id, job.state), 0);
+  case 'failed'
+    manipid_wait(url, job, 0, 'Quiet', true);   % raises the job's error
+end
+if ~isfield(job, 'result') || ~isstruct(job.result)
+  manipid_error('NOT_FOUND', 'result', sprintf('job %s (%s) has no result', job.id, job.state), 0);
+end
+result = job.result;
+if isfield(result, 'estimates') && isstruct(result.estimates)
+  result = tidy_identification(result);
+end
+result.job_id = job.id;
+result.state = job.state;
+end
+
+function r = tidy_identification(r)
+r.names = fieldnames(r.estimates)';
+r.values = cellfun(@(name) r.estimates.(name), r.names);
+if ~isfield(r, 'std_errors') || ~isstruct(r.std_errors)
+  r.std_errors = struct();
+end
+r.std_values = nan(size(r.values));
+for k = 1:numel(r.names)
+  name = r.names{k};
+  if ~isfield(r.std_errors, name) || isempty(r.std_errors.(name))
+    r.std_errors.(name) = NaN;
+  end
+  r.std_values(k) = r.std_errors.(name);
+end
+for name = {'free', 'warnings'}
+  if isfield(r, name{1}), r.(name{1}) = manipid_cellstr(r.(name{1})); end
+end
+if isfield(r, 'identifiability') && isstruct(r.identifiability)
+  id = r.identifiability;
+  if isfield(id, 'unidentifiable'), id.unidentifiable = manipid_cellstr(id.unidentifiable); end
+  if isfield(id, 'findings'), id.findings = manipid_cellstr(id.findings); end
+  if isfield(id, 'singular_values'), id.singular_values = reshape(double(id.singular_values), 1, []); end
+  if isfield(id, 'combinations')
+    id.combinations = struct_array(id.combinations, {'name', 'value', 'std_error'});
+  end
+  r.identifiability = id;
+end
+if isfield(r, 'correlation') && isstruct(r.correlation)
+  c = r.correlation;
+  if isfield(c, 'parameters'), c.parameters = manipid_cellstr(c.parameters); end
+  if isfield(c, 'matrix') && iscell(c.matrix)
+    c.matrix = numeric_matrix(c.matrix);
+  end
+  r.correlation = c;
+end
+end
+
+function s = struct_array(value, fields)
+%STRUCT_ARRAY  A decoded array of objects as a 1-by-n struct array, null numbers as NaN.
+if isempty(value)
+  s = repmat(cell2struct(cell(numel(fields), 1), fields, 1), 1, 0);
+  return
+end
+if iscell(value)
+  items = value;
+else
+  items = num2cell(value);
+end
+s = repmat(cell2struct(cell(numel(fields), 1), fields, 1), 1, numel(items));
+for k = 1:numel(items)
+  for f = 1:numel(fields)
+    if isfield(items{k}, fields{f}), s(k).(fields{f}) = items{k}.(fields{f}); end
+  end
+  for f = {'value', 'std_error'}
+    if any(strcmp(f{1}, fields)) && isempty(s(k).(f{1})), s(k).(f{1}) = NaN; end
+  end
+end
+end
+
+function m = numeric_matrix(rows)
+%NUMERIC_MATRIX  Rows of numbers (possibly null) decoded as a cell, as a matrix with NaN.
+m = nan(numel(rows), 0);
+for i = 1:numel(rows)
+  row = rows{i};
+  if iscell(row)
+    values = nan(1, numel(row));
+    for j = 1:numel(row)
+      if ~isempty(row{j}), values(j) = row{j}; end
+    end
+  else
+    values = reshape(double(row), 1, []);
+  end
+  m(i, 1:numel(values)) = values;
+end
+end

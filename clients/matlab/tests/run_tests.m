@@ -1,0 +1,174 @@
+function run_tests(url, run_csv)
+%RUN_TESTS  End-to-end test of the MATLAB/Octave client against a running manipid service.
+%   RUN_TESTS(URL, RUN_CSV) drives the service at URL through the client: the paper's
+%   case (cedro2009) simulated by the service and uploaded from the arrays of RUN_CSV
+%   (written by `manipid simulate --out RUN_CSV`), identified, waited for, its result
+%   and history checked; shapes of one joint / few samples; Idempotency-Key; cancel;
+%   and the error mapping (problem+json code/field, NaN refused before sending).
+%   Without arguments, URL and RUN_CSV come from the environment variables MANIPID_URL
+%   and MANIPID_RUN_CSV. When the server was started with --token, MANIPID_TOKEN must
+%   hold it (MANIPID_TEST_TOKEN=1 then also checks that a wrong token is refused).
+%   Raises an error on the first failure. tests/run_tests.sh starts a server and runs
+%   this with octave-cli.
+if nargin < 1 || isempty(url), url = getenv('MANIPID_URL'); end
+if nargin < 2 || isempty(run_csv), run_csv = getenv('MANIPID_RUN_CSV'); end
+if isempty(url) || isempty(run_csv)
+  error('run_tests:usage', 'run_tests(URL, RUN_CSV), or set MANIPID_URL and MANIPID_RUN_CSV');
+end
+here = fileparts(mfilename('fullpath'));
+addpath(fileparts(here));
+started = tic;
+passed = 0;
+
+% --- The paper's run simulated by the service equals `manipid simulate`'s, bit for bit.
+M = dlmread(run_csv, ',', 1, 0);
+check(isequal(size(M), [9701 13]), 'run.csv is the paper''s run: 9701 samples, t + 4 x (q, tau, ref)');
+sim = manipid_simulate(url, struct('preset', 'cedro2009'));
+check(strcmp(sim.kind, 'simulation') && any(strcmp(sim.state, {'queued', 'running', 'succeeded'})), ...
+      'manipid_simulate returns the job');
+sim = manipid_wait(url, sim, 60);
+check(strcmp(sim.state, 'succeeded'), 'the simulation succeeds');
+[meta, data] = manipid_dataset(url, sim);
+check(meta.joints == 4 && meta.samples == 9701 && meta.has_torque && meta.has_reference, ...
+      'the simulated dataset has 4 joints, 9701 samples, torques and references');
+check(strcmp(meta.source_job, sim.id), 'the dataset names the simulation that made it');
+check(isequal(data.t, M(:, 1)) && isequal(data.q, M(:, 2:5)) && isequal(data.tau, M(:, 6:9)) ...
+      && isequal(data.ref, M(:, 10:13)), 'the service''s simulation equals manipid simulate''s CSV exactly');
+passed = passed + 1;
+
+% --- Upload from arrays (samples x joints), round trip bit-exact.
+ds = manipid_upload(url, M(:, 1), M(:, 2:5), M(:, 6:9), M(:, 10:13), 'paper run from Octave');
+check(strncmp(ds.id, 'ds_', 3) && ds.joints == 4 && ds.samples == 9701, 'upload: 4 joints, 9701 samples');
+check(strcmp(ds.name, 'paper run from Octave') && ds.has_torque && ds.has_reference, 'upload: name, torque, reference');
+check(abs(ds.dt - 0.001) < 1e-12, 'upload: dt = 1 ms');
+[~, back] = manipid_dataset(url, ds.id);
+check(isequal(back.t, M(:, 1)) && isequal(back.q, M(:, 2:5)) && isequal(back.tau, M(:, 6:9)) ...
+      && isequal(back.ref, M(:, 10:13)), 'upload: the stored samples are the arrays, bit for bit');
+passed = passed + 1;
+
+% --- The paper's identification: submit, wait, result.
+job = manipid_identify(url, ds, struct('preset', 'cedro2009'));
+check(strcmp(job.kind, 'identification') && strncmp(job.id, 'job_', 4), 'manipid_identify returns the job');
+job = manipid_wait(url, job.id, 120);
+check(strcmp(job.state, 'succeeded'), 'the identification succeeds');
+r = manipid_result(url, job.id);
+check(abs(r.estimates.m2 - 25) < 0.01, sprintf('m2 = %.6f, expected 25 within 0.01', r.estimates.m2));
+check(abs(r.estimates.m3 - 15) < 0.01 && abs(r.estimates.m4 - 5) < 0.01, 'm3 = 15 and m4 = 5 within 0.01');
+check(isequal(sort(r.identifiability.unidentifiable), {'l1', 'm1'}), 'm1 and l1 are reported unidentifiable');
+check(~r.identifiability.all_identifiable, 'all_identifiable is false');
+check(strcmp(r.identifiability.combinations(1).name, 'm1*l1^2') ...
+      && abs(r.identifiability.combinations(1).value - 50 * 0.4^2) < 0.01, 'the product m1*l1^2 = 8 is reported');
+check(isnan(r.std_errors.m1) && isnan(r.std_errors.l1) && r.std_errors.m2 > 0 && r.std_errors.m2 < 1e-3, ...
+      'standard errors: NaN for m1 and l1, small for m2');
+check(isequal(r.names, {'m1', 'm2', 'm3', 'm4', 'l1', 'l2', 'l3', 'l4'}) && numel(r.values) == 8 ...
+      && r.values(2) == r.estimates.m2 && isnan(r.std_values(1)), 'names/values/std_values follow the estimates');
+check(strcmp(r.job_id, job.id) && strcmp(r.state, 'succeeded') && strcmp(r.dataset_id, ds.id), 'result names its job and dataset');
+check(isequal(size(r.correlation.matrix), [8 8]) && isnan(r.correlation.matrix(1, 1)) && r.correlation.matrix(2, 2) == 1, ...
+      'correlation matrix 8 x 8, NaN for the unidentifiable');
+r2 = manipid_result(url, job);
+check(isequal(r2.estimates, r.estimates), 'manipid_result takes the finished job struct as well');
+passed = passed + 1;
+
+% --- History: every evaluation, paged.
+[index, cost, theta, names] = manipid_history(url, job);
+check(numel(index) == r.evaluations && job.progress.evaluations == r.evaluations, ...
+      sprintf('history length %d = evaluations %d', numel(index), r.evaluations));
+check(isequal(index, (0:r.evaluations - 1)'), 'history indices are 0..evaluations-1');
+check(min(cost) == r.final_cost, 'the smallest cost in the history is the final cost');
+check(isequal(size(theta), [r.evaluations 8]) && isequal(names, r.names), 'theta is evaluations x 8, names as the estimates');
+initial = cellfun(@(n) r.initial.(n), names);
+check(isequal(theta(1, :), initial), 'the first evaluation is the initial point');
+[index400, cost400, theta400] = manipid_history(url, job.id, 'PageSize', 400);
+check(isequal(index400, index) && isequal(cost400, cost) && isequal(theta400, theta), 'pages of 400 give the same history');
+passed = passed + 1;
+
+% --- Shapes: one joint, a single free parameter given as text, few samples.
+one = manipid_upload(url, [0 0.1 0.2 0.3 0.4], [0; 0.1; 0.2; 0.3; 0.4]);
+check(one.joints == 1 && one.samples == 5, 'one joint (5 x 1) stays 1 joint of 5 samples');
+odd_name = sprintf('run "7" \\ with\ttab');
+two = manipid_upload(url, 0.01, [1 2 3; 4 5 6], [], [], odd_name);
+check(strcmp(two.name, odd_name), 'quotes, backslashes and tabs in a name survive JSON');
+check(two.joints == 3 && two.samples == 2 && abs(two.dt - 0.01) < 1e-15, 'a 2 x 3 matrix is 2 samples of 3 joints (dt given)');
+[~, two_back] = manipid_dataset(url, two);
+check(isequal(two_back.q, [1 2 3; 4 5 6]) && isempty(two_back.tau) && isempty(two_back.ref), ...
+      'the 2 x 3 dataset comes back as it went, without tau and ref');
+truth = struct('m1', 50, 'm2', 24, 'm3', 15, 'm4', 5, 'l1', 0.4, 'l2', 0.8, 'l3', 0.6, 'l4', 0.2);
+quick = manipid_identify(url, ds.id, struct('free', 'm2', 'initial', truth, 'max_evaluations', 500, 'lower', []));
+check(isequal(quick.request.free, {'m2'}) && quick.request.initial.m2 == 24 && ~isfield(quick.request, 'lower'), ...
+      'free ''m2'' goes as ["m2"]; [] fields are left out');
+check(quick.request.initial.l3 == 0.6, 'initial values go as given');
+quick = manipid_wait(url, quick, 60, 'Quiet', true);
+rq = manipid_result(url, quick);
+check(isequal(rq.free, {'m2'}) && abs(rq.estimates.m2 - 25) < 0.01, sprintf('one free parameter (the others at their true values): m2 = %.6f, expected 25', rq.estimates.m2));
+passed = passed + 1;
+
+% --- Idempotency-Key: the same upload twice is one dataset.
+key = sprintf('octave-test-%d', round(rand() * 1e9));
+first = manipid_upload(url, 0.01, [1 2 3; 4 5 6], [], [], 'idem', 'IdempotencyKey', key);
+again = manipid_upload(url, 0.01, [1 2 3; 4 5 6], [], [], 'idem', 'IdempotencyKey', key);
+check(strcmp(first.id, again.id), 'the same Idempotency-Key returns the first dataset');
+code = caught(@() manipid_upload(url, 0.01, [1 2 3; 4 5 7], [], [], 'idem', 'IdempotencyKey', key));
+check(strcmp(code, 'manipid:IDEMPOTENCY_MISMATCH'), 'the same key with other data: IDEMPOTENCY_MISMATCH');
+passed = passed + 1;
+
+% --- Cancel a running output-error identification.
+slow = manipid_identify(url, ds, struct('method', 'output-error', 'max_evaluations', 100000, 'max_seconds', 600));
+cancelled = manipid_cancel(url, slow);
+check(strcmp(cancelled.id, slow.id) && (cancelled.cancel_requested || strcmp(cancelled.state, 'cancelled')), ...
+      'manipid_cancel asks for the cancellation');
+slow = manipid_wait(url, slow, 60, 'Quiet', true);
+check(strcmp(slow.state, 'cancelled'), 'the cancelled job ends cancelled');
+passed = passed + 1;
+
+% --- Errors: problem+json code, field and detail in the error; nothing sent for NaN.
+[code, message, problem] = caught(@() manipid_identify(url, ds, struct('bogus', 1)));
+check(strcmp(code, 'manipid:INVALID_FIELD'), ['unknown option: manipid:INVALID_FIELD, got ' code]);
+check(strcmp(problem.field, 'bogus') && problem.status == 422 && ~isempty(strfind(problem.detail, 'unknown field')), ...
+      'the problem names the field and says why');
+check(~isempty(strfind(message, 'INVALID_FIELD')) && ~isempty(strfind(message, 'bogus')) ...
+      && ~isempty(strfind(message, 'HTTP 422')), ['the message carries code, field and status: ' message]);
+[code, ~, problem] = caught(@() manipid_identify(url, ds, struct('free', {{'m2', 'm9'}})));
+check(strcmp(code, 'manipid:INVALID_FIELD') && ~isempty(strfind(problem.field, 'free')), ...
+      ['an unknown parameter name: INVALID_FIELD at free, got ' problem.field]);
+[code, message, problem] = caught(@() manipid_upload(url, 0.001, [0 0; 1 NaN; 2 2]));
+check(strcmp(code, 'manipid:INVALID_FIELD') && strcmp(problem.field, 'q[1]') && problem.status == 0, ...
+      ['NaN is refused before sending, field q[1]: ' message]);
+[code, ~, problem] = caught(@() manipid_upload(url, [0 1 2], [0 0; 1 1; 2 2], [1 2 3]));
+check(strcmp(code, 'manipid:INVALID_FIELD') && strcmp(problem.field, 'tau'), 'tau of the wrong size is refused');
+[code, ~, problem] = caught(@() manipid_upload(url, [0 1 2 3], [0 1 2; 0 1 2]));
+check(strcmp(code, 'manipid:INVALID_FIELD') && strcmp(problem.field, 't'), 't that does not match the rows of q is refused');
+[code, ~, problem] = caught(@() manipid_result(url, 'job_0000000000000000'));
+check(strcmp(code, 'manipid:NOT_FOUND') && problem.status == 404, 'an unknown job: manipid:NOT_FOUND (404)');
+[code, ~, problem] = caught(@() manipid_job(url, 'job/../../x'));
+check(strcmp(code, 'manipid:INVALID_FIELD') && problem.status == 0, 'a malformed id is refused before sending');
+[code, ~, problem] = caught(@() manipid_job('http://127.0.0.1:9', 'job_x'));
+check(strcmp(code, 'manipid:CONNECTION'), ['no server: manipid:CONNECTION, got ' code]);
+if strcmp(getenv('MANIPID_TEST_TOKEN'), '1')
+  [code, ~, problem] = caught(@() manipid_job(struct('url', url, 'token', 'wrong'), job));
+  check(strcmp(code, 'manipid:UNAUTHORIZED') && problem.status == 401, 'a wrong token: manipid:UNAUTHORIZED');
+end
+passed = passed + 1;
+
+fprintf('run_tests: %d groups passed in %.1f s\n', passed, toc(started));
+end
+
+function check(condition, what)
+if ~condition
+  error('run_tests:failed', 'FAILED: %s', what);
+end
+fprintf('ok  %s\n', what);
+end
+
+function [identifier, message, problem] = caught(action)
+%CAUGHT  Run ACTION; the identifier and message of the error it raised ('' if none).
+identifier = '';
+message = '';
+problem = [];
+try
+  action();
+catch err
+  identifier = err.identifier;
+  message = err.message;
+  problem = manipid_last_problem();
+end
+end

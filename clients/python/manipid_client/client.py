@@ -1,0 +1,532 @@
+"""The HTTP client of the manipid service: Client, Dataset, Job and History.
+
+Standard library only (http.client + json). One fresh connection per request: the server
+closes idle keep-alive connections after 2 s, and a lab script's request rate makes reuse
+pointless. numpy is used only when the caller hands numpy arrays in or asks for them out.
+"""
+from __future__ import annotations
+
+import csv
+import http.client
+import json
+import os
+import socket
+import sys
+import time
+import urllib.parse
+from typing import Any, Dict, Iterator, List, Mapping, NamedTuple, Optional, Sequence, TextIO, Union
+
+from .errors import JobCancelled, JobFailed, JobTimeout, ManipidConnectionError, ManipidError
+
+TERMINAL_STATES = ("succeeded", "failed", "cancelled")
+LONG_POLL_LIMIT = 30.0  # the server caps ?wait= at 30 s
+PROGRESS_POLL = 1.0  # seconds per long-poll while a live progress line is shown
+
+PathLike = Union[str, "os.PathLike[str]"]
+
+
+class Dataset:
+    """A stored dataset: `id` plus the server's metadata (`name`, `joints`, `samples`, `dt`,
+    `has_torque`, `has_reference`, `source_job`, `created_at`) as attributes and in `data`.
+
+    Pass it (or its id string) to Client.identify(). str(dataset) is its id.
+    """
+
+    def __init__(self, client: "Client", data: Mapping[str, Any]) -> None:
+        self.client = client
+        self.data: dict = dict(data)
+
+    @property
+    def id(self) -> str:
+        return self.data["id"]
+
+    def __getattr__(self, name: str) -> Any:
+        # Metadata fields as attributes without freezing the list: new server fields just work.
+        try:
+            return self.__dict__["data"][name]
+        except KeyError:
+            raise AttributeError(name) from None
+
+    def csv(self) -> str:
+        """The samples as CSV text (header t,q1..qn[,tau1..taun][,ref1..refn])."""
+        return self.client.dataset_csv(self.id)
+
+    def delete(self) -> None:
+        self.client.delete_dataset(self.id)
+
+    def __str__(self) -> str:
+        return self.id
+
+    def __repr__(self) -> str:
+        return f"<Dataset {self.id} {self.data.get('joints')} joints × {self.data.get('samples')} samples>"
+
+
+class History(NamedTuple):
+    """A job's cost history as numpy arrays (Job.history(as_numpy=True)).
+
+    index: (n,) int64; cost: (n,) float64; theta: (n, p) float64, column k is names[k].
+    """
+
+    index: Any
+    cost: Any
+    theta: Any
+    names: List[str]
+
+
+class Job:
+    """A simulation or identification job. `data` is the JSON last seen from the server;
+    `refresh()` fetches it again, `wait()` long-polls until the job ends."""
+
+    def __init__(self, client: "Client", data: Mapping[str, Any]) -> None:
+        self.client = client
+        self.data: dict = dict(data)
+
+    # --- the job's fields -------------------------------------------------------------
+    @property
+    def id(self) -> str:
+        return self.data["id"]
+
+    @property
+    def state(self) -> str:
+        """queued, running, succeeded, failed or cancelled, as last seen (refresh() to update)."""
+        return self.data["state"]
+
+    @property
+    def kind(self) -> Optional[str]:
+        return self.data.get("kind")
+
+    @property
+    def done(self) -> bool:
+        return self.state in TERMINAL_STATES
+
+    @property
+    def progress(self) -> dict:
+        """{"evaluations": int, "best_cost": float | None} as last seen."""
+        return dict(self.data.get("progress") or {})
+
+    @property
+    def dataset_id(self) -> Optional[str]:
+        """The dataset identified, or the one a simulation made (once it has succeeded)."""
+        result = self.data.get("result") or {}
+        return self.data.get("dataset_id") or result.get("dataset_id")
+
+    def __repr__(self) -> str:
+        return f"<Job {self.id} {self.kind} {self.state}>"
+
+    # --- life cycle --------------------------------------------------------------------
+    def refresh(self, wait: Optional[float] = None) -> "Job":
+        """Fetches the job again; with `wait` (s, ≤ 30) long-polls until it ends or that time passes."""
+        path = f"/v1/jobs/{_quote(self.id)}"
+        timeout = None
+        if wait is not None and wait > 0:
+            wait = min(float(wait), LONG_POLL_LIMIT)
+            path += f"?wait={wait:g}"
+            timeout = self.client.timeout + wait  # the answer may legitimately take `wait` seconds
+        self.data = self.client._request("GET", path, timeout=timeout)
+        return self
+
+    def wait(self, timeout: Optional[float] = None, progress: Union[bool, TextIO] = False) -> dict:
+        """Waits until the job ends and returns its `result` dict.
+
+        Long-polls `GET /v1/jobs/{id}?wait=S` (S ≤ 30 s). Raises JobFailed (with the job's
+        problem fields) or JobCancelled (its `.result` has the best point reached), and
+        JobTimeout when `timeout` seconds pass first (the job goes on).
+
+        progress=True shows a live line (state, evaluations, best cost, elapsed time) on stderr
+        when stderr is a terminal, rewritten in place with '\\r'; when it is not a terminal
+        (a log file, CI) one line per state change is printed instead. A stream may be given
+        instead of True.
+        """
+        stream = sys.stderr if progress is True else (progress or None)
+        display = _Progress(stream, self.id) if stream is not None else None
+        deadline = None if timeout is None else time.monotonic() + timeout
+        try:
+            while True:
+                if display:
+                    display.update(self.data)
+                if self.done:
+                    break
+                step = PROGRESS_POLL if display and display.live else LONG_POLL_LIMIT
+                if deadline is not None:
+                    remaining = deadline - time.monotonic()
+                    if remaining <= 0:
+                        raise JobTimeout(f"job {self.id} still {self.state} after {timeout:g} s", job=self.data)
+                    step = min(step, remaining)
+                self.refresh(wait=step)
+        finally:
+            if display:
+                display.close()
+        return self._outcome()
+
+    def result(self, timeout: Optional[float] = None) -> dict:
+        """The job's result dict, waiting for it if the job has not ended (like a future).
+
+        Identification: estimates, std_errors, correlation, identifiability, final_cost,
+        evaluations, ...; simulation: dataset_id, samples, ... Raises as wait() does.
+        """
+        if self.done:
+            return self._outcome()
+        return self.wait(timeout=timeout)
+
+    def _outcome(self) -> dict:
+        if self.state == "failed":
+            raise JobFailed(self.data)
+        if self.state == "cancelled":
+            raise JobCancelled(self.data)
+        return self.data.get("result") or {}
+
+    def cancel(self) -> "Job":
+        """Asks the server to cancel (idempotent). A queued job ends at once, a running
+        identification at its next cost evaluation: wait() then raises JobCancelled."""
+        self.data = self.client._request("POST", f"/v1/jobs/{_quote(self.id)}/cancel", b"")
+        return self
+
+    def delete(self) -> None:
+        """Deletes a finished job and its history (409 CONFLICT while queued or running)."""
+        self.client._request("DELETE", f"/v1/jobs/{_quote(self.id)}")
+
+    def history(self, as_numpy: bool = False, page_size: int = 1000) -> Union[List[dict], History]:
+        """Every cost evaluation so far (live while the job runs), following next_page_token.
+
+        Default: a list of {"index": int, "cost": float, "parameters": {"m1": ..., ...}}.
+        as_numpy=True: a History(index, cost, theta, names) of numpy arrays, theta being
+        evaluations × parameters in the order of `names`; ImportError when numpy is missing.
+        """
+        if as_numpy:
+            try:
+                import numpy
+            except ImportError as error:
+                raise ImportError("Job.history(as_numpy=True) needs numpy; the default list needs nothing") from error
+        entries: List[dict] = []
+        token: Optional[str] = None
+        while True:
+            query = {"page_size": page_size}
+            if token:
+                query["page_token"] = token
+            page = self.client._request("GET", f"/v1/jobs/{_quote(self.id)}/history", query=query)
+            entries.extend(page.get("items", []))
+            token = page.get("next_page_token")
+            if not token:
+                break
+        if not as_numpy:
+            return entries
+        names = list(entries[0]["parameters"]) if entries else []
+        return History(
+            index=numpy.array([entry["index"] for entry in entries], dtype=numpy.int64),
+            cost=numpy.array([entry["cost"] for entry in entries], dtype=numpy.float64),
+            theta=numpy.array([[entry["parameters"][name] for name in names] for entry in entries],
+                              dtype=numpy.float64).reshape(len(entries), len(names)),
+            names=names)
+
+    def history_csv(self) -> str:
+        """The whole history as CSV text: index,cost,m1..mn,l1..ln."""
+        return self.client._request("GET", f"/v1/jobs/{_quote(self.id)}/history", accept="text/csv")
+
+
+class Client:
+    """A connection to a manipid server.
+
+    url: e.g. "http://127.0.0.1:8080" (a path prefix behind a proxy is kept);
+    token: sent as `Authorization: Bearer <token>` (the server's --token);
+    timeout: seconds for one request (a long-poll adds its wait to it).
+    """
+
+    def __init__(self, url: str, token: Optional[str] = None, timeout: float = 60.0) -> None:
+        parts = urllib.parse.urlsplit(str(url))
+        if parts.scheme not in ("http", "https") or not parts.hostname:
+            raise ValueError(f"url must look like http://HOST:PORT, got {url!r}")
+        self.url = str(url).rstrip("/")
+        self.token = token
+        self.timeout = float(timeout)
+        self._parts = parts
+        self._prefix = parts.path.rstrip("/")
+
+    def __repr__(self) -> str:
+        return f"Client({self.url!r})"
+
+    # --- datasets ----------------------------------------------------------------------
+    def upload_dataset(self, path_or_arrays: Union[PathLike, Mapping[str, Any]], name: Optional[str] = None,
+                       idempotency_key: Optional[str] = None) -> Dataset:
+        """Stores a trajectory and returns its Dataset.
+
+        path_or_arrays is either
+        - a CSV file path (str or os.PathLike) with header t,q1..qn[,tau1..taun][,ref1..refn]
+          (what `manipid simulate --out` writes), sent as it is; or
+        - a dict with `t` (sample times) or `dt` (with optional `t0`), `q`, and optionally `tau`
+          and `ref`. Plain lists are per joint, as the API has them: q[j][i] is joint j+1 at
+          sample i. numpy arrays are samples × joints (one row per sample, like the CSV) and
+          are transposed; a 1-D array is one joint.
+        name: stored with the dataset. The server takes no name with a CSV body, so a CSV file
+        with a name is read here and sent as JSON (numbers round-trip exactly).
+        idempotency_key: a retry with the same key returns the first dataset.
+        """
+        if isinstance(path_or_arrays, (str, os.PathLike)):
+            if name is None:
+                with open(path_or_arrays, "rb") as stream:
+                    body: Union[bytes, dict] = stream.read()
+                content_type = "text/csv"
+            else:
+                body, content_type = _csv_to_json(path_or_arrays), "application/json"
+        elif isinstance(path_or_arrays, Mapping):
+            body, content_type = _arrays_to_json(path_or_arrays), "application/json"
+        else:
+            raise TypeError("upload_dataset takes a CSV path or a dict of arrays (t or dt, q, tau, ref), "
+                            f"not {type(path_or_arrays).__name__}")
+        if isinstance(body, dict) and name is not None:
+            body["name"] = name
+        data = self._request("POST", "/v1/datasets", body, content_type=content_type,
+                             headers=_idempotency(idempotency_key))
+        return Dataset(self, data)
+
+    def dataset(self, dataset_id: Union[str, Dataset]) -> Dataset:
+        """A dataset's metadata."""
+        return Dataset(self, self._request("GET", f"/v1/datasets/{_quote(_dataset_id(dataset_id))}"))
+
+    def datasets(self, page_size: int = 50) -> Iterator[Dataset]:
+        """Every stored dataset, newest first (fetched page by page as you iterate)."""
+        for item in self._pages("/v1/datasets", {"page_size": page_size}):
+            yield Dataset(self, item)
+
+    def dataset_csv(self, dataset_id: Union[str, Dataset]) -> str:
+        """A dataset's samples as CSV text."""
+        return self._request("GET", f"/v1/datasets/{_quote(_dataset_id(dataset_id))}",
+                             query={"format": "csv"}, accept="text/csv")
+
+    def delete_dataset(self, dataset_id: Union[str, Dataset]) -> None:
+        self._request("DELETE", f"/v1/datasets/{_quote(_dataset_id(dataset_id))}")
+
+    # --- jobs --------------------------------------------------------------------------
+    def simulate(self, idempotency_key: Optional[str] = None, **options: Any) -> Job:
+        """Queues a closed-loop simulation (POST /v1/simulations); returns its Job.
+
+        Keyword options are the request's JSON fields: preset, kinetic_energy, name,
+        parameters, kp, kd, reference, duration, dt, noise, ... (none: the paper's run).
+        Job.wait() returns {"dataset_id": ..., "samples": ..., ...}.
+        """
+        return Job(self, self._request("POST", "/v1/simulations", options, headers=_idempotency(idempotency_key)))
+
+    def identify(self, dataset: Union[str, Dataset, Mapping[str, Any], None] = None,
+                 idempotency_key: Optional[str] = None, **options: Any) -> Job:
+        """Queues an identification (POST /v1/identifications); returns its Job.
+
+        dataset: a Dataset, a dataset id, or None with simulation={...} (simulate, then
+        identify). Keyword options are the request's JSON fields: preset, method, algorithm,
+        free, initial, lower, upper, kp, kd, half_length, band, torque_source, weights,
+        max_evaluations, max_seconds, ... (unknown ones are refused by the server, 422).
+        """
+        body = dict(options)
+        if dataset is not None:
+            if "dataset_id" in body:
+                raise TypeError("give the dataset either positionally or as dataset_id=, not both")
+            body["dataset_id"] = _dataset_id(dataset)
+        return Job(self, self._request("POST", "/v1/identifications", body, headers=_idempotency(idempotency_key)))
+
+    def job(self, job_id: str) -> Job:
+        """A job by id (e.g. one submitted by another script)."""
+        return Job(self, self._request("GET", f"/v1/jobs/{_quote(job_id)}"))
+
+    def jobs(self, state: Optional[str] = None, kind: Optional[str] = None, page_size: int = 50) -> Iterator[Job]:
+        """Every job, newest first, optionally of one state and/or kind (paged as you iterate).
+        Listed jobs carry no `request`; refresh() one for the full record."""
+        query: Dict[str, Any] = {"page_size": page_size}
+        if state is not None:
+            query["state"] = state
+        if kind is not None:
+            query["kind"] = kind
+        for item in self._pages("/v1/jobs", query):
+            yield Job(self, item)
+
+    def health(self) -> dict:
+        """GET /healthz: {"status": "ok"} while serving."""
+        return self._request("GET", "/healthz")
+
+    # --- HTTP --------------------------------------------------------------------------
+    def _pages(self, path: str, query: Dict[str, Any]) -> Iterator[dict]:
+        token: Optional[str] = None
+        while True:
+            page = self._request("GET", path, query={**query, **({"page_token": token} if token else {})})
+            yield from page.get("items", [])
+            token = page.get("next_page_token")
+            if not token:
+                return
+
+    def _request(self, method: str, path: str, body: Union[bytes, Mapping, None] = None, *,
+                 query: Optional[Mapping[str, Any]] = None, content_type: Optional[str] = None,
+                 accept: str = "application/json", headers: Optional[Mapping[str, str]] = None,
+                 timeout: Optional[float] = None) -> Any:
+        """One request; returns parsed JSON (or text for non-JSON answers, None for 204)."""
+        all_headers = {"Accept": accept, "User-Agent": "manipid-client-python"}
+        if self.token:
+            all_headers["Authorization"] = f"Bearer {self.token}"
+        if isinstance(body, Mapping):
+            try:
+                # allow_nan=False: NaN/Infinity are not JSON; say so here rather than as a parse error there.
+                body = json.dumps(body, allow_nan=False).encode()
+            except ValueError as error:
+                raise ValueError(f"every number sent must be finite: {error}") from None
+            content_type = content_type or "application/json"
+        if body is not None:
+            all_headers["Content-Type"] = content_type or "application/octet-stream"
+        elif method == "POST":
+            body = b""  # a POST without Content-Length is refused (400), so send an empty body
+        all_headers.update(headers or {})
+        target = self._prefix + path
+        if query:
+            target += "?" + urllib.parse.urlencode(query)
+
+        connection_class = http.client.HTTPSConnection if self._parts.scheme == "https" else http.client.HTTPConnection
+        connection = connection_class(self._parts.hostname, self._parts.port,
+                                      timeout=timeout if timeout is not None else self.timeout)
+        try:
+            connection.request(method, target, body=body, headers=all_headers)
+            response = connection.getresponse()
+            data = response.read()
+            status = response.status
+            answer_type = response.getheader("Content-Type", "")
+            retry_after = response.getheader("Retry-After")
+        except (OSError, http.client.HTTPException) as error:
+            kind = "timed out" if isinstance(error, socket.timeout) else "failed"
+            raise ManipidConnectionError(f"{method} {self.url}{path} {kind}: {error}") from error
+        finally:
+            connection.close()
+
+        parsed: Any = None
+        if "json" in answer_type and data:
+            try:
+                parsed = json.loads(data)
+            except ValueError:
+                parsed = None
+        if status >= 400:
+            problem = parsed if isinstance(parsed, dict) else {}
+            message = None if problem.get("detail") or problem.get("title") else \
+                f"{method} {path}: HTTP {status} {data[:200].decode(errors='replace')}".strip()
+            raise ManipidError(message, status=status, problem=problem, retry_after=_seconds(retry_after))
+        if status == 204 or not data:
+            return None
+        if parsed is not None:
+            return parsed
+        return data.decode("utf-8", errors="replace")
+
+
+# --- helpers ---------------------------------------------------------------------------
+class _Progress:
+    """The progress display of Job.wait(progress=True): one line rewritten in place on a
+    terminal, else a line per state change (so logs stay readable)."""
+
+    def __init__(self, stream: TextIO, job_id: str) -> None:
+        self.stream = stream
+        self.job_id = job_id
+        try:
+            self.live = bool(stream.isatty())
+        except (AttributeError, ValueError):
+            self.live = False
+        self.started = time.monotonic()
+        self.last_state: Optional[str] = None
+        self.width = 0
+
+    def update(self, job: Mapping[str, Any]) -> None:
+        state = job.get("state", "?")
+        progress = job.get("progress") or {}
+        evaluations = progress.get("evaluations")
+        best = progress.get("best_cost")
+        text = f"{self.job_id} {state}"
+        if evaluations:
+            text += f"  {evaluations} evaluations"
+        if best is not None:
+            text += f"  best cost {best:.6g}"
+        try:
+            if self.live:
+                text += f"  {time.monotonic() - self.started:.1f} s"
+                # Pad over the previous text: no terminal escape codes needed.
+                self.stream.write("\r" + text.ljust(self.width))
+                self.width = max(self.width, len(text))
+                self.stream.flush()
+            elif state != self.last_state:
+                self.stream.write(text + "\n")
+                self.stream.flush()
+        except (OSError, ValueError):
+            pass  # a closed or broken stderr must not fail the wait
+        self.last_state = state
+
+    def close(self) -> None:
+        if self.live and self.width:
+            try:
+                self.stream.write("\n")
+                self.stream.flush()
+            except (OSError, ValueError):
+                pass
+
+
+def _quote(segment: str) -> str:
+    return urllib.parse.quote(str(segment), safe="")
+
+
+def _idempotency(key: Optional[str]) -> Dict[str, str]:
+    return {"Idempotency-Key": str(key)} if key is not None else {}
+
+
+def _seconds(value: Optional[str]) -> Optional[float]:
+    try:
+        return float(value) if value is not None else None
+    except ValueError:
+        return None
+
+
+def _dataset_id(dataset: Union[str, Dataset, Mapping[str, Any]]) -> str:
+    if isinstance(dataset, Dataset):
+        return dataset.id
+    if isinstance(dataset, Mapping):
+        return str(dataset["id"])
+    if isinstance(dataset, str):
+        return dataset
+    raise TypeError(f"expected a Dataset or a dataset id, not {type(dataset).__name__}")
+
+
+def _per_joint(value: Any) -> Any:
+    """numpy samples × joints → per-joint lists; plain lists pass through (already per joint)."""
+    if hasattr(value, "ndim") and hasattr(value, "tolist"):
+        if value.ndim == 1:
+            return [value.tolist()]
+        if value.ndim == 2:
+            return value.T.tolist()
+        raise ValueError(f"expected a samples × joints array, got {value.ndim} dimensions")
+    return value
+
+
+def _arrays_to_json(arrays: Mapping[str, Any]) -> dict:
+    body: Dict[str, Any] = {}
+    for key, value in arrays.items():
+        if key in ("q", "tau", "ref"):
+            body[key] = _per_joint(value)
+        elif hasattr(value, "tolist"):
+            body[key] = value.tolist()  # numpy t, or numpy scalars for dt/t0
+        else:
+            body[key] = value
+    return body
+
+
+def _csv_to_json(path: PathLike) -> dict:
+    """Reads a t,q1..qn,tau1..taun,ref1..refn CSV into the JSON upload (for a named upload);
+    the server still validates everything."""
+    with open(path, newline="") as stream:
+        rows = [row for row in csv.reader(stream) if row]
+    if not rows:
+        raise ValueError(f"{os.fspath(path)}: empty file")
+    columns: Dict[str, List[float]] = {name.strip(): [] for name in rows[0]}
+    names = list(columns)
+    for number, row in enumerate(rows[1:], start=2):
+        if len(row) != len(names):
+            raise ValueError(f"{os.fspath(path)}:{number}: {len(row)} fields, the header has {len(names)}")
+        for name, text in zip(names, row):
+            columns[name].append(float(text))
+    body: Dict[str, Any] = {"t": columns.pop("t", None)}
+    for block in ("q", "tau", "ref"):
+        count = 0
+        while f"{block}{count + 1}" in columns:
+            count += 1
+        if count:
+            body[block] = [columns.pop(f"{block}{j}") for j in range(1, count + 1)]
+    if body["t"] is None or columns:
+        raise ValueError(f"{os.fspath(path)}: expected columns t,q1..qn[,tau1..taun][,ref1..refn], "
+                         f"got {','.join(names)}")
+    return body
