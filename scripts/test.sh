@@ -1,10 +1,14 @@
 #!/usr/bin/env bash
 # Builds manipid with AddressSanitizer and UndefinedBehaviorSanitizer (the `debug` preset)
-# and runs every test: unit tests of core/ and api/, and the command line end to end.
-# Installs missing Debian packages first. Usage: bash scripts/test.sh
+# and runs every test: unit tests of core/, api/ and the store, the command line and the
+# service end to end (the real binary on port 0 with a real SQLite file), the Python and
+# MATLAB/Octave clients, the curl batch script and the packaging checks — then fuzzes the
+# JSON and CSV request parsers for a short while (scripts/fuzz.sh).
+# Installs missing Debian packages first. Usage: bash scripts/test.sh [FUZZ_SECONDS]
 set -euo pipefail
 cd "$(dirname "${BASH_SOURCE[0]}")/.."
 bash scripts/setup.sh
 cmake --preset debug >/dev/null
 cmake --build --preset debug -j "$(nproc)"
 ctest --preset debug -j "$(nproc)"
+bash scripts/fuzz.sh "${1:-15}"
