@@ -35,7 +35,9 @@ std::optional<Trajectory> JobService::dataset_data(const std::string& id) { retu
 api::Page<api::DatasetInfo> JobService::datasets(const api::PageRequest& page) { return store_.list_datasets(page); }
 
 api::DeleteOutcome JobService::delete_dataset(const std::string& id) {
-  return store_.delete_dataset(id) ? api::DeleteOutcome::deleted : api::DeleteOutcome::not_found;
+  bool in_use = false;
+  if (store_.delete_dataset(id, &in_use)) return api::DeleteOutcome::deleted;
+  return in_use ? api::DeleteOutcome::conflict : api::DeleteOutcome::not_found;
 }
 
 api::SubmitResult JobService::submit(api::JobKind kind, const std::string& request_json, const std::string& dataset_id,

@@ -153,9 +153,17 @@ class SqliteStore final : public Store {
     });
   }
 
-  bool delete_dataset(const std::string& id) override {
+  bool delete_dataset(const std::string& id, bool* in_use) override {
     auto connection = pool_.checkout();
     return sqlite::run_transaction(*connection, TransactionKind::write, [&] {
+      if (in_use) *in_use = false;
+      auto readers = connection->prepare(
+          "SELECT 1 FROM jobs WHERE dataset_id = ?1 AND state IN ('queued', 'running') LIMIT 1");
+      readers.bind_text(1, id);
+      if (readers.step()) {
+        if (in_use) *in_use = true;
+        return false;
+      }
       auto remove = connection->prepare("DELETE FROM datasets WHERE id = ?1");
       remove.bind_text(1, id);
       remove.run();

@@ -74,7 +74,8 @@ class Store {
   virtual std::optional<api::DatasetInfo> find_dataset(const std::string& id) = 0;
   virtual std::optional<Trajectory> load_dataset(const std::string& id) = 0;
   virtual api::Page<api::DatasetInfo> list_datasets(const api::PageRequest& page) = 0;  ///< newest first
-  virtual bool delete_dataset(const std::string& id) = 0;
+  /// Not while a queued or running job will read it: then false with *in_use set.
+  virtual bool delete_dataset(const std::string& id, bool* in_use = nullptr) = 0;
 
   // ---- jobs ----
   /// Inserts a queued job unless the key replays or conflicts or the queue is full

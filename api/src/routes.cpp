@@ -23,7 +23,6 @@
 #include <map>
 #include <memory>
 #include <mutex>
-#include <regex>
 #include <sstream>
 
 namespace manipid::api {
@@ -234,10 +233,12 @@ void list_datasets(RouteState& state, const httplib::Request& request, httplib::
 
 void delete_dataset(RouteState& state, const httplib::Request& request, httplib::Response& response) {
   const std::string id = request.matches[1];
-  if (state.service.delete_dataset(id) == DeleteOutcome::not_found) {
-    throw ApiError(ProblemKind::not_found, "no dataset " + id, "id");
+  switch (state.service.delete_dataset(id)) {
+    case DeleteOutcome::deleted: response.status = 204; return;
+    case DeleteOutcome::not_found: throw ApiError(ProblemKind::not_found, "no dataset " + id, "id");
+    case DeleteOutcome::conflict:
+      throw ApiError(ProblemKind::conflict, "dataset " + id + " is the input of a queued or running job", "id");
   }
-  response.status = 204;
 }
 
 void submit(RouteState& state, const httplib::Request& request, httplib::Response& response, JobKind kind) {
@@ -350,11 +351,26 @@ void job_history(RouteState& state, const httplib::Request& request, httplib::Re
   send_json(response, 200, history_page_to_json(*page));
 }
 
-void cancel_job(RouteState& state, const httplib::Request& request, httplib::Response& response) {
-  const std::string id = request.matches[1];
+void cancel_job_with_id(RouteState& state, const std::string& id, httplib::Response& response) {
   const auto job = state.service.cancel(id);
   if (!job) throw ApiError(ProblemKind::not_found, "no job " + id, "id");
   send_job(response, 200, *job);
+}
+
+void cancel_job(RouteState& state, const httplib::Request& request, httplib::Response& response) {
+  cancel_job_with_id(state, request.matches[1], response);
+}
+
+/// The job id of "/v1/jobs/{id}/cancel" or "/v1/jobs/{id}:cancel", else empty.
+std::string cancel_route_id(const std::string& path) {
+  const std::string prefix = "/v1/jobs/";
+  if (path.rfind(prefix, 0) != 0) return "";
+  std::size_t end = prefix.size();
+  while (end < path.size() && (std::isalnum(static_cast<unsigned char>(path[end])) || path[end] == '_' || path[end] == '-')) ++end;
+  const std::size_t length = end - prefix.size();
+  const std::string rest = path.substr(end);
+  if (length == 0 || length > 64 || (rest != "/cancel" && rest != ":cancel")) return "";
+  return path.substr(prefix.size(), length);
 }
 
 void delete_job(RouteState& state, const httplib::Request& request, httplib::Response& response) {
@@ -406,13 +422,10 @@ httplib::Server::HandlerResponse before_routing(RouteState& state, const httplib
   // cpp-httplib 0.11.4 reads a POST without Content-Length until the peer closes (curl -X POST
   // sends none): answer a bodiless cancel here, before any read, and refuse other such POSTs.
   if (request.method == "POST" && !request.has_header("Content-Length") && !request.has_header("Transfer-Encoding")) {
-    std::smatch match;
-    static const std::regex cancel_route(std::string("^/v1/jobs/") + id_pattern + "(?:/cancel|:cancel)$");
-    if (std::regex_match(request.path, match, cancel_route)) {
-      httplib::Request bodiless = request;
-      bodiless.matches = match;
-      guarded(state.self.lock(), [&state](const httplib::Request& r, httplib::Response& w) { cancel_job(state, r, w); })(
-          bodiless, response);
+    if (const std::string id = cancel_route_id(request.path); !id.empty()) {
+      guarded(state.self.lock(), [&state, id](const httplib::Request&, httplib::Response& answer) {
+        cancel_job_with_id(state, id, answer);
+      })(request, response);
     } else {
       send_problem(response, {ProblemKind::length_required, "send the body with a Content-Length", "Content-Length"},
                    request.path);

@@ -194,6 +194,23 @@ TEST_F(StoreTest, UnknownDatasetIsAbsent) {
   EXPECT_FALSE(store_->delete_dataset("ds_0000000000000000"));
 }
 
+TEST_F(StoreTest, DatasetOfAQueuedOrRunningJobIsNotDeleted) {
+  const std::string dataset = store_->insert_dataset("in use", make_trajectory(10, 2, true, false), "", std::nullopt).dataset.id;
+  NewJob job = identification_job();
+  job.dataset_id = dataset;
+  const std::string id = submit(job);
+  bool in_use = false;
+  EXPECT_FALSE(store_->delete_dataset(dataset, &in_use));
+  EXPECT_TRUE(in_use);
+  ASSERT_TRUE(store_->claim_next_job());
+  EXPECT_FALSE(store_->delete_dataset(dataset, &in_use));
+  EXPECT_TRUE(in_use);
+  store_->finish_job(id, api::JobState::succeeded, "{}", "", {}, dataset);
+  EXPECT_TRUE(store_->delete_dataset(dataset, &in_use));
+  EXPECT_FALSE(in_use);
+  EXPECT_FALSE(store_->find_dataset(dataset));
+}
+
 TEST_F(StoreTest, MismatchedTrajectoryShapeIsRefused) {
   auto data = make_trajectory(10, 2, true, false);
   data.tau.resize(9, 2);

@@ -1,0 +1,223 @@
+#!/usr/bin/env bash
+# package_list_test.sh — checks that scripts/setup.sh and docker/Dockerfile install from the one
+# Debian package list (scripts/debian-packages.txt) through the one parser (scripts/packages.sh),
+# so they cannot drift, and that the image's [runtime] section covers every shared library the
+# manipid executable links against. Needs no Docker daemon.
+#
+#   tests/packaging/package_list_test.sh [path/to/manipid]
+#
+# Without the binary the ldd check is skipped. A debug (sanitizer) build works too: the
+# sanitizer runtimes are not expected in [runtime]. Exit 0 when every check passes.
+set -euo pipefail
+
+root=$(cd "$(dirname "${BASH_SOURCE[0]}")/../.." && pwd)
+packages="$root/scripts/packages.sh"
+dockerfile="$root/docker/Dockerfile"
+setup="$root/scripts/setup.sh"
+binary=${1:-}
+
+failures=0
+pass() { printf 'ok    %s\n' "$1"; }
+fail() { printf 'FAIL  %s\n' "$1"; [[ -z "${2:-}" ]] || printf '      %s\n' "$2"; failures=$((failures + 1)); }
+work=$(mktemp -d "${TMPDIR:-/tmp}/manipid-packaging-test.XXXXXX")
+trap 'rm -rf -- "$work"' EXIT
+
+# ---- The list parses, with the three sections, none empty --------------------------------
+if sections=$(bash "$packages" --sections 2>"$work/err"); then
+  for section in build test runtime; do
+    if grep -qx "$section" <<<"$sections"; then pass "section [$section] exists"; else fail "section [$section] exists"; fi
+    if names=$(bash "$packages" "$section" 2>"$work/err") && [[ -n "$names" ]]; then
+      pass "section [$section] parses, $(wc -l <<<"$names") packages"
+    else
+      fail "section [$section] parses and is non-empty" "$(cat "$work/err")"
+    fi
+  done
+else
+  fail "scripts/packages.sh --sections" "$(cat "$work/err")"
+fi
+build=$(bash "$packages" build 2>/dev/null || true)
+runtime=$(bash "$packages" runtime 2>/dev/null || true)
+
+# The parser refuses what would silently install less.
+bad() {  # bad DESCRIPTION CONTENT SECTION...: packages.sh must fail on this list
+  local what=$1 content=$2
+  shift 2
+  printf '%s\n' "$content" >"$work/bad.txt"
+  if bash "$packages" --file "$work/bad.txt" "$@" >/dev/null 2>&1; then fail "parser refuses $what"; else pass "parser refuses $what"; fi
+}
+bad "an unknown section" $'[build]\ncmake' runtime
+bad "an empty section" $'[build]\n[runtime]\nlibc6' build
+bad "a name before any section" $'cmake\n[build]\nmake' build
+bad "an invalid name" $'[build]\nlib_Foo' build
+bad "two names on one line" $'[build]\ncmake make' build
+bad "a name twice in a section" $'[build]\ncmake\ncmake' build
+printf '# comment\n\n[build]   # why\n  cmake   # tool\nmake\n[test]\ncmake\njq\n' >"$work/good.txt"
+got=$(bash "$packages" --file "$work/good.txt" build test | tr '\n' ' ')
+if [[ "$got" == "cmake make jq " ]]; then pass "parser: comments, blanks, order, each name once"; else fail "parser: comments, blanks, order, each name once" "got '$got'"; fi
+
+# ---- setup.sh installs [build] and [test] through packages.sh -----------------------------
+expected=$(bash "$packages" build test)
+if listed=$(bash "$setup" --list 2>&1) && [[ "$listed" == "$expected" ]]; then
+  pass "setup.sh --list is exactly packages.sh build test"
+else
+  fail "setup.sh --list is exactly packages.sh build test" "$(diff <(echo "$expected") <(echo "$listed") | head -5 | tr '\n' ' ')"
+fi
+if grep -q 'packages\.sh' "$setup" && ! grep -v '^[[:space:]]*#' "$setup" | grep -q 'debian-packages\.txt'; then
+  pass "setup.sh reads the list only through packages.sh"
+else
+  fail "setup.sh reads the list only through packages.sh"
+fi
+
+# ---- Dockerfile: packages only from the list, through packages.sh -------------------------
+# Instructions with their continuation lines joined, comments dropped.
+instructions=$(sed -e '/^[[:space:]]*#/d' "$dockerfile" | sed -e ':a' -e '/\\$/{N;s/\\\n/ /;ba' -e '}')
+# Stages: "name<TAB>instruction" for every instruction after a FROM ... AS name.
+staged=$(awk 'BEGIN{IGNORECASE=1} /^FROM[[:space:]]/{stage=""; for(i=1;i<=NF;i++) if(toupper($i)=="AS") stage=$(i+1)} stage!=""{print stage "\t" $0}' <<<"$instructions")
+stage_has() { grep -P "^$1\t" <<<"$staged" | cut -f2- | grep -qE -- "$2"; }
+
+for pair in build:build runtime:runtime; do
+  stage=${pair%%:*} section=${pair#*:}
+  if stage_has "$stage" '^COPY .*scripts/packages\.sh' && stage_has "$stage" '^COPY .*scripts/debian-packages\.txt'; then
+    pass "stage $stage copies packages.sh and debian-packages.txt"
+  else
+    fail "stage $stage copies packages.sh and debian-packages.txt"
+  fi
+  if stage_has "$stage" "^RUN .*packages=\\\$\\([^)]*packages\\.sh $section\\)"; then
+    pass "stage $stage takes section [$section] from packages.sh"
+  else
+    fail "stage $stage takes section [$section] from packages.sh"
+  fi
+  # shellcheck disable=SC2016 # a literal $packages
+  if stage_has "$stage" 'apt-get install .*\$packages'; then
+    pass "stage $stage installs \$packages"
+  else
+    fail "stage $stage installs \$packages"
+  fi
+done
+# Every apt-get install names no package itself: after "install", only options and $variables.
+literal=$(grep -oE 'apt-get install[^;&|]*' <<<"$instructions" | sed 's/apt-get install//' | tr ' ' '\n' |
+          grep -vE '^$|^-|^"?\$\{?[A-Za-z_]+\}?"?$' || true)
+if [[ -z "$literal" ]]; then
+  pass "Dockerfile hard-codes no package name in apt-get install"
+else
+  fail "Dockerfile hard-codes no package name in apt-get install" "found: $(tr '\n' ' ' <<<"$literal")"
+fi
+# shellcheck disable=SC2016 # a literal $packages
+if grep -qE 'apt(-get)? +(install|-y)' <<<"$(grep -vE 'apt-get install[^;&|]*\$packages' <<<"$instructions")"; then
+  fail "every apt-get install in the Dockerfile installs \$packages"
+else
+  pass "every apt-get install in the Dockerfile installs \$packages"
+fi
+# Nothing but packages.sh reads the list: no RUN feeds it to sed, awk, grep, cat, xargs, read...
+if grep -E '^RUN ' <<<"$instructions" | grep -qE '(sed|awk|grep|cat|xargs|read|<)[^;&|]*debian-packages\.txt'; then
+  fail "Dockerfile reads debian-packages.txt only through packages.sh"
+else
+  pass "Dockerfile reads debian-packages.txt only through packages.sh"
+fi
+
+# The runtime image's other promises.
+check_line() {  # check_line DESCRIPTION REGEX
+  if grep -qE -- "$2" <<<"$instructions"; then pass "$1"; else fail "$1"; fi
+}
+check_line "ARG BASE defaults to debian:bookworm(-slim)" '^ARG BASE=debian:bookworm(-slim)?$'
+check_line "both stages FROM \${BASE}" '^FROM \$\{BASE\} AS build'
+check_line "runtime stage FROM \${BASE}" '^FROM \$\{BASE\} AS runtime'
+check_line "builds only the manipid target of the release preset" 'cmake --build --preset release --target manipid'
+check_line "non-root USER" '^USER manipid'
+check_line "EXPOSE 8080" '^EXPOSE 8080$'
+check_line "VOLUME /data" '^VOLUME \["/data"\]'
+check_line "STOPSIGNAL SIGTERM" '^STOPSIGNAL SIGTERM$'
+check_line "HEALTHCHECK on /healthz" '^HEALTHCHECK .*/healthz'
+check_line "ENTRYPOINT serve on 0.0.0.0 with /data/manipid.db" \
+  '^ENTRYPOINT \["manipid", "serve", "--host", "0.0.0.0", "--db", "/data/manipid.db"\]$'
+# The HEALTHCHECK's program must be in the image: curl from [runtime].
+if grep -qx curl <<<"$runtime"; then pass "curl (HEALTHCHECK) is in [runtime]"; else fail "curl (HEALTHCHECK) is in [runtime]"; fi
+
+# ---- compose.yaml -------------------------------------------------------------------------
+compose="$root/docker/compose.yaml"
+if command -v python3 >/dev/null && python3 -c 'import yaml' 2>/dev/null; then
+  if python3 - "$compose" <<'EOF'
+import sys, yaml
+doc = yaml.safe_load(open(sys.argv[1]))
+service = doc["services"]["manipid"]
+assert service["init"] is True, "init: true"
+assert service["build"]["dockerfile"] == "docker/Dockerfile", service["build"]
+assert any(str(v).endswith(":/data") and str(v).split(":")[0] in doc["volumes"] for v in service["volumes"]), "named volume on /data"
+assert any(str(p).endswith(":8080") for p in service["ports"]), "port 8080"
+assert "MANIPID_TOKEN" in service["environment"], "token from the environment"
+EOF
+  then pass "compose.yaml: init, named volume on /data, port 8080, MANIPID_TOKEN"
+  else fail "compose.yaml: init, named volume on /data, port 8080, MANIPID_TOKEN"
+  fi
+else
+  echo "skip  compose.yaml (no python3-yaml)"
+fi
+
+# ---- .dockerignore keeps build trees out of the context ------------------------------------
+if grep -qxE '/?build/?|\*\*/build/?' "$root/.dockerignore"; then pass ".dockerignore excludes build/"; else fail ".dockerignore excludes build/"; fi
+for needed in CMakeLists.txt CMakePresets.json core api server scripts; do
+  if grep -qxE "/?$needed/?" "$root/.dockerignore"; then fail ".dockerignore keeps $needed (the build stage copies it)"; fi
+done
+
+# ---- Every package named exists in Debian (installed here, or known to apt) ----------------
+unknown=()
+while IFS= read -r package; do
+  [[ -n "$package" ]] || continue
+  status=$(dpkg-query -W -f='${Status}' "$package" 2>/dev/null || true)
+  [[ "$status" == "install ok installed" ]] && continue
+  apt-cache show "$package" >/dev/null 2>&1 || unknown+=("$package")
+done < <(bash "$packages" build test runtime)
+if [[ ${#unknown[@]} -eq 0 ]]; then pass "every listed package is installed or known to apt"; else fail "every listed package is installed or known to apt" "unknown: ${unknown[*]}"; fi
+
+# ---- [runtime] covers what the binary links against ---------------------------------------
+if [[ -n "$binary" ]]; then
+  if [[ ! -x "$binary" ]]; then
+    fail "binary $binary is executable"
+  else
+    # Libraries ldd resolves → their Debian packages (dpkg -S on the resolved path, /usr-merged).
+    missing_libs=$(ldd "$binary" | grep 'not found' || true)
+    [[ -z "$missing_libs" ]] || fail "ldd resolves every library" "$missing_libs"
+    uncovered=()
+    while IFS= read -r library; do
+      [[ -n "$library" ]] || continue
+      real=$(readlink -f -- "$library")
+      owner=$(dpkg -S "$real" 2>/dev/null || dpkg -S "${real/#\/usr\/lib\//\/lib\/}" 2>/dev/null ||
+              dpkg -S "$library" 2>/dev/null || true)
+      package=${owner%%:*}
+      if [[ -z "$package" ]]; then
+        uncovered+=("$library(no package)")
+        continue
+      fi
+      # Sanitizer runtimes come with the debug build only.
+      [[ "$package" =~ ^lib(asan|ubsan|lsan|tsan)[0-9]+$ ]] && continue
+      grep -qx -- "$package" <<<"$runtime" || uncovered+=("$package($library)")
+    done < <(ldd "$binary" | awk '$2 == "=>" && $3 ~ /^\// {print $3}')
+    if [[ ${#uncovered[@]} -eq 0 ]]; then
+      pass "[runtime] covers every library $(basename "$binary") links against"
+    else
+      fail "[runtime] covers every library $(basename "$binary") links against" "missing: ${uncovered[*]}"
+    fi
+  fi
+else
+  echo "skip  ldd coverage (no binary given)"
+fi
+
+# Without a binary, a hint instead: the shared-library packages the [build] -dev packages pull
+# (libsqlite3-dev → libsqlite3-0) that [runtime] lacks. Not all are linked, so not a failure.
+[[ -n "$binary" ]] || while IFS= read -r dev; do
+  [[ -n "$dev" ]] || continue
+  depends=$(dpkg-query -W -f='${Depends}' "$dev" 2>/dev/null || apt-cache show --no-all-versions "$dev" 2>/dev/null | sed -n 's/^Depends: //p')
+  for dependency in $(tr ',|' '\n' <<<"$depends" | sed -e 's/(.*)//' -e 's/:any//' -e 's/[[:space:]]//g'); do
+    # A versioned shared-library package name: lib<name><soversion> (libnlopt0, libssl3, libcpp-httplib0.11, ...)
+    [[ "$dependency" =~ ^lib[a-z0-9+.-]*[0-9]$ && "$dependency" != *-dev ]] || continue
+    if ! grep -qx -- "$dependency" <<<"$runtime"; then
+      echo "note  $dev depends on $dependency, not in [runtime] (fine if manipid does not link it)"
+    fi
+  done
+done < <(grep -E -- '-dev$' <<<"$build")
+
+if [[ $failures -gt 0 ]]; then
+  echo "package_list_test: $failures check(s) failed" >&2
+  exit 1
+fi
+echo "package_list_test: all checks passed"
