@@ -11,4 +11,4 @@ bash scripts/setup.sh
 cmake --preset debug >/dev/null
 cmake --build --preset debug -j "$(nproc)"
 ctest --preset debug -j "$(nproc)"
-bash scripts/fuzz.sh "${1:-15}"
+bash scripts/fuzz.sh "${1:-10}"

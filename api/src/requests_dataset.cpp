@@ -41,12 +41,16 @@ Eigen::MatrixXd read_block(const Json& value, const std::string& path, int expec
   }
   // Every joint's length is checked before anything is allocated: sizing the matrix from
   // joint 0 alone let a 100 kB body (one long joint, many empty ones) ask for gigabytes.
-  for (std::size_t joint = 0; joint < joints; ++joint) {
-    if (value[joint].is_array() && value[joint].size() != value[0].size() && value[0].is_array()) {
+  if (value[0].is_array()) {
+    const bool counted = count.samples >= 0;
+    const std::size_t expected = counted ? static_cast<std::size_t>(count.samples) : value[0].size();
+    const std::string source = counted ? count.source : fields::element_path(path, 0);
+    for (std::size_t joint = 0; joint < joints; ++joint) {
+      if (!value[joint].is_array() || value[joint].size() == expected) continue;
       const std::string joint_path = fields::element_path(path, joint);
       std::string message = joint_path + " has " + samples_text(value[joint].size()) + ", expected " +
-                            std::to_string(value[0].size()) + " (as " + fields::element_path(path, 0) + ")";
-      if (joints == value[0].size()) message += "; " + path + " must hold one array per joint, not one per sample";
+                            std::to_string(expected) + " (as " + source + ")";
+      if (joints == expected) message += "; " + path + " must hold one array per joint, not one per sample";
       throw InputError(joint_path, message);
     }
   }
