@@ -1,19 +1,33 @@
 #!/usr/bin/env bash
 # Builds the libFuzzer targets of tests/fuzz/ (JSON and CSV request parsers of api/) with clang,
-# ASan and UBSan into build/fuzz, and fuzzes each for SECONDS (default 20) on a copy of its seed
-# corpus (build/fuzz/corpus-<target>; the repository's corpus is never modified), together with
-# the reproducers kept in tests/fuzz/regressions/<target>/. Targets run side by side when there
+# ASan and UBSan into build/fuzz, and fuzzes each on a copy of its seed corpus
+# (build/fuzz/corpus-<target>; the repository's corpus is never modified), together with the
+# reproducers kept in tests/fuzz/regressions/<target>/. Targets run side by side when there
 # are at least two CPUs. Prints one summary line per target; exits non-zero if any target
 # crashes, leaks, times out or runs out of memory (the input is saved as
 # build/fuzz/artifacts-<target>/crash-*, oom-*, leak-* or timeout-*).
+#
+#   bash scripts/fuzz.sh [SECONDS]   explore: a random seed, SECONDS per target (default 20)
+#   bash scripts/fuzz.sh --runs N    check: seed 1, exactly N inputs per target — the same
+#                                    inputs every time, so a red result is the code's change
+#                                    and not the luck of the draw (what scripts/test.sh runs)
 # Installs nothing: run scripts/setup.sh first (needs the Debian packages clang and
-# libclang-rt-14-dev). Usage: bash scripts/fuzz.sh [SECONDS_PER_TARGET]
+# libclang-rt-14-dev).
 set -euo pipefail
 cd "$(dirname "${BASH_SOURCE[0]}")/.."
 
-seconds=${1:-20}
-if ! [[ "$seconds" =~ ^[1-9][0-9]*$ ]]; then
-  echo "usage: scripts/fuzz.sh [SECONDS_PER_TARGET]  (a positive whole number, got '$seconds')" >&2
+usage="usage: scripts/fuzz.sh [SECONDS_PER_TARGET] | --runs INPUTS_PER_TARGET"
+if [[ "${1:-}" == "--runs" ]]; then
+  count=${2:-}
+  budget=(-seed=1 -runs="$count")
+  describe="$count inputs per target, seed 1"
+else
+  count=${1:-20}
+  budget=(-max_total_time="$count")
+  describe="$count s per target, random seed"
+fi
+if ! [[ "$count" =~ ^[1-9][0-9]*$ ]]; then
+  echo "$usage  (a positive whole number, got '$count')" >&2
   exit 2
 fi
 command -v clang++ >/dev/null || { echo "fuzz: clang++ not found; run scripts/setup.sh" >&2; exit 2; }
@@ -23,7 +37,7 @@ jobs=$(nproc)
 started=$SECONDS
 CC=clang CXX=clang++ cmake -S tests/fuzz -B "$build" >/dev/null
 cmake --build "$build" -j "$jobs"
-echo "== fuzz: built in $((SECONDS - started)) s; fuzzing each target for $seconds s"
+echo "== fuzz: built in $((SECONDS - started)) s; fuzzing: $describe"
 
 # target, corpus and dictionary name, longest input in bytes
 targets=("json_fuzz json 4096" "csv_fuzz csv 4096")
@@ -39,7 +53,7 @@ run_target() {
   if [[ -d "$regressions" ]] && compgen -G "$regressions/*" >/dev/null; then inputs+=("$regressions"); fi
   # The first directory receives the new units; the others (regressions) are only read.
   UBSAN_OPTIONS=print_stacktrace=1:halt_on_error=1 "$build/$target" \
-    -max_total_time="$seconds" -timeout=5 -rss_limit_mb=2048 -max_len="$max_len" \
+    "${budget[@]}" -timeout=5 -rss_limit_mb=2048 -max_len="$max_len" \
     -dict=tests/fuzz/"$name".dict -artifact_prefix="$artifacts"/ -print_final_stats=1 \
     "${inputs[@]}" >"$build/$target.log" 2>&1
 }

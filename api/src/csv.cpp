@@ -152,6 +152,14 @@ void check_column_name(std::string_view name, std::size_t column, std::size_t li
                      line_prefix(line) + ": column " + std::to_string(column + 1) +
                          " of the header has an empty name");
   }
+  // One mark at the start of the header is the file's encoding signature and was removed; a
+  // second one (a file saved twice with "UTF-8 with BOM") would hide inside the name and make
+  // "t" read as something else, so say what it is.
+  if (name.find("\xEF\xBB\xBF") != std::string_view::npos) {
+    throw InputError(std::string(structure_field),
+                     line_prefix(line) + ": column " + std::to_string(column + 1) +
+                         " of the header contains a UTF-8 byte-order mark (U+FEFF); save the file as plain UTF-8");
+  }
 }
 
 std::vector<std::string> parse_header(std::string_view line, std::size_t line_number,
@@ -200,7 +208,9 @@ Eigen::VectorXd CsvTable::column(std::string_view name) const {
 
 CsvTable parse_csv(std::string_view text, const CsvLimits& limits) {
   // A UTF-8 byte-order mark (Excel's "CSV UTF-8") is not part of the first name.
-  if (text.substr(0, 3) == "\xEF\xBB\xBF") text.remove_prefix(3);
+  // One mark, at most: a second is refused as part of a name (check_column_name).
+  const bool marked = text.substr(0, 3) == "\xEF\xBB\xBF";
+  if (marked) text.remove_prefix(3);
 
   LineReader reader(text);
   std::string_view line;
@@ -209,7 +219,7 @@ CsvTable parse_csv(std::string_view text, const CsvLimits& limits) {
     throw InputError(std::string(structure_field), "empty input: expected a header line of column names");
   }
   // ...nor is one after leading blank lines; a header of nothing but the mark is empty.
-  if (line.substr(0, 3) == "\xEF\xBB\xBF") line.remove_prefix(3);
+  if (!marked && line.substr(0, 3) == "\xEF\xBB\xBF") line.remove_prefix(3);
   CsvTable table;
   table.columns = parse_header(line, line_number, limits);
   const std::size_t column_count = table.columns.size();

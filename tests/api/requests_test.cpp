@@ -319,6 +319,21 @@ TEST(HostileInput, ByteOrderMarkAfterBlankLinesIsNotPartOfTheName) {
   EXPECT_EQ(table.columns[0], "t");
 }
 
+TEST(HostileInput, ByteOrderMarkInsideANameIsRefused) {
+  // Found by csv_fuzz: a second mark stayed in the first name, which format_csv wrote at the
+  // start of a file, where the reader strips it: the name did not survive a round trip.
+  for (const char* text : {"\xEF\xBB\xBF\xEF\xBB\xBFt,q1\n0,1\n", "\n\xEF\xBB\xBF\xEF\xBB\xBFt,q1\n0,1\n",
+                           "t,q\xEF\xBB\xBF" "1\n0,1\n"}) {
+    try {
+      (void)parse_csv(text);
+      ADD_FAILURE() << "expected InputError for " << text;
+    } catch (const InputError& error) {
+      EXPECT_EQ(error.field(), "csv");
+      EXPECT_NE(std::string(error.what()).find("byte-order mark"), std::string::npos) << error.what();
+    }
+  }
+}
+
 TEST(DatasetCsv, KeepsTheCsvReadersFields) {
   expect_error([] { dataset_from_csv("t,q1\n0,1\n0.001,x\n"); }, "q1", "line 3");
   expect_error([] { dataset_from_csv("t,q1,q2\n0,1\n"); }, "csv", "expected 3 fields, got 2");
