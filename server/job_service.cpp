@@ -96,6 +96,10 @@ std::optional<api::Page<api::HistoryEntry>> JobService::history(const std::strin
   return store_.history(id, page);
 }
 
+std::optional<api::HistoryOverview> JobService::history_overview(const std::string& id, long max_points) {
+  return store_.history_overview(id, max_points);
+}
+
 std::optional<api::JobInfo> JobService::cancel(const std::string& id) {
   switch (store_.cancel_job(id)) {
     case CancelOutcome::not_found: return std::nullopt;

@@ -36,6 +36,7 @@ class JobService : public api::Service {
   std::optional<api::JobInfo> wait(const std::string& id, double seconds) override;
   api::Page<api::JobInfo> jobs(const api::JobFilter& filter, const api::PageRequest& page) override;
   std::optional<api::Page<api::HistoryEntry>> history(const std::string& id, const api::PageRequest& page) override;
+  std::optional<api::HistoryOverview> history_overview(const std::string& id, long max_points) override;
   std::optional<api::JobInfo> cancel(const std::string& id) override;
   api::DeleteOutcome delete_job(const std::string& id) override;
 

@@ -40,6 +40,19 @@ void check_shape(const Eigen::MatrixXd& matrix, int samples, int joints, const c
   }
 }
 
+/// One job_history row (idx, cost, theta) of the statement's current step.
+api::HistoryEntry history_entry(const Statement& rows, const std::string& id) {
+  api::HistoryEntry entry;
+  entry.index = static_cast<long>(rows.integer(0));
+  entry.cost = rows.real_or_null(1).value_or(std::numeric_limits<double>::quiet_NaN());
+  const auto theta = rows.blob(2);
+  entry.theta.resize(theta.size() / sizeof(double));
+  if (!sqlite::decode_doubles(theta, entry.theta.data(), entry.theta.size())) {
+    throw StoreError("history entry of job " + id + " has a damaged theta in the database");
+  }
+  return entry;
+}
+
 class SqliteStore final : public Store {
  public:
   explicit SqliteStore(const std::string& path) : pool_(path, open_and_prepare(path)) {}
@@ -406,18 +419,37 @@ class SqliteStore final : public Store {
               result.next_page_token = sqlite::encode_page_token("h1", result.items.back().index, id);
               break;
             }
-            api::HistoryEntry entry;
-            entry.index = static_cast<long>(rows.integer(0));
-            entry.cost = rows.real_or_null(1).value_or(std::numeric_limits<double>::quiet_NaN());
-            const auto theta = rows.blob(2);
-            entry.theta.resize(theta.size() / sizeof(double));
-            if (!sqlite::decode_doubles(theta, entry.theta.data(), entry.theta.size())) {
-              throw StoreError("history entry of job " + id + " has a damaged theta in the database");
-            }
-            result.items.push_back(std::move(entry));
+            result.items.push_back(history_entry(rows, id));
           }
           return result;
         });
+  }
+
+  std::optional<api::HistoryOverview> history_overview(const std::string& id, long max_points) override {
+    auto connection = pool_.checkout();
+    return sqlite::run_transaction(*connection, TransactionKind::read, [&]() -> std::optional<api::HistoryOverview> {
+      if (!select_state(*connection, id)) return std::nullopt;
+      api::HistoryOverview overview;
+      auto extent = connection->prepare("SELECT count(*), min(idx), max(idx) FROM job_history WHERE job_id = ?1");
+      extent.bind_text(1, id);
+      extent.step();
+      overview.total = static_cast<long>(extent.integer(0));
+      if (overview.total == 0) return overview;
+      const std::int64_t first = extent.integer(1), last = extent.integer(2);
+      auto best = connection->prepare(
+          "SELECT idx FROM job_history WHERE job_id = ?1 AND cost IS NOT NULL ORDER BY cost, idx LIMIT 1");
+      best.bind_text(1, id);
+      if (best.step()) overview.best_index = static_cast<long>(best.integer(0));
+      overview.stride = max_points <= 0 || overview.total <= max_points ? 1 : (overview.total + max_points - 1) / max_points;
+      // A scan of the job's part of the primary key; only the chosen rows' blobs are decoded.
+      auto rows = connection->prepare(
+          "SELECT idx, cost, theta FROM job_history WHERE job_id = ?1 "
+          "AND ((idx - ?2) % ?3 = 0 OR idx = ?4 OR idx = ?5) ORDER BY idx");
+      rows.bind_text(1, id).bind_integer(2, first).bind_integer(3, overview.stride).bind_integer(4, last);
+      rows.bind_integer(5, overview.best_index.value_or(last));
+      while (rows.step()) overview.items.push_back(history_entry(rows, id));
+      return overview;
+    });
   }
 
   // ---- the process's life ----

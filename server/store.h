@@ -101,6 +101,9 @@ class Store {
   virtual bool delete_job(const std::string& id, bool* was_active) = 0;
   /// History entries in index order; the page token is opaque (keyset on index).
   virtual std::optional<api::Page<api::HistoryEntry>> history(const std::string& id, const api::PageRequest& page) = 0;
+  /// Every stride-th entry with the first, last and best, stride = ceil(total / max_points),
+  /// read in one transaction (a running job's history grows meanwhile).
+  virtual std::optional<api::HistoryOverview> history_overview(const std::string& id, long max_points) = 0;
 
   // ---- the process's life ----
   /// At start-up: every job left running by a dead process goes back to queued (history

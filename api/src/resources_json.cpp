@@ -62,17 +62,32 @@ std::vector<std::string> history_parameter_names(std::size_t size) {
   return parameter_names(static_cast<int>(size / 2));
 }
 
-nlohmann::ordered_json history_page_to_json(const Page<HistoryEntry>& page) {
+namespace {
+
+Json history_items(const std::vector<HistoryEntry>& entries) {
   Json items = Json::array();
-  for (const HistoryEntry& entry : page.items) {
+  for (const HistoryEntry& entry : entries) {
     const std::vector<std::string> names = history_parameter_names(entry.theta.size());
     Json parameters = Json::object();
     for (std::size_t i = 0; i < names.size() && i < entry.theta.size(); ++i) parameters[names[i]] = number(entry.theta[i]);
     items.push_back({{"index", entry.index}, {"cost", number(entry.cost)}, {"parameters", parameters}});
   }
-  Json json = {{"items", items}};
+  return items;
+}
+
+}  // namespace
+
+nlohmann::ordered_json history_page_to_json(const Page<HistoryEntry>& page) {
+  Json json = {{"items", history_items(page.items)}};
   if (!page.next_page_token.empty()) json["next_page_token"] = page.next_page_token;
   return json;
+}
+
+nlohmann::ordered_json history_overview_to_json(const HistoryOverview& overview) {
+  return {{"total", overview.total},
+          {"stride", overview.stride},
+          {"best_index", overview.best_index ? Json(*overview.best_index) : Json(nullptr)},
+          {"items", history_items(overview.items)}};
 }
 
 std::string history_to_csv(const std::vector<HistoryEntry>& entries) {

@@ -5,6 +5,7 @@
 //
 // The manipid headers come before httplib.h on purpose: Debian's httplib.h pulls in
 // <resolv.h>, whose `_res` macro breaks Eigen if Eigen comes second.
+#include "manipid/api/plots.h"
 #include "manipid/api/problem.h"
 #include "manipid/api/requests.h"
 #include "manipid/api/resources_json.h"
@@ -169,6 +170,11 @@ PageRequest page_request(const httplib::Request& request, int default_size) {
   return page;
 }
 
+/// ?max_points= for the drawing endpoints: at most this many points (about), 2 to 1,000,000.
+long max_points_parameter(const httplib::Request& request, long fallback) {
+  return static_cast<long>(integer_parameter(request, "max_points", fallback, 2, 1'000'000));
+}
+
 bool wants_csv(const httplib::Request& request) {
   if (request.has_param("format")) {
     const std::string format = request.get_param_value("format");
@@ -220,6 +226,30 @@ void get_dataset(RouteState& state, const httplib::Request& request, httplib::Re
   const auto dataset = state.service.dataset(id);
   if (!dataset) throw ApiError(ProblemKind::not_found, "no dataset " + id, "id");
   send_json(response, 200, dataset_to_json(*dataset));
+}
+
+void get_dataset_data(RouteState& state, const httplib::Request& request, httplib::Response& response) {
+  const std::string id = request.matches[1];
+  const long max_points = request.has_param("max_points") ? max_points_parameter(request, 0) : 0;
+  const auto data = state.service.dataset_data(id);
+  if (!data) throw ApiError(ProblemKind::not_found, "no dataset " + id, "id");
+  if (wants_csv(request)) {
+    Trajectory thinned;
+    const std::vector<long> rows = plot_indices(data->samples(), max_points);
+    const auto pick = [&rows](const Eigen::MatrixXd& matrix) {
+      Eigen::MatrixXd out(static_cast<Eigen::Index>(rows.size()), matrix.cols());
+      for (std::size_t r = 0; r < rows.size(); ++r) out.row(static_cast<Eigen::Index>(r)) = matrix.row(rows[r]);
+      return out;
+    };
+    thinned.t = pick(data->t);
+    thinned.q = pick(data->q);
+    thinned.tau = pick(data->tau);
+    thinned.ref = pick(data->ref);
+    response.status = 200;
+    response.set_content(format_csv(trajectory_to_csv(thinned)), "text/csv");
+    return;
+  }
+  send_json(response, 200, trajectory_to_json(*data, max_points));
 }
 
 void list_datasets(RouteState& state, const httplib::Request& request, httplib::Response& response) {
@@ -325,6 +355,21 @@ void list_jobs(RouteState& state, const httplib::Request& request, httplib::Resp
 
 void job_history(RouteState& state, const httplib::Request& request, httplib::Response& response) {
   const std::string id = request.matches[1];
+  if (request.has_param("max_points")) {
+    // Thinned for drawing; paging does not apply.
+    if (request.has_param("page_size") || request.has_param("page_token")) {
+      throw ApiError(ProblemKind::invalid_field, "max_points cannot be combined with page_size or page_token", "max_points");
+    }
+    const auto overview = state.service.history_overview(id, max_points_parameter(request, 0));
+    if (!overview) throw ApiError(ProblemKind::not_found, "no job " + id, "id");
+    if (wants_csv(request)) {
+      response.status = 200;
+      response.set_content(history_to_csv(overview->items), "text/csv");
+      return;
+    }
+    send_json(response, 200, history_overview_to_json(*overview));
+    return;
+  }
   if (wants_csv(request) && !request.has_param("page_size") && !request.has_param("page_token")) {
     // CSV without paging parameters: the whole history, as `manipid identify --history` writes it.
     std::vector<HistoryEntry> entries;
@@ -349,6 +394,27 @@ void job_history(RouteState& state, const httplib::Request& request, httplib::Re
     return;
   }
   send_json(response, 200, history_page_to_json(*page));
+}
+
+void job_fit(RouteState& state, const httplib::Request& request, httplib::Response& response) {
+  const std::string id = request.matches[1];
+  const long max_points = max_points_parameter(request, 2000);
+  const auto job = state.service.job(id);
+  if (!job) throw ApiError(ProblemKind::not_found, "no job " + id, "id");
+  if (job->kind != JobKind::identification) {
+    throw ApiError(ProblemKind::conflict, "job " + id + " is a simulation; only identifications have a fit", "id");
+  }
+  if (job->result.empty()) {
+    throw ApiError(ProblemKind::conflict,
+                   "job " + id + " is " + to_string(job->state) + " and has no estimate to fit yet", "id");
+  }
+  const auto data = state.service.dataset_data(job->dataset_id);
+  if (!data) throw ApiError(ProblemKind::conflict, "the dataset of job " + id + " was deleted", "dataset_id");
+  try {
+    send_json(response, 200, torque_fit_to_json(job->request, job->result, *data, max_points));
+  } catch (const nlohmann::json::exception&) {
+    throw ApiError(ProblemKind::conflict, "job " + id + " has no usable stored result", "id");
+  }
 }
 
 void cancel_job_with_id(RouteState& state, const std::string& id, httplib::Response& response) {
@@ -522,6 +588,7 @@ void register_routes(httplib::Server& server, Service& service, RouteOptions opt
   server.Post("/v1/datasets", route(create_dataset));
   server.Get("/v1/datasets", route(list_datasets));
   server.Get("/v1/datasets/" + id, route(get_dataset));
+  server.Get("/v1/datasets/" + id + "/data", route(get_dataset_data));
   server.Delete("/v1/datasets/" + id, route(delete_dataset));
 
   server.Post("/v1/simulations", guarded(state, [state](const httplib::Request& request, httplib::Response& response) {
@@ -534,6 +601,7 @@ void register_routes(httplib::Server& server, Service& service, RouteOptions opt
   server.Get("/v1/jobs", route(list_jobs));
   server.Get("/v1/jobs/" + id, route(get_job));
   server.Get("/v1/jobs/" + id + "/history", route(job_history));
+  server.Get("/v1/jobs/" + id + "/fit", route(job_fit));
   server.Post("/v1/jobs/" + id + "(?:/cancel|:cancel)", route(cancel_job));
   server.Delete("/v1/jobs/" + id, route(delete_job));
 }

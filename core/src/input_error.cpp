@@ -50,6 +50,28 @@ FilteredData filter_for_input_error(const Trajectory& data, const FilterSettings
   return result;
 }
 
+TorqueFit torque_fit(const RobotModel& model, const Parameters& parameters, const Trajectory& data,
+                     const FilteredData& filtered) {
+  check_parameters(model, parameters);
+  const int outputs = filtered.samples();
+  const int first = filtered.filter.half_length;
+  if (filtered.q.cols() != model.joint_count() || first + outputs > data.samples()) {
+    throw InputError("samples", "the filtered data does not belong to this trajectory and model");
+  }
+  TorqueFit fit;
+  fit.t = data.t.segment(first, outputs);
+  fit.measured = filtered.tau;
+  fit.model.resize(outputs, model.joint_count());
+  DynamicsWorkspace workspace(model);
+  Eigen::VectorXd tau(model.joint_count());
+  for (int i = 0; i < outputs; ++i) {
+    inverse_dynamics(model, parameters, workspace, filtered.q.row(i).transpose(), filtered.qd.row(i).transpose(),
+                     filtered.qdd.row(i).transpose(), tau);
+    fit.model.row(i) = tau.transpose();
+  }
+  return fit;
+}
+
 InputErrorCost::InputErrorCost(const RobotModel& model, const FilteredData& data, Eigen::VectorXd joint_weights)
     : model_(model), data_(data), weights_(std::move(joint_weights)), products_(parameter_products(model)) {
   const int n = model.joint_count();

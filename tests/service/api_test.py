@@ -199,7 +199,8 @@ class PaperExperiment(unittest.TestCase):
         status, answer, spec = self.server.request("GET", "/openapi.json")
         self.assertEqual(status, 200)
         self.assertTrue(spec["openapi"].startswith("3."))
-        for path in ("/v1/datasets", "/v1/identifications", "/v1/simulations", "/v1/jobs/{id}", "/v1/jobs/{id}/history"):
+        for path in ("/v1/datasets", "/v1/identifications", "/v1/simulations", "/v1/jobs/{id}", "/v1/jobs/{id}/history",
+                     "/v1/jobs/{id}/fit", "/v1/datasets/{id}/data"):
             self.assertIn(path, spec["paths"])
         status, _, job = self.server.request("POST", "/v1/simulations", {"duration": 0.2})
         job = self.server.wait_job(job["id"])

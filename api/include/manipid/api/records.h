@@ -53,6 +53,15 @@ struct HistoryEntry {
   std::vector<double> theta;  ///< all parameters, θ order (m1..mn, l1..ln)
 };
 
+/// A cost history thinned for drawing: every stride-th entry (index order), plus always the
+/// first, the last and the best (lowest cost). `total` counts every stored entry.
+struct HistoryOverview {
+  long total = 0;
+  long stride = 1;
+  std::optional<long> best_index;  ///< none while the history is empty
+  std::vector<HistoryEntry> items;
+};
+
 struct PageRequest {
   int page_size = 50;        ///< 1..1000 (0 means 50)
   std::string page_token;    ///< opaque; empty = first page

@@ -25,6 +25,8 @@ nlohmann::ordered_json job_to_json(const JobInfo& job);
 std::vector<std::string> history_parameter_names(std::size_t size);
 /// {"items": [{"index", "cost", "parameters": {"m1": ...}}], "next_page_token"?}
 nlohmann::ordered_json history_page_to_json(const Page<HistoryEntry>& page);
+/// {"total", "stride", "best_index" (null when empty), "items": [as in a page]}
+nlohmann::ordered_json history_overview_to_json(const HistoryOverview& overview);
 /// "index,cost,m1,...,ln" then one row per entry (the format `manipid identify --history` writes).
 std::string history_to_csv(const std::vector<HistoryEntry>& entries);
 

@@ -47,6 +47,8 @@ class Service {
   virtual Page<JobInfo> jobs(const JobFilter& filter, const PageRequest& page) = 0;
   /// The cost history in index order, a page at a time; empty optional if no such job.
   virtual std::optional<Page<HistoryEntry>> history(const std::string& id, const PageRequest& page) = 0;
+  /// The history thinned to about `max_points` entries for drawing (see HistoryOverview).
+  virtual std::optional<HistoryOverview> history_overview(const std::string& id, long max_points) = 0;
   /// Best effort and idempotent: a queued job ends cancelled at once, a running one at its
   /// next cost evaluation; a finished job is returned unchanged.
   virtual std::optional<JobInfo> cancel(const std::string& id) = 0;

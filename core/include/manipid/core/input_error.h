@@ -35,6 +35,19 @@ struct FilteredData {
 FilteredData filter_for_input_error(const Trajectory& data, const FilterSettings& filter, bool use_reference,
                                     const std::optional<PdController>& controller);
 
+/// What the input-error cost compares, sample by sample, at one parameter value: the filtered
+/// measured torque τ^f and the model torque τ̂(q^f, q̇^f, q̈^f, θ), samples × joints, with the
+/// time of each filtered sample (output j of the filter belongs to input sample M + j).
+struct TorqueFit {
+  Eigen::VectorXd t;
+  Eigen::MatrixXd measured, model;
+  Eigen::MatrixXd residual() const { return model - measured; }
+};
+
+/// τ^f beside τ̂ at `parameters`; `filtered` comes from filter_for_input_error(data, ...).
+TorqueFit torque_fit(const RobotModel& model, const Parameters& parameters, const Trajectory& data,
+                     const FilteredData& filtered);
+
 class InputErrorCost {
  public:
   /// `joint_weights` has one entry per joint (w_j ≥ 0); empty means all 1.

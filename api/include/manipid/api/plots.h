@@ -1,0 +1,34 @@
+// plots.h — series for drawing: a trajectory in the upload's JSON shape, the torque fit of a
+// finished identification (filtered measured torque beside the model torque at the estimate),
+// and the evenly spaced sample indices both use to stay small. What the dashboard draws, and
+// what a script plots (GET /v1/datasets/{id}/data, GET /v1/jobs/{id}/fit).
+//
+// Decimation is for drawing only: the stored data and histories are never thinned.
+#pragma once
+
+#include "manipid/core/trajectory.h"
+
+#include <nlohmann/json.hpp>
+
+#include <string>
+#include <vector>
+
+namespace manipid::api {
+
+/// Indices 0, s, 2s, … of `count` samples with s = ceil(count / max_points), and always the
+/// last: at most max_points + 1 of them, all of them when count ≤ max_points (or max_points ≤ 0).
+std::vector<long> plot_indices(long count, long max_points);
+
+/// {"t": [...], "q": [[joint 1 ...], ...], "tau"?: [[...]], "ref"?: [[...]]} — the shape
+/// POST /v1/datasets accepts, so the full (max_points ≤ 0) output uploads back unchanged.
+nlohmann::ordered_json trajectory_to_json(const Trajectory& data, long max_points);
+
+/// The fit at a finished identification's estimate, from the job's stored request and result
+/// and its dataset: {"parameters": {...}, "filter": {...}, "torque_source", "samples",
+/// "t": [...], "joints": [{"joint", "measured": [...], "model": [...], "residual": [...],
+/// "rms_measured", "rms_residual"}]}. The RMS figures use every sample, the series are
+/// decimated to max_points. Throws InputError when request, result and data do not fit together.
+nlohmann::ordered_json torque_fit_to_json(const std::string& request_json, const std::string& result_json,
+                                          const Trajectory& data, long max_points);
+
+}  // namespace manipid::api

@@ -1,0 +1,114 @@
+// plots.cpp — series for drawing (plots.h).
+#include "manipid/api/plots.h"
+
+#include "manipid/api/requests.h"
+#include "manipid/core/input_error.h"
+
+#include <cmath>
+
+namespace manipid::api {
+namespace {
+
+using Json = nlohmann::ordered_json;
+
+Json number(double value) { return std::isfinite(value) ? Json(value) : Json(nullptr); }
+
+template <class Column>
+Json pick(const Column& column, const std::vector<long>& indices) {
+  Json values = Json::array();
+  for (long i : indices) values.push_back(number(column[static_cast<Eigen::Index>(i)]));
+  return values;
+}
+
+Json columns(const Eigen::MatrixXd& matrix, const std::vector<long>& indices) {
+  Json joints = Json::array();
+  for (Eigen::Index j = 0; j < matrix.cols(); ++j) joints.push_back(pick(matrix.col(j), indices));
+  return joints;
+}
+
+double rms(const Eigen::VectorXd& values) {
+  return values.size() == 0 ? 0.0 : std::sqrt(values.squaredNorm() / static_cast<double>(values.size()));
+}
+
+/// A number the stored result must hold; its absence means the result is not an identification's.
+double stored_number(const nlohmann::json& object, const char* key, const std::string& where) {
+  const auto found = object.find(key);
+  if (found == object.end() || !found->is_number()) {
+    throw InputError("result", "the job's result has no number " + where + key);
+  }
+  return found->get<double>();
+}
+
+}  // namespace
+
+std::vector<long> plot_indices(long count, long max_points) {
+  std::vector<long> indices;
+  if (count <= 0) return indices;
+  const long stride = max_points <= 0 || count <= max_points ? 1 : (count + max_points - 1) / max_points;
+  indices.reserve(static_cast<std::size_t>(count / stride + 2));
+  for (long i = 0; i < count; i += stride) indices.push_back(i);
+  if (indices.back() != count - 1) indices.push_back(count - 1);
+  return indices;
+}
+
+nlohmann::ordered_json trajectory_to_json(const Trajectory& data, long max_points) {
+  const std::vector<long> indices = plot_indices(data.samples(), max_points);
+  Json json = {{"t", pick(data.t, indices)}, {"q", columns(data.q, indices)}};
+  if (data.has_torque()) json["tau"] = columns(data.tau, indices);
+  if (data.has_reference()) json["ref"] = columns(data.ref, indices);
+  return json;
+}
+
+nlohmann::ordered_json torque_fit_to_json(const std::string& request_json, const std::string& result_json,
+                                          const Trajectory& data, long max_points) {
+  const IdentificationSpec spec = identification_from_json(nlohmann::json::parse(request_json));
+  const nlohmann::json result = nlohmann::json::parse(result_json);
+  const RobotModel& model = spec.preset.model;
+  if (data.joint_count() != model.joint_count()) {
+    throw InputError("dataset_id", "the dataset has " + std::to_string(data.joint_count()) + " joints, the model " +
+                                       std::to_string(model.joint_count()));
+  }
+
+  // The estimate, every parameter (the fixed ones hold their given values).
+  const std::vector<std::string> names = parameter_names(model.joint_count());
+  if (!result.contains("estimates") || !result["estimates"].is_object()) {
+    throw InputError("result", "the job's result has no estimates");
+  }
+  Eigen::VectorXd theta(static_cast<Eigen::Index>(names.size()));
+  Json parameters = Json::object();
+  for (std::size_t i = 0; i < names.size(); ++i) {
+    theta[static_cast<Eigen::Index>(i)] = stored_number(result["estimates"], names[i].c_str(), "estimates.");
+    parameters[names[i]] = theta[static_cast<Eigen::Index>(i)];
+  }
+
+  // The filter and torque the identification used, as its result reports them.
+  if (!result.contains("filter") || !result["filter"].is_object()) throw InputError("result", "the job's result has no filter");
+  FilterSettings filter;
+  filter.half_length = static_cast<int>(stored_number(result["filter"], "half_length", "filter."));
+  filter.band = stored_number(result["filter"], "band", "filter.");
+  filter.dt = stored_number(result["filter"], "dt", "filter.");
+  const bool from_reference = result.value("torque_source", std::string()) == "reference";
+
+  const FilteredData filtered = filter_for_input_error(data, filter, from_reference, spec.options.controller);
+  const TorqueFit fit = torque_fit(model, Parameters::from_vector(theta), data, filtered);
+  const Eigen::MatrixXd residual = fit.residual();
+
+  const std::vector<long> indices = plot_indices(fit.t.size(), max_points);
+  Json joints = Json::array();
+  for (Eigen::Index j = 0; j < fit.model.cols(); ++j) {
+    joints.push_back({{"joint", j + 1},
+                      {"measured", pick(fit.measured.col(j), indices)},
+                      {"model", pick(fit.model.col(j), indices)},
+                      {"residual", pick(residual.col(j), indices)},
+                      {"rms_measured", number(rms(fit.measured.col(j)))},
+                      {"rms_residual", number(rms(residual.col(j)))}});
+  }
+  return {{"parameters", parameters},
+          {"filter", {{"half_length", filter.half_length}, {"band", filter.band}, {"dt", filter.dt}}},
+          {"torque_source", from_reference ? "reference" : "measured"},
+          {"samples", fit.t.size()},
+          {"t", pick(fit.t, indices)},
+          {"joints", joints}};
+}
+
+}  // namespace manipid::api
