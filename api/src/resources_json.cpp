@@ -58,6 +58,32 @@ nlohmann::ordered_json job_to_json(const JobInfo& job) {
   return json;
 }
 
+nlohmann::ordered_json preset_to_json(const Preset& preset, const std::string& kinetic_energy) {
+  const std::vector<std::string> names = parameter_names(preset.model.joint_count());
+  const auto by_name = [&names](const Parameters& parameters) {
+    const Eigen::VectorXd theta = parameters.vector();
+    Json values = Json::object();
+    for (std::size_t i = 0; i < names.size(); ++i) values[names[i]] = theta[static_cast<Eigen::Index>(i)];
+    return values;
+  };
+  const auto list = [](const Eigen::VectorXd& vector) { return std::vector<double>(vector.data(), vector.data() + vector.size()); };
+  return {{"name", preset.name},
+          {"description", preset.description},
+          {"kinetic_energy", kinetic_energy},
+          {"joints", preset.model.joint_count()},
+          {"parameters", names},
+          {"true_parameters", by_name(preset.true_parameters)},
+          {"initial_parameters", by_name(preset.initial_parameters)},
+          {"kp", list(preset.controller.kp)},
+          {"kd", list(preset.controller.kd)},
+          {"reference",
+           {{"step_times", preset.reference.step_times},
+            {"amplitudes", preset.reference.amplitudes},
+            {"half_length", preset.reference.half_length},
+            {"band", preset.reference.band}}},
+          {"simulation", {{"duration", preset.simulation.duration}, {"dt", preset.simulation.dt}}}};
+}
+
 std::vector<std::string> history_parameter_names(std::size_t size) {
   return parameter_names(static_cast<int>(size / 2));
 }

@@ -5,6 +5,7 @@
 //
 // The manipid headers come before httplib.h on purpose: Debian's httplib.h pulls in
 // <resolv.h>, whose `_res` macro breaks Eigen if Eigen comes second.
+#include "manipid/api/dashboard.h"
 #include "manipid/api/plots.h"
 #include "manipid/api/problem.h"
 #include "manipid/api/requests.h"
@@ -417,6 +418,32 @@ void job_fit(RouteState& state, const httplib::Request& request, httplib::Respon
   }
 }
 
+void list_presets(RouteState&, const httplib::Request&, httplib::Response& response) {
+  nlohmann::ordered_json items = nlohmann::ordered_json::array();
+  for (const std::string& name : preset_names()) items.push_back(preset_to_json(find_preset(name), "complete"));
+  send_json(response, 200, {{"items", items}});
+}
+
+void get_preset(RouteState&, const httplib::Request& request, httplib::Response& response) {
+  const std::string name = request.matches[1];
+  const std::vector<std::string> names = preset_names();
+  if (std::find(names.begin(), names.end(), name) == names.end()) {
+    std::string known;
+    for (const std::string& each : names) known += (known.empty() ? "" : ", ") + each;
+    throw ApiError(ProblemKind::not_found, "no preset " + name + " (known: " + known + ")", "name");
+  }
+  std::string energy = "complete";
+  if (request.has_param("kinetic_energy")) {
+    energy = request.get_param_value("kinetic_energy");
+    if (energy != "complete" && energy != "paper") {
+      throw ApiError(ProblemKind::invalid_field, "kinetic_energy must be complete or paper, got '" + energy + "'",
+                     "kinetic_energy");
+    }
+  }
+  send_json(response, 200,
+            preset_to_json(find_preset(name, energy == "paper" ? KineticEnergy::paper : KineticEnergy::complete), energy));
+}
+
 void cancel_job_with_id(RouteState& state, const std::string& id, httplib::Response& response) {
   const auto job = state.service.cancel(id);
   if (!job) throw ApiError(ProblemKind::not_found, "no job " + id, "id");
@@ -460,6 +487,21 @@ std::string request_metrics(RouteState& state) {
         << "\"} " << count << "\n";
   }
   return out.str();
+}
+
+void send_asset(httplib::Response& response, const std::string& path) {
+  const auto& assets = dashboard_assets();
+  const auto found = std::find_if(assets.begin(), assets.end(), [&path](const DashboardAsset& asset) { return asset.path == path; });
+  if (found == assets.end()) throw ApiError(ProblemKind::not_found, "no file " + path, "path");
+  // Embedded in this binary: revalidate on every load, so a new build is never mixed with an old cache.
+  response.set_header("Cache-Control", "no-cache");
+  response.set_header("X-Content-Type-Options", "nosniff");
+  if (path == "/") {
+    response.set_header("Content-Security-Policy",
+                        "default-src 'self'; img-src 'self' data:; style-src 'self' 'unsafe-inline'; frame-ancestors 'none'");
+  }
+  response.status = 200;
+  response.set_content(std::string(found->body), std::string(found->content_type).c_str());
 }
 
 // ---- Cross-cutting -----------------------------------------------------------------------
@@ -585,12 +627,23 @@ void register_routes(httplib::Server& server, Service& service, RouteOptions opt
                response.set_content(openapi_json(), "application/json");
              }));
 
+  // The dashboard: static files, so outside the token's reach (its API calls are not). One
+  // page answers every view's address, so /jobs/{id} can be bookmarked and reloaded.
+  const auto page = guarded(state, [](const httplib::Request&, httplib::Response& response) { send_asset(response, "/"); });
+  server.Get("/", page);
+  server.Get("/jobs/" + id, page);
+  server.Get("/assets/([A-Za-z0-9._-]{1,64})", guarded(state, [](const httplib::Request& request, httplib::Response& response) {
+               send_asset(response, "/assets/" + std::string(request.matches[1]));
+             }));
+
   server.Post("/v1/datasets", route(create_dataset));
   server.Get("/v1/datasets", route(list_datasets));
   server.Get("/v1/datasets/" + id, route(get_dataset));
   server.Get("/v1/datasets/" + id + "/data", route(get_dataset_data));
   server.Delete("/v1/datasets/" + id, route(delete_dataset));
 
+  server.Get("/v1/presets", route(list_presets));
+  server.Get("/v1/presets/" + id, route(get_preset));
   server.Post("/v1/simulations", guarded(state, [state](const httplib::Request& request, httplib::Response& response) {
                 submit(*state, request, response, JobKind::simulation);
               }));

@@ -24,7 +24,7 @@ trap 'rm -rf -- "$work"' EXIT
 
 # ---- The list parses, with the three sections, none empty --------------------------------
 if sections=$(bash "$packages" --sections 2>"$work/err"); then
-  for section in build test runtime; do
+  for section in build test web runtime; do
     if grep -qx "$section" <<<"$sections"; then pass "section [$section] exists"; else fail "section [$section] exists"; fi
     if names=$(bash "$packages" "$section" 2>"$work/err") && [[ -n "$names" ]]; then
       pass "section [$section] parses, $(wc -l <<<"$names") packages"
@@ -82,7 +82,7 @@ for pair in build:build runtime:runtime; do
   else
     fail "stage $stage copies packages.sh and debian-packages.txt"
   fi
-  if stage_has "$stage" "^RUN .*packages=\\\$\\([^)]*packages\\.sh $section\\)"; then
+  if stage_has "$stage" "^RUN .*packages=\\\$\\([^)]*packages\\.sh[^)]* $section[ )]"; then
     pass "stage $stage takes section [$section] from packages.sh"
   else
     fail "stage $stage takes section [$section] from packages.sh"

@@ -1,7 +1,8 @@
 """plots_test.py — the drawing endpoints against the real binary on port 0 with a real SQLite
 file: a dataset's data as JSON (full, which uploads back unchanged, and thinned), a cost
 history thinned for drawing (first, best and last always there), and the torque fit at an
-identification's estimate (its mean square residual is the reported cost), with their errors.
+identification's estimate (its mean square residual is the reported cost), the presets the
+dashboard's form starts from, with their errors.
 
 Run: MANIPID_BIN=build/debug/server/manipid python3 -m unittest tests/service/plots_test.py
 """
@@ -109,6 +110,25 @@ class DrawingEndpoints(unittest.TestCase):
         self.assertAlmostEqual(cost, result["final_cost"], delta=1e-6 * result["final_cost"])
         for joint in fit["joints"]:
             self.assertLess(joint["rms_residual"], 0.05 * joint["rms_measured"])
+
+    def test_presets_give_the_papers_values(self):
+        presets = self.get("/v1/presets")["items"]
+        self.assertIn("cedro2009", [preset["name"] for preset in presets])
+        paper = self.get("/v1/presets/cedro2009?kinetic_energy=paper")
+        self.assertEqual(paper["kinetic_energy"], "paper")
+        self.assertEqual(paper["joints"], 4)
+        self.assertEqual(paper["true_parameters"],
+                         {"m1": 50, "m2": 25, "m3": 15, "m4": 5, "l1": 0.4, "l2": 0.8, "l3": 0.6, "l4": 0.2})
+        self.assertEqual(paper["initial_parameters"]["m2"], 25.1)
+        self.assertEqual(paper["kp"], [3800, 40000, 10000, 500])
+        self.assertEqual(paper["kd"], [159.5, 120, 50, 2])
+        self.assertEqual(paper["reference"]["step_times"], [1, 3, 5, 7])
+        self.assertEqual(paper["simulation"], {"duration": 9.7, "dt": 0.001})
+        _, _, problem = self.server.request("GET", "/v1/presets/puma560")
+        self.assertEqual((problem["status"], problem["field"]), (404, "name"))
+        self.assertIn("cedro2009", problem["detail"])
+        _, _, problem = self.server.request("GET", "/v1/presets/cedro2009?kinetic_energy=full")
+        self.assertEqual((problem["status"], problem["field"]), (422, "kinetic_energy"))
 
     def test_errors_name_the_field(self):
         _, _, problem = self.server.request("GET", f"/v1/jobs/{self.job['id']}/fit?max_points=1")

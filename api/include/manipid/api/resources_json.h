@@ -3,6 +3,7 @@
 #pragma once
 
 #include "manipid/api/records.h"
+#include "manipid/core/presets.h"
 
 #include <nlohmann/json.hpp>
 
@@ -20,6 +21,11 @@ nlohmann::ordered_json dataset_to_json(const DatasetInfo& dataset);
 ///  "result": {...} (succeeded; also cancelled identifications: the best point reached),
 ///  "error": {problem} (failed), "links": {"self", "history", "cancel", "dataset"?}}
 nlohmann::ordered_json job_to_json(const JobInfo& job);
+
+/// {"name", "description", "joints", "parameters": [m1..ln], "true_parameters": {...},
+///  "initial_parameters": {...}, "kp", "kd", "reference": {"step_times", "amplitudes",
+///  "half_length", "band"}, "simulation": {"duration", "dt"}, "kinetic_energy"}
+nlohmann::ordered_json preset_to_json(const Preset& preset, const std::string& kinetic_energy);
 
 /// Parameter names for a θ of `size` entries: m1..mn, l1..ln.
 std::vector<std::string> history_parameter_names(std::size_t size);

@@ -1,0 +1,148 @@
+// dashboard_test.mjs — the web dashboard end to end in headless Chromium (Debian's chromium,
+// driven by playwright-core from web/node_modules): start `manipid serve --port 0` on a fresh
+// SQLite file, open /, reach the paper's form and submit it with the keyboard alone, follow
+// the job page until it has drawn everything, then check the charts hold the number of points
+// the API says they should, the result table the job's estimates, that the page fits a narrow
+// screen, and that the console stayed clean. Screenshots go to ARTIFACT_DIR.
+//
+//   node tests/dashboard/dashboard_test.mjs path/to/manipid ARTIFACT_DIR
+//
+// Exit 0: pass; 1: a check failed; 77: skipped (no chromium, or playwright-core not installed).
+import { spawn } from "node:child_process";
+import { existsSync, mkdirSync, mkdtempSync, rmSync } from "node:fs";
+import { createRequire } from "node:module";
+import { tmpdir } from "node:os";
+import path from "node:path";
+import readline from "node:readline";
+import { fileURLToPath } from "node:url";
+
+const here = path.dirname(fileURLToPath(import.meta.url));
+const root = path.resolve(here, "../..");
+const [binary, artifacts = path.join(tmpdir(), "manipid-dashboard-artifacts")] = process.argv.slice(2);
+const CHROMIUM = process.env.CHROMIUM || "/usr/bin/chromium";
+
+function skip(why) { console.log(`SKIP: ${why}`); process.exit(77); }
+if (!binary) { console.error("usage: dashboard_test.mjs path/to/manipid [ARTIFACT_DIR]"); process.exit(2); }
+if (!existsSync(CHROMIUM)) skip(`${CHROMIUM} not found (Debian package chromium; scripts/setup.sh installs it)`);
+let chromium;
+try {
+  ({ chromium } = createRequire(path.join(root, "web/package.json"))("playwright-core"));
+} catch {
+  skip("playwright-core is not in web/node_modules (run `npm ci --prefix web`; scripts/setup.sh does)");
+}
+
+let failures = 0;
+function check(condition, what) {
+  console.log(`${condition ? "ok  " : "FAIL"}  ${what}`);
+  if (!condition) failures += 1;
+}
+
+async function startServer(database) {
+  const server = spawn(binary, ["serve", "--port", "0", "--db", database, "--workers", "2"], { stdio: ["ignore", "pipe", "pipe"] });
+  server.stderr.on("data", () => {});  // request log
+  const line = await new Promise((resolve, reject) => {
+    readline.createInterface({ input: server.stdout }).once("line", resolve);
+    server.once("exit", (code) => reject(new Error(`manipid serve exited with ${code} before listening`)));
+  });
+  const url = /listening on (http:\/\/\S+)/.exec(line)?.[1];
+  if (!url) throw new Error(`unexpected first line: ${line}`);
+  return { server, url };
+}
+
+async function json(url) {
+  const response = await fetch(url);
+  if (!response.ok) throw new Error(`${url}: HTTP ${response.status}`);
+  return response.json();
+}
+
+const workdir = mkdtempSync(path.join(tmpdir(), "manipid-dashboard-"));
+mkdirSync(artifacts, { recursive: true });
+const { server, url } = await startServer(path.join(workdir, "jobs.db"));
+const browser = await chromium.launch({
+  executablePath: CHROMIUM,
+  args: ["--headless", "--no-sandbox", "--disable-gpu", "--disable-quic", "--no-first-run", "--disable-background-networking",
+         "--disable-component-update", "--disable-sync"],
+});
+const consoleErrors = [];
+try {
+  const page = await browser.newPage({ viewport: { width: 1280, height: 800 } });
+  page.on("console", (message) => { if (message.type() === "error") consoleErrors.push(message.text()); });
+  page.on("pageerror", (error) => consoleErrors.push(String(error)));
+
+  await page.goto(`${url}/`);
+  await page.waitForSelector("#paper-form");
+  check(await page.inputValue("#f-initial-m2") === "25.1", "the form starts from the paper's initial values (m2 = 25.1)");
+  check(await page.inputValue("#f-duration") === "9.7", "... and its 9.7 s experiment");
+
+  // Keyboard only: Tab until the submit button has focus, then Enter.
+  let reached = false;
+  for (let presses = 0; presses < 80 && !reached; presses += 1) {
+    await page.keyboard.press("Tab");
+    reached = await page.evaluate(() => document.activeElement?.id === "paper-submit");
+  }
+  check(reached, "the submit button is reachable with Tab");
+  await page.keyboard.press("Enter");
+  await page.waitForURL(/\/jobs\/job_[0-9a-f]+$/, { timeout: 30000 });
+  const jobId = page.url().split("/").pop();
+  await page.waitForSelector("body[data-ready=true]", { timeout: 240000 });
+  check(await page.getAttribute("body", "data-job-state") === "succeeded", `job ${jobId} reached succeeded on its page`);
+  check((await page.textContent("#job-state")).trim() === "succeeded", "the state badge says succeeded");
+
+  // What the charts should hold, from the API.
+  const job = await json(`${url}/v1/jobs/${jobId}`);
+  const overview = await json(`${url}/v1/jobs/${jobId}/history?max_points=2000`);
+  const data = await json(`${url}/v1/datasets/${job.dataset_id}/data?max_points=2000`);
+  const fit = await json(`${url}/v1/jobs/${jobId}/fit?max_points=2000`);
+  const points = (selector) => page.getAttribute(selector, "data-points").then(Number);
+  const series = (selector) => page.getAttribute(selector, "data-series").then(Number);
+  check(await points("#chart-cost") === overview.items.length && overview.items.length > 10,
+        `cost chart: ${overview.items.length} points of ${overview.total} evaluations`);
+  for (const name of ["m1", "m2", "m3", "m4", "l1", "l2", "l3", "l4"]) {
+    const selector = `#chart-parameter-${name}`;
+    check(await points(selector) === overview.items.length && await series(selector) === 2, `${name} chart: estimate and true value`);
+  }
+  check(await points("#chart-angles") === data.t.length && data.t.length === 1941, "angle chart: 1941 points (9701 samples, every 5th and the last)");
+  check(await series("#chart-angles") === 8, "angle chart: q1..q4 and ref1..ref4");
+  check(await series("#chart-torques") === 4, "torque chart: tau1..tau4");
+  for (const joint of [1, 2, 3, 4]) check(await points(`#chart-fit-${joint}`) === fit.t.length, `fit chart of joint ${joint}`);
+  check(await series("#chart-residual") === 4, "residual chart: four joints");
+  check(await page.locator("canvas").count() >= 16, "every chart drew a canvas");
+
+  // The table shows the job's estimates.
+  for (const name of ["m2", "m3", "m4", "l2", "l3", "l4"]) {
+    const shown = Number(await page.getAttribute(`#result-table tr[data-parameter="${name}"] td[data-estimate]`, "data-estimate"));
+    check(shown === job.result.estimates[name], `table: ${name} = ${shown}`);
+    check(Math.abs(shown - { m2: 25, m3: 15, m4: 5, l2: 0.8, l3: 0.6, l4: 0.2 }[name]) < 1e-3 * shown, `${name} is within 0.1 % of the truth`);
+  }
+  check((await page.textContent('#result-table tr[data-parameter="m1"]')).includes("not alone"), "m1 is not given alone");
+  check(await page.locator('#result-table tr[data-parameter="m1*l1^2"]').count() === 1, "m1*l1^2 is reported instead");
+  check((await page.textContent("#findings")).includes("m1*l1^2"), "the findings say why, in words");
+  check(await page.locator("#correlation tbody td").count() === 36, "6 × 6 correlation heat map (m1 and l1 have none)");
+  await page.screenshot({ path: path.join(artifacts, "job-1280x800.png"), fullPage: true });
+
+  // A narrow screen: nothing wider than the viewport but the scrollable tables.
+  await page.setViewportSize({ width: 390, height: 844 });
+  await page.waitForTimeout(300);
+  const overflow = await page.evaluate(() => document.documentElement.scrollWidth - window.innerWidth);
+  check(overflow <= 1, `no sideways scrolling at 390 px (overflow ${overflow} px)`);
+  await page.screenshot({ path: path.join(artifacts, "job-390.png"), fullPage: true });
+
+  // Back to the list: the job is there, by keyboard-followable link.
+  await page.setViewportSize({ width: 1280, height: 800 });
+  await page.click('a.brand');
+  await page.waitForSelector(`#jobs tr[data-job-id="${jobId}"]`);
+  check((await page.textContent(`#jobs tr[data-job-id="${jobId}"] .badge`)).trim() === "succeeded", "the job list shows it succeeded");
+  await page.screenshot({ path: path.join(artifacts, "jobs-1280x800.png") });
+
+  check(consoleErrors.length === 0, `no console errors${consoleErrors.length ? ": " + consoleErrors.join(" | ") : ""}`);
+} catch (error) {
+  check(false, `unexpected: ${error.stack || error}`);
+} finally {
+  await browser.close();
+  server.kill("SIGTERM");
+  const code = await new Promise((resolve) => server.once("exit", resolve));
+  check(code === 0, "the server exits 0 on SIGTERM");
+  rmSync(workdir, { recursive: true, force: true });
+}
+console.log(failures ? `${failures} check(s) failed; screenshots in ${artifacts}` : `all checks passed; screenshots in ${artifacts}`);
+process.exit(failures ? 1 : 0);
