@@ -71,13 +71,15 @@ nlohmann::ordered_json torque_fit_to_json(const std::string& request_json, const
 
   // The estimate, every parameter (the fixed ones hold their given values).
   const std::vector<std::string> names = parameter_names(model.joint_count());
-  if (!result.contains("estimates") || !result["estimates"].is_object()) {
-    throw InputError("result", "the job's result has no estimates");
+  // "point", not "estimates": the model needs every parameter, including those the data
+  // determine only in combination (their estimates are null).
+  if (!result.contains("point") || !result["point"].is_object()) {
+    throw InputError("result", "the job's result has no point");
   }
   Eigen::VectorXd theta(static_cast<Eigen::Index>(names.size()));
   Json parameters = Json::object();
   for (std::size_t i = 0; i < names.size(); ++i) {
-    theta[static_cast<Eigen::Index>(i)] = stored_number(result["estimates"], names[i].c_str(), "estimates.");
+    theta[static_cast<Eigen::Index>(i)] = stored_number(result["point"], names[i].c_str(), "point.");
     parameters[names[i]] = theta[static_cast<Eigen::Index>(i)];
   }
 

@@ -1,7 +1,9 @@
 // result_json.cpp — identification results to JSON (result_json.h).
 #include "manipid/api/result_json.h"
 
+#include <algorithm>
 #include <cmath>
+#include <limits>
 
 namespace manipid::api {
 namespace {
@@ -25,6 +27,15 @@ const char* source_name(TorqueSource source) {
 }  // namespace
 
 nlohmann::ordered_json result_to_json(const IdentificationResult& result) {
+  // What the data determine: a parameter they cannot separate from another (m1 and l1 of the
+  // paper's robot) has no estimate of its own, only the combination in "identifiability".
+  Eigen::VectorXd estimates = result.estimate;
+  const std::vector<std::string>& unidentifiable = result.identifiability.unidentifiable;
+  for (std::size_t i = 0; i < result.names.size(); ++i) {
+    if (std::find(unidentifiable.begin(), unidentifiable.end(), result.names[i]) != unidentifiable.end()) {
+      estimates[static_cast<Eigen::Index>(i)] = std::numeric_limits<double>::quiet_NaN();
+    }
+  }
   nlohmann::ordered_json free = nlohmann::ordered_json::array();
   for (std::size_t i = 0; i < result.names.size(); ++i) {
     if (result.free[i]) free.push_back(result.names[i]);
@@ -47,7 +58,8 @@ nlohmann::ordered_json result_to_json(const IdentificationResult& result) {
   return {
       {"method", to_string(result.method)},
       {"algorithm", result.algorithm},
-      {"estimates", by_name(result.names, result.estimate)},
+      {"estimates", by_name(result.names, estimates)},
+      {"point", by_name(result.names, result.estimate)},
       {"std_errors", by_name(result.names, result.std_errors)},
       {"initial", by_name(result.names, result.initial)},
       {"free", free},

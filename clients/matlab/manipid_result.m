@@ -1,7 +1,8 @@
 function result = manipid_result(url, job_id)
 %MANIPID_RESULT  The result of a finished job, with MATLAB-friendly shapes.
 %   R = MANIPID_RESULT(URL, JOB_ID) returns the result of an identification:
-%     R.estimates        struct of the estimates by name: R.estimates.m2 (kg), .l3 (m)
+%     R.estimates        struct of the estimates by name: R.estimates.m2 (kg), .l3 (m); NaN for
+%                        a parameter the data cannot determine alone (see R.identifiability)
 %     R.std_errors       struct by name; NaN for fixed and unidentifiable parameters
 %     R.names, R.values, R.std_values
 %                        the same as a 1-by-n cell of names and two 1-by-n vectors
@@ -54,6 +55,10 @@ end
 
 function r = tidy_identification(r)
 r.names = fieldnames(r.estimates)';
+% A parameter the data cannot determine alone (null in JSON, [] after jsondecode) is NaN.
+for k = 1:numel(r.names)
+  if isempty(r.estimates.(r.names{k})), r.estimates.(r.names{k}) = NaN; end
+end
 r.values = cellfun(@(name) r.estimates.(name), r.names);
 if ~isfield(r, 'std_errors') || ~isstruct(r.std_errors)
   r.std_errors = struct();

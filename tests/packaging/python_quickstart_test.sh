@@ -46,6 +46,9 @@ import ast, sys
 last = sys.argv[1].strip().splitlines()[-1]
 estimates = ast.literal_eval(last)  # print(result["estimates"]) prints a dict
 truth = {"m2": 25.0, "m3": 15.0, "m4": 5.0, "l2": 0.8, "l3": 0.6, "l4": 0.2}
+# m1 and l1 enter the paper's model only as m1*l1^2: no confident number for either.
+if estimates["m1"] is not None or estimates["l1"] is not None:
+    sys.exit(f"m1 and l1 must print as None (not identifiable alone), got {estimates['m1']}, {estimates['l1']}")
 for name, value in truth.items():
     got = estimates[name]
     if abs(got - value) > 1e-3 * value:

@@ -97,7 +97,7 @@ class DrawingEndpoints(unittest.TestCase):
         self.assertEqual(fit["filter"], {"half_length": 100, "band": 0.2, "dt": result["filter"]["dt"]})
         self.assertEqual(fit["torque_source"], "reference")
         self.assertEqual(fit["samples"], 9701 - 201)
-        self.assertEqual(fit["parameters"], result["estimates"])
+        self.assertEqual(fit["parameters"], result["point"])
         self.assertLessEqual(len(fit["t"]), 501)
         self.assertAlmostEqual(fit["t"][0], 0.1, places=12)  # output j belongs to input sample M + j
         self.assertEqual(len(fit["joints"]), 4)

@@ -23,8 +23,8 @@ std::vector<long> plot_indices(long count, long max_points);
 /// POST /v1/datasets accepts, so the full (max_points ≤ 0) output uploads back unchanged.
 nlohmann::ordered_json trajectory_to_json(const Trajectory& data, long max_points);
 
-/// The fit at a finished identification's estimate, from the job's stored request and result
-/// and its dataset: {"parameters": {...}, "filter": {...}, "torque_source", "samples",
+/// The fit at a finished identification's estimate (the result's "point"), from the job's
+/// stored request and result and its dataset: {"parameters": {...}, "filter": {...}, "torque_source", "samples",
 /// "t": [...], "joints": [{"joint", "measured": [...], "model": [...], "residual": [...],
 /// "rms_measured", "rms_residual"}]}. The RMS figures use every sample, the series are
 /// decimated to max_points. Throws InputError when request, result and data do not fit together.

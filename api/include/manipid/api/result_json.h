@@ -1,10 +1,14 @@
 // result_json.h — identification results as JSON: the object `manipid identify --json`
 // prints and the service returns as a job's `result`.
 //
-// Shape (every parameter by name; numbers that do not exist — the standard error of a fixed
-// or unidentifiable parameter — are null, never NaN):
+// Shape (every parameter by name; numbers that do not exist — the estimate of a parameter the
+// data cannot determine alone, the standard error of a fixed or unidentifiable one — are
+// null, never NaN):
 //   { "method", "algorithm",
-//     "estimates": {"m1": 50.2, ...}, "std_errors": {"m1": null, "m2": 0.0023, ...},
+//     "estimates": {"m1": null, "m2": 25.0003, ...}, "std_errors": {"m1": null, "m2": 5e-6, ...},
+//     "point": {"m1": 50.08, ...}  (where the minimiser stopped, every parameter: what the model
+//              was evaluated at, e.g. for the torque fit; unidentifiable entries are one
+//              arbitrary point of a valley the data cannot tell apart, not estimates),
 //     "initial": {...}, "free": ["m1", ...],
 //     "correlation": {"parameters": [...], "matrix": [[...]]},
 //     "identifiability": {"all_identifiable", "unidentifiable": [...],
