@@ -222,6 +222,17 @@ class Job:
         """The whole history as CSV text: index,cost,m1..mn,l1..ln."""
         return self.client._request("GET", f"/v1/jobs/{_quote(self.id)}/history", accept="text/csv")
 
+    def history_overview(self, max_points: int = 2000) -> dict:
+        """The history thinned for plotting: {"total", "stride", "best_index", "items"}, every
+        stride-th evaluation plus the first, the best and the last (the stored history is whole)."""
+        return self.client._request("GET", f"/v1/jobs/{_quote(self.id)}/history", query={"max_points": max_points})
+
+    def fit(self, max_points: int = 2000) -> dict:
+        """A finished identification's torque fit: the filtered measured torque beside the model
+        torque at the estimate, per joint ({"t", "joints": [{"measured", "model", "residual",
+        "rms_measured", "rms_residual"}], "filter", ...}), thinned to max_points for plotting."""
+        return self.client._request("GET", f"/v1/jobs/{_quote(self.id)}/fit", query={"max_points": max_points})
+
 
 class Client:
     """A connection to a manipid server.
@@ -291,6 +302,16 @@ class Client:
         """A dataset's samples as CSV text."""
         return self._request("GET", f"/v1/datasets/{_quote(_dataset_id(dataset_id))}",
                              query={"format": "csv"}, accept="text/csv")
+
+    def dataset_data(self, dataset_id: Union[str, Dataset], max_points: Optional[int] = None) -> dict:
+        """A dataset's samples as {"t", "q": [[joint 1...], ...], "tau"?, "ref"?} — the shape
+        upload_dataset takes — all of them, or about max_points for plotting."""
+        query = {"max_points": max_points} if max_points else None
+        return self._request("GET", f"/v1/datasets/{_quote(_dataset_id(dataset_id))}/data", query=query)
+
+    def preset(self, name: str = "cedro2009", kinetic_energy: str = "complete") -> dict:
+        """A robot preset: true and initial parameters, PD gains, reference, horizon."""
+        return self._request("GET", f"/v1/presets/{_quote(name)}", query={"kinetic_energy": kinetic_energy})
 
     def delete_dataset(self, dataset_id: Union[str, Dataset]) -> None:
         self._request("DELETE", f"/v1/datasets/{_quote(_dataset_id(dataset_id))}")

@@ -95,6 +95,24 @@ class AgainstServer(unittest.TestCase):
         self.assertEqual(sorted(history[0]["parameters"]), sorted(self.result["estimates"]))
         self.assertEqual(len(self.job.history_csv().strip().split("\n")), len(history) + 1)
 
+    def test_plotting_helpers(self) -> None:
+        overview = self.job.history_overview(max_points=100)
+        self.assertEqual(overview["total"], self.result["evaluations"])
+        self.assertLessEqual(len(overview["items"]), 102)
+        fit = self.job.fit(max_points=300)
+        self.assertEqual(len(fit["joints"]), 4)
+        self.assertLessEqual(len(fit["t"]), 301)
+        self.assertAlmostEqual(sum(joint["rms_residual"] ** 2 for joint in fit["joints"]), self.result["final_cost"],
+                               delta=1e-6 * self.result["final_cost"])
+        data = self.client.dataset_data(self.dataset)
+        self.assertEqual(len(data["t"]), 9701)
+        self.assertEqual(len(self.client.dataset_data(self.dataset, max_points=100)["t"]), 100)
+        preset = self.client.preset("cedro2009")
+        self.assertEqual(preset["true_parameters"]["m2"], 25)
+        # What the data cannot determine alone has no estimate: m1 and l1 are None.
+        self.assertIsNone(self.result["estimates"]["m1"])
+        self.assertIsNone(self.result["estimates"]["l1"])
+
     @unittest.skipUnless(numpy, "numpy is not installed")
     def test_history_as_numpy(self) -> None:
         history = self.job.history(as_numpy=True)
