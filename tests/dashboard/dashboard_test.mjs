@@ -134,6 +134,32 @@ try {
   check((await page.textContent(`#jobs tr[data-job-id="${jobId}"] .badge`)).trim() === "succeeded", "the job list shows it succeeded");
   await page.screenshot({ path: path.join(artifacts, "jobs-1280x800.png") });
 
+  // Live: a long job's page redraws its charts as evaluations arrive; Cancel (by keyboard) stops it.
+  const post = (route, body) => fetch(`${url}${route}`, { method: "POST", headers: { "Content-Type": "application/json" },
+                                                          body: JSON.stringify(body) }).then((r) => r.json());
+  // Output-error: a closed-loop simulation per evaluation, so it runs long enough to watch.
+  const long = await post("/v1/identifications", { simulation: { duration: 2.0 }, method: "output-error" });
+  await page.goto(`${url}/jobs/${long.id}`);
+  await page.waitForSelector("body[data-job-state=running]", { timeout: 60000 });
+  await page.waitForSelector("#chart-cost[data-total]", { timeout: 60000 });
+  const first = Number(await page.getAttribute("#chart-cost", "data-total"));
+  await page.waitForFunction((seen) => Number(document.querySelector("#chart-cost").dataset.total) > seen, first, { timeout: 60000 });
+  const later = Number(await page.getAttribute("#chart-cost", "data-total"));
+  check(later > first, `the running job's charts follow it live (${first} → ${later} evaluations)`);
+  check(await points("#chart-cost") <= 2002, "... drawn from at most about 2000 points");
+  await page.focus("#cancel");
+  await page.keyboard.press("Enter");
+  await page.waitForSelector("body[data-ready=true]", { timeout: 120000 });
+  const ended = await page.getAttribute("body", "data-job-state");
+  check(ended === "cancelled", `Cancel stops it; the page says cancelled (${ended})`);
+  check(await page.locator("#result-table").count() === 1, "a cancelled job shows its best point so far");
+
+  // A simulation's page: its data (Fig. 2).
+  const simulation = await post("/v1/simulations", { duration: 1.5 });
+  await page.goto(`${url}/jobs/${simulation.id}`);
+  await page.waitForSelector("body[data-ready=true]", { timeout: 120000 });
+  check(await points("#chart-angles") === 1501 && await series("#chart-torques") === 4, "a simulation's page draws its 1501 samples");
+
   check(consoleErrors.length === 0, `no console errors${consoleErrors.length ? ": " + consoleErrors.join(" | ") : ""}`);
 } catch (error) {
   check(false, `unexpected: ${error.stack || error}`);
