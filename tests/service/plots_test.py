@@ -6,6 +6,9 @@ dashboard's form starts from, with their errors.
 
 Run: MANIPID_BIN=build/debug/server/manipid python3 -m unittest tests/service/plots_test.py
 """
+import gzip
+import http.client
+import json
 import math
 import os
 import sys
@@ -129,6 +132,46 @@ class DrawingEndpoints(unittest.TestCase):
         self.assertIn("cedro2009", problem["detail"])
         _, _, problem = self.server.request("GET", "/v1/presets/cedro2009?kinetic_energy=full")
         self.assertEqual((problem["status"], problem["field"]), (422, "kinetic_energy"))
+
+    def raw_get(self, path, headers):
+        connection = http.client.HTTPConnection(self.server.host, self.server.port, timeout=60)
+        try:
+            connection.request("GET", path, headers=headers)
+            response = connection.getresponse()
+            return response.status, {k.lower(): v for k, v in response.getheaders()}, response.read()
+        finally:
+            connection.close()
+
+    def test_browsers_get_gzip_never_brotli(self):
+        # cpp-httplib 0.11.4's Brotli (quality 11) takes seconds for a large body; gzip is offered instead.
+        path = f"/v1/jobs/{self.job['id']}/history?max_points=2000"
+        plain = self.get(path)
+        for accept, expected in (("gzip, deflate, br", "gzip"), ("br", None), ("BR;q=1.0, gzip;q=0.5", "gzip"), ("identity", None)):
+            status, headers, body = self.raw_get(path, {"Accept-Encoding": accept})
+            self.assertEqual(status, 200)
+            self.assertEqual(headers.get("content-encoding"), expected, accept)
+            self.assertEqual(json.loads(gzip.decompress(body) if expected == "gzip" else body), plain, accept)
+
+    def test_the_dashboard_is_served(self):
+        _, _, page = self.raw_get("/", {})
+        if b"built without its dashboard" in page:
+            self.skipTest("this manipid was built without web/node_modules (npm ci did not run)")
+        for path in ("/", f"/jobs/{self.job['id']}"):
+            status, headers, body = self.raw_get(path, {})
+            self.assertEqual(status, 200, path)
+            self.assertTrue(headers["content-type"].startswith("text/html"), path)
+            self.assertIn("default-src 'self'", headers["content-security-policy"])
+            self.assertIn(b'<script type="module" src="/assets/app.js">', body)
+        for name, kind in (("app.js", "text/javascript"), ("app.css", "text/css"), ("uPlot.iife.min.js", "text/javascript")):
+            status, headers, body = self.raw_get(f"/assets/{name}", {})
+            self.assertEqual(status, 200, name)
+            self.assertTrue(headers["content-type"].startswith(kind), name)
+            self.assertEqual(headers["x-content-type-options"], "nosniff")
+            self.assertGreater(len(body), 1000, name)
+        status, _, problem = self.server.request("GET", "/assets/secret.db")
+        self.assertEqual(status, 404)
+        status, _, _ = self.server.request("GET", "/assets/..%2Fmanipid.db")
+        self.assertEqual(status, 404)
 
     def test_errors_name_the_field(self):
         _, _, problem = self.server.request("GET", f"/v1/jobs/{self.job['id']}/fit?max_points=1")
