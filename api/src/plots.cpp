@@ -88,8 +88,13 @@ nlohmann::ordered_json torque_fit_to_json(const std::string& request_json, const
   FilterSettings filter;
   filter.half_length = static_cast<int>(stored_number(result["filter"], "half_length", "filter."));
   filter.band = stored_number(result["filter"], "band", "filter.");
-  filter.dt = stored_number(result["filter"], "dt", "filter.");
-  const bool from_reference = result.value("torque_source", std::string()) == "reference";
+  filter.dt = data.dt();  // the filter's Δ is the data's sample period, whatever the method
+  bool from_reference = result.value("torque_source", std::string()) == "reference";
+  if (result.value("method", std::string()) == "output-error") {
+    // Output-error filters nothing; its result carries the default filter. Show the fit through
+    // that filter, with the torque the data has.
+    from_reference = !data.has_torque();
+  }
 
   const FilteredData filtered = filter_for_input_error(data, filter, from_reference, spec.options.controller);
   const TorqueFit fit = torque_fit(model, Parameters::from_vector(theta), data, filtered);

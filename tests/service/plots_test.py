@@ -114,6 +114,19 @@ class DrawingEndpoints(unittest.TestCase):
         for joint in fit["joints"]:
             self.assertLess(joint["rms_residual"], 0.05 * joint["rms_measured"])
 
+    def test_fit_of_an_output_error_job(self):
+        # Output-error filters nothing: the fit shows its estimate through the default filter,
+        # at the data's own sample period, with the measured torque.
+        status, _, job = self.server.request("POST", "/v1/identifications", {
+            "simulation": {"duration": 1.0, "dt": 0.002}, "method": "output-error", "max_evaluations": 3})
+        self.assertEqual(status, 202, job)
+        job = self.server.wait_job(job["id"])
+        self.assertEqual(job["state"], "succeeded", job)
+        fit = self.get(f"/v1/jobs/{job['id']}/fit")
+        self.assertEqual(fit["filter"]["dt"], 0.002)
+        self.assertEqual(fit["torque_source"], "measured")
+        self.assertEqual(fit["samples"], 501 - 2 * fit["filter"]["half_length"] - 1)
+
     def test_presets_give_the_papers_values(self):
         presets = self.get("/v1/presets")["items"]
         self.assertIn("cedro2009", [preset["name"] for preset in presets])

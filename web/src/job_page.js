@@ -125,8 +125,10 @@ function resultSection(result, truth) {
     ["Method", `${result.method}, ${result.algorithm}`],
     ["Stopped", `${result.stop_reason} after ${result.evaluations} evaluations in ${number(result.wall_seconds, 3)} s`],
     ["Cost", `${number(result.initial_cost, 4)} → ${number(result.final_cost, 6)}`],
-    ["Filter", `M = ${filter.half_length}, Ωg = ${number(filter.band, 4)} rad/sample${filter.automatic ? " (chosen from the data)" : ""}`],
-    ["Torque", result.torque_source],
+    ...(result.method === "output-error"
+      ? [["Compared", "simulated and measured joint angles (no filter)"]]
+      : [["Filter", `M = ${filter.half_length}, Ωg = ${number(filter.band, 4)} rad/sample${filter.automatic ? " (chosen from the data)" : ""}`],
+         ["Torque", result.torque_source]]),
   ];
   return section("result", "Result",
     h("dl", { class: "summary" }, facts.map(([term, detail]) => [h("dt", {}, term), h("dd", {}, detail)])),
