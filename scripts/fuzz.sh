@@ -8,9 +8,10 @@
 # build/fuzz/artifacts-<target>/crash-*, oom-*, leak-* or timeout-*).
 #
 #   bash scripts/fuzz.sh [SECONDS]   explore: a random seed, SECONDS per target (default 20)
-#   bash scripts/fuzz.sh --runs N    check: seed 1, exactly N inputs per target — the same
-#                                    inputs every time, so a red result is the code's change
-#                                    and not the luck of the draw (what scripts/test.sh runs)
+#   bash scripts/fuzz.sh --runs N    check: seed 1, exactly N inputs per target — for the same
+#                                    build and corpus the same inputs, so a red result points at
+#                                    the code, not the luck of the draw (what scripts/test.sh runs;
+#                                    coverage figures still vary a little between machines)
 # Installs nothing: run scripts/setup.sh first (needs the Debian packages clang and
 # libclang-rt-14-dev).
 set -euo pipefail
