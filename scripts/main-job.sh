@@ -34,3 +34,5 @@ curl -sS --fail-with-body -H 'Accept: text/csv' "$url/v1/jobs/$id/history" >"$ou
 curl -sS --fail-with-body "$url/v1/datasets/$(python3 -c 'import json,sys; print(json.load(sys.stdin)["dataset_id"])' <<<"$job")?format=csv" >"$out/run.csv"
 python3 scripts/print_result.py "$out/job.json"
 echo "== saved: $out/job.json (the job), $out/history.csv (every evaluation), $out/run.csv (the data)"
+echo "== to look at it in the dashboard: $manipid serve --db $out/manipid.db"
+echo "   then open http://127.0.0.1:8080/jobs/$id"
