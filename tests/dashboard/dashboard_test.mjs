@@ -161,6 +161,15 @@ try {
   check(await points("#chart-angles") === 1501 && await series("#chart-torques") === 4, "a simulation's page draws its 1501 samples");
 
   check(consoleErrors.length === 0, `no console errors${consoleErrors.length ? ": " + consoleErrors.join(" | ") : ""}`);
+
+  // A section that cannot be drawn explains itself; the rest of the page stands. (After the
+  // console check: the browser logs the 404 it meets as a console error.)
+  const finished = await json(`${url}/v1/jobs/${simulation.id}`);
+  await fetch(`${url}/v1/datasets/${finished.dataset_id}`, { method: "DELETE" });
+  await page.goto(`${url}/jobs/${simulation.id}`);
+  await page.waitForSelector("body[data-ready=true]", { timeout: 60000 });
+  check((await page.textContent("main")).includes(`no dataset ${finished.dataset_id}`),
+        "a deleted dataset: its section says so, the page still loads");
 } catch (error) {
   check(false, `unexpected: ${error.stack || error}`);
 } finally {

@@ -277,10 +277,19 @@ export async function jobView(main, id) {
   if (job.state === "failed" && job.error) {
     body.prepend(section("error", "Why it failed", h("p", { role: "alert" }, job.error.detail || job.error.title || "unknown error")));
   }
+  // A section that cannot be drawn (its dataset deleted since, say) says so in its place;
+  // the rest of the page stands.
+  const drawOrExplain = async (title, draw) => {
+    try {
+      await draw();
+    } catch (error) {
+      body.append(section(`missing-${body.children.length}`, title, h("p", { role: "status" }, error.message || String(error))));
+    }
+  };
   if (job.kind === "identification" && job.result) {
     body.append(resultSection(job.result, truth));
-    await fitSection(body, id);
+    await drawOrExplain("Torque fit", () => fitSection(body, id));
   }
-  if (job.dataset_id) await dataSection(body, job.dataset_id);
+  if (job.dataset_id) await drawOrExplain("Measured data", () => dataSection(body, job.dataset_id));
   document.body.dataset.ready = "true";  // last: every section is drawn
 }
