@@ -138,12 +138,9 @@ JobOutcome run_identification_job(const api::JobInfo& job, Store& store, LiveJob
   nlohmann::ordered_json json = api::result_to_json(result);
   json["dataset_id"] = dataset_id;
   outcome.result = json.dump();
-  const auto& unidentifiable = result.identifiability.unidentifiable;
   for (std::size_t i = 0; i < result.names.size(); ++i) {
     // Stored estimates are what the data determine, as in the result's "estimates".
-    if (!result.free[i] || std::find(unidentifiable.begin(), unidentifiable.end(), result.names[i]) != unidentifiable.end()) {
-      continue;
-    }
+    if (!result.free[i] || !result.identifiability.determines_alone(result.names[i])) continue;
     const double error = result.std_errors[static_cast<Eigen::Index>(i)];
     outcome.estimates.push_back({result.names[i], result.estimate[static_cast<Eigen::Index>(i)],
                                  std::isfinite(error) ? std::optional<double>(error) : std::nullopt});

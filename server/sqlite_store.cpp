@@ -7,6 +7,8 @@
 #include "sqlite_schema.h"
 #include "store.h"
 
+#include "manipid/api/plots.h"
+
 #include <cstdint>
 #include <limits>
 #include <stdexcept>
@@ -440,7 +442,7 @@ class SqliteStore final : public Store {
           "SELECT idx FROM job_history WHERE job_id = ?1 AND cost IS NOT NULL ORDER BY cost, idx LIMIT 1");
       best.bind_text(1, id);
       if (best.step()) overview.best_index = static_cast<long>(best.integer(0));
-      overview.stride = max_points <= 0 || overview.total <= max_points ? 1 : (overview.total + max_points - 1) / max_points;
+      overview.stride = api::plot_stride(overview.total, max_points);
       // A scan of the job's part of the primary key; only the chosen rows' blobs are decoded.
       auto rows = connection->prepare(
           "SELECT idx, cost, theta FROM job_history WHERE job_id = ?1 "

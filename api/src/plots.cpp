@@ -41,21 +41,41 @@ double stored_number(const nlohmann::json& object, const char* key, const std::s
 
 }  // namespace
 
+long plot_stride(long count, long max_points) {
+  return max_points <= 0 || count <= max_points ? 1 : (count + max_points - 1) / max_points;
+}
+
 std::vector<long> plot_indices(long count, long max_points) {
   std::vector<long> indices;
   if (count <= 0) return indices;
-  const long stride = max_points <= 0 || count <= max_points ? 1 : (count + max_points - 1) / max_points;
+  const long stride = plot_stride(count, max_points);
   indices.reserve(static_cast<std::size_t>(count / stride + 2));
   for (long i = 0; i < count; i += stride) indices.push_back(i);
   if (indices.back() != count - 1) indices.push_back(count - 1);
   return indices;
 }
 
-nlohmann::ordered_json trajectory_to_json(const Trajectory& data, long max_points) {
-  const std::vector<long> indices = plot_indices(data.samples(), max_points);
-  Json json = {{"t", pick(data.t, indices)}, {"q", columns(data.q, indices)}};
-  if (data.has_torque()) json["tau"] = columns(data.tau, indices);
-  if (data.has_reference()) json["ref"] = columns(data.ref, indices);
+Trajectory thin(const Trajectory& data, long max_points) {
+  if (plot_stride(data.samples(), max_points) == 1) return data;
+  const std::vector<long> rows = plot_indices(data.samples(), max_points);
+  const auto pick_rows = [&rows](const Eigen::MatrixXd& matrix) {
+    Eigen::MatrixXd out(static_cast<Eigen::Index>(rows.size()), matrix.cols());
+    for (std::size_t r = 0; r < rows.size(); ++r) out.row(static_cast<Eigen::Index>(r)) = matrix.row(rows[r]);
+    return out;
+  };
+  Trajectory thinned;
+  thinned.t = pick_rows(data.t);
+  thinned.q = pick_rows(data.q);
+  thinned.tau = pick_rows(data.tau);
+  thinned.ref = pick_rows(data.ref);
+  return thinned;
+}
+
+nlohmann::ordered_json trajectory_to_json(const Trajectory& data) {
+  const std::vector<long> all = plot_indices(data.samples(), 0);
+  Json json = {{"t", pick(data.t, all)}, {"q", columns(data.q, all)}};
+  if (data.has_torque()) json["tau"] = columns(data.tau, all);
+  if (data.has_reference()) json["ref"] = columns(data.ref, all);
   return json;
 }
 

@@ -58,7 +58,7 @@ nlohmann::ordered_json job_to_json(const JobInfo& job) {
   return json;
 }
 
-nlohmann::ordered_json preset_to_json(const Preset& preset, const std::string& kinetic_energy) {
+nlohmann::ordered_json preset_to_json(const Preset& preset) {
   const std::vector<std::string> names = parameter_names(preset.model.joint_count());
   const auto by_name = [&names](const Parameters& parameters) {
     const Eigen::VectorXd theta = parameters.vector();
@@ -69,7 +69,7 @@ nlohmann::ordered_json preset_to_json(const Preset& preset, const std::string& k
   const auto list = [](const Eigen::VectorXd& vector) { return std::vector<double>(vector.data(), vector.data() + vector.size()); };
   return {{"name", preset.name},
           {"description", preset.description},
-          {"kinetic_energy", kinetic_energy},
+          {"kinetic_energy", to_string(preset.model.kinetic_energy)},
           {"joints", preset.model.joint_count()},
           {"parameters", names},
           {"true_parameters", by_name(preset.true_parameters)},

@@ -1,7 +1,6 @@
 // result_json.cpp — identification results to JSON (result_json.h).
 #include "manipid/api/result_json.h"
 
-#include <algorithm>
 #include <cmath>
 #include <limits>
 
@@ -30,9 +29,8 @@ nlohmann::ordered_json result_to_json(const IdentificationResult& result) {
   // What the data determine: a parameter they cannot separate from another (m1 and l1 of the
   // paper's robot) has no estimate of its own, only the combination in "identifiability".
   Eigen::VectorXd estimates = result.estimate;
-  const std::vector<std::string>& unidentifiable = result.identifiability.unidentifiable;
   for (std::size_t i = 0; i < result.names.size(); ++i) {
-    if (std::find(unidentifiable.begin(), unidentifiable.end(), result.names[i]) != unidentifiable.end()) {
+    if (!result.identifiability.determines_alone(result.names[i])) {
       estimates[static_cast<Eigen::Index>(i)] = std::numeric_limits<double>::quiet_NaN();
     }
   }

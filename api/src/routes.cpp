@@ -231,26 +231,16 @@ void get_dataset(RouteState& state, const httplib::Request& request, httplib::Re
 
 void get_dataset_data(RouteState& state, const httplib::Request& request, httplib::Response& response) {
   const std::string id = request.matches[1];
-  const long max_points = request.has_param("max_points") ? max_points_parameter(request, 0) : 0;
+  const long max_points = max_points_parameter(request, 0);  // 0: every sample
   const auto data = state.service.dataset_data(id);
   if (!data) throw ApiError(ProblemKind::not_found, "no dataset " + id, "id");
+  const Trajectory shown = thin(*data, max_points);
   if (wants_csv(request)) {
-    Trajectory thinned;
-    const std::vector<long> rows = plot_indices(data->samples(), max_points);
-    const auto pick = [&rows](const Eigen::MatrixXd& matrix) {
-      Eigen::MatrixXd out(static_cast<Eigen::Index>(rows.size()), matrix.cols());
-      for (std::size_t r = 0; r < rows.size(); ++r) out.row(static_cast<Eigen::Index>(r)) = matrix.row(rows[r]);
-      return out;
-    };
-    thinned.t = pick(data->t);
-    thinned.q = pick(data->q);
-    thinned.tau = pick(data->tau);
-    thinned.ref = pick(data->ref);
     response.status = 200;
-    response.set_content(format_csv(trajectory_to_csv(thinned)), "text/csv");
+    response.set_content(format_csv(trajectory_to_csv(shown)), "text/csv");
     return;
   }
-  send_json(response, 200, trajectory_to_json(*data, max_points));
+  send_json(response, 200, trajectory_to_json(shown));
 }
 
 void list_datasets(RouteState& state, const httplib::Request& request, httplib::Response& response) {
@@ -420,28 +410,23 @@ void job_fit(RouteState& state, const httplib::Request& request, httplib::Respon
 
 void list_presets(RouteState&, const httplib::Request&, httplib::Response& response) {
   nlohmann::ordered_json items = nlohmann::ordered_json::array();
-  for (const std::string& name : preset_names()) items.push_back(preset_to_json(find_preset(name), "complete"));
+  for (const std::string& name : preset_names()) items.push_back(preset_to_json(find_preset(name)));
   send_json(response, 200, {{"items", items}});
 }
 
 void get_preset(RouteState&, const httplib::Request& request, httplib::Response& response) {
   const std::string name = request.matches[1];
-  const std::vector<std::string> names = preset_names();
-  if (std::find(names.begin(), names.end(), name) == names.end()) {
-    std::string known;
-    for (const std::string& each : names) known += (known.empty() ? "" : ", ") + each;
-    throw ApiError(ProblemKind::not_found, "no preset " + name + " (known: " + known + ")", "name");
-  }
-  std::string energy = "complete";
-  if (request.has_param("kinetic_energy")) {
-    energy = request.get_param_value("kinetic_energy");
-    if (energy != "complete" && energy != "paper") {
-      throw ApiError(ProblemKind::invalid_field, "kinetic_energy must be complete or paper, got '" + energy + "'",
-                     "kinetic_energy");
+  const KineticEnergy energy = request.has_param("kinetic_energy")
+                                   ? parse_kinetic_energy(request.get_param_value("kinetic_energy"), "kinetic_energy")
+                                   : KineticEnergy::complete;
+  const Preset preset = [&] {
+    try {
+      return find_preset(name, energy);
+    } catch (const InputError& error) {  // an unknown name: it lists the known ones
+      throw ApiError(ProblemKind::not_found, error.what(), "name");
     }
-  }
-  send_json(response, 200,
-            preset_to_json(find_preset(name, energy == "paper" ? KineticEnergy::paper : KineticEnergy::complete), energy));
+  }();
+  send_json(response, 200, preset_to_json(preset));
 }
 
 void cancel_job_with_id(RouteState& state, const std::string& id, httplib::Response& response) {

@@ -15,13 +15,20 @@
 
 namespace manipid::api {
 
-/// Indices 0, s, 2s, … of `count` samples with s = ceil(count / max_points), and always the
-/// last: at most max_points + 1 of them, all of them when count ≤ max_points (or max_points ≤ 0).
+/// The stride s = ceil(count / max_points) that thins `count` samples to about max_points;
+/// 1 when count ≤ max_points or max_points ≤ 0. The store thins histories by the same rule.
+long plot_stride(long count, long max_points);
+
+/// Indices 0, s, 2s, … of `count` samples (s = plot_stride), and always the last: at most
+/// max_points + 1 of them, all of them when count ≤ max_points (or max_points ≤ 0).
 std::vector<long> plot_indices(long count, long max_points);
 
+/// The samples at plot_indices(samples, max_points): the whole trajectory when max_points ≤ 0.
+Trajectory thin(const Trajectory& data, long max_points);
+
 /// {"t": [...], "q": [[joint 1 ...], ...], "tau"?: [[...]], "ref"?: [[...]]} — the shape
-/// POST /v1/datasets accepts, so the full (max_points ≤ 0) output uploads back unchanged.
-nlohmann::ordered_json trajectory_to_json(const Trajectory& data, long max_points);
+/// POST /v1/datasets accepts, so it uploads back unchanged.
+nlohmann::ordered_json trajectory_to_json(const Trajectory& data);
 
 /// The fit at a finished identification's estimate (the result's "point"), from the job's
 /// stored request and result and its dataset: {"parameters": {...}, "filter": {...}, "torque_source", "samples",

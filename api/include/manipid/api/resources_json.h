@@ -25,7 +25,7 @@ nlohmann::ordered_json job_to_json(const JobInfo& job);
 /// {"name", "description", "joints", "parameters": [m1..ln], "true_parameters": {...},
 ///  "initial_parameters": {...}, "kp", "kd", "reference": {"step_times", "amplitudes",
 ///  "half_length", "band"}, "simulation": {"duration", "dt"}, "kinetic_energy"}
-nlohmann::ordered_json preset_to_json(const Preset& preset, const std::string& kinetic_energy);
+nlohmann::ordered_json preset_to_json(const Preset& preset);
 
 /// Parameter names for a θ of `size` entries: m1..mn, l1..ln.
 std::vector<std::string> history_parameter_names(std::size_t size);

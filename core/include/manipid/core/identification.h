@@ -25,6 +25,7 @@
 
 #include <Eigen/Core>
 
+#include <algorithm>
 #include <atomic>
 #include <functional>
 #include <optional>
@@ -128,6 +129,10 @@ struct IdentifiabilityReport {
   /// Plain-language findings, one per problem found.
   std::vector<std::string> findings;
   bool all_identifiable() const { return unidentifiable.empty(); }
+  /// False for a parameter the data determine only in combination with others.
+  bool determines_alone(const std::string& name) const {
+    return std::find(unidentifiable.begin(), unidentifiable.end(), name) == unidentifiable.end();
+  }
 };
 
 struct IdentificationResult {
