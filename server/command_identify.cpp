@@ -159,6 +159,11 @@ int run_identify(const IdentifyOptions& options) {
   for (const std::string& list : options.initial) {
     for (const std::string& item : split_list(list)) apply_parameter(item, identification.initial, "--init");
   }
+  try {
+    check_parameter_ranges(identification.initial, "");
+  } catch (const InputError& error) {
+    rethrow_with_source(error, "--init");
+  }
   for (const std::string& list : options.free) {
     for (const std::string& name : split_list(list)) identification.free.push_back(name);
   }

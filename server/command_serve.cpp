@@ -8,6 +8,7 @@
 #include "store.h"
 #include "worker_pool.h"
 
+#include "manipid/api/problem.h"
 #include "manipid/api/routes.h"
 
 #include <httplib.h>  // after the manipid headers: see routes.cpp
@@ -86,6 +87,11 @@ CLI::App* add_serve_command(CLI::App& app, ServeOptions& options) {
   command->add_option("--http-threads", options.http_threads, "Connections served at once")
       ->check(integer_between(2, 1024))
       ->capture_default_str();
+  command->add_option("--max-attempts", options.max_attempts,
+                      "A job whose worker died this many times (the process crashed or was killed while "
+                      "running it) is failed at start-up instead of run again")
+      ->check(integer_between(1, 1000))
+      ->capture_default_str();
   return command;
 }
 
@@ -107,8 +113,19 @@ int run_serve(const ServeOptions& options) {
   } catch (const StoreError& error) {
     throw UsageError("--db " + options.database + ": " + error.what());
   }
-  const int recovered = store->recover_interrupted_jobs();
-  if (recovered > 0) log_line("manipid: " + std::to_string(recovered) + " interrupted job(s) queued again");
+  const RecoveryOutcome recovered = store->recover_interrupted_jobs(options.max_attempts, [](int losses) {
+    return api::problem_to_json({api::ProblemKind::worker_lost,
+                                 "the worker stopped while running this job " + std::to_string(losses) +
+                                     " times (the process crashed or was killed); it will not be run again",
+                                 ""})
+        .dump();
+  });
+  if (recovered.requeued > 0) log_line("manipid: " + std::to_string(recovered.requeued) + " interrupted job(s) queued again");
+  if (recovered.cancelled > 0) log_line("manipid: " + std::to_string(recovered.cancelled) + " interrupted job(s) cancelled as asked");
+  for (const std::string& id : recovered.failed) {
+    log_line("manipid: job " + id + " failed: its worker died " + std::to_string(options.max_attempts) +
+             " or more times while running it");
+  }
 
   WorkerPoolOptions pool_options;
   pool_options.workers = workers;

@@ -242,6 +242,11 @@ Robot resolve_robot(const RobotOptions& options) {
   robot.parameters = robot.preset.true_parameters;
   for (const std::string& item : options.parameters) apply_parameter(item, robot.parameters, "--param");
   check_parameters(robot.preset.model, robot.parameters);
+  try {
+    check_parameter_ranges(robot.parameters, "");
+  } catch (const InputError& error) {
+    rethrow_with_source(error, "--param");
+  }
   return robot;
 }
 

@@ -169,6 +169,7 @@ struct ServeOptions {
   std::string token;
   double job_timeout = 3600.0;
   int http_threads = 32;
+  int max_attempts = 3;       ///< worker deaths a job may cause before it is failed for good
 };
 CLI::App* add_serve_command(CLI::App& app, ServeOptions& options);
 int run_serve(const ServeOptions& options);

@@ -22,12 +22,7 @@ using Clock = std::chrono::steady_clock;
 std::string job_failed(const std::string& detail) {
   // A computation that could not finish (a diverging simulation, a store failure): the
   // request was valid, so this is not one of the request's problem kinds.
-  return nlohmann::json{{"type", "/problems/job-failed"},
-                        {"title", "The job could not be completed"},
-                        {"status", 500},
-                        {"code", "JOB_FAILED"},
-                        {"detail", detail}}
-      .dump();
+  return api::problem_to_json({api::ProblemKind::job_failed, detail, ""}).dump();
 }
 
 JobOutcome failed(std::string error) {
@@ -160,6 +155,8 @@ JobOutcome run_job(const api::JobInfo& job, Store& store, LiveJob& live, const R
     return failed(api::problem_to_json(api::problem_from(error)).dump());
   } catch (const api::ApiError& error) {
     return failed(api::problem_to_json(error.problem()).dump());
+  } catch (const IdentificationError& error) {
+    return failed(api::problem_to_json({api::ProblemKind::not_computable, error.what(), ""}).dump());
   } catch (const std::bad_alloc&) {
     return failed(job_failed("out of memory"));
   } catch (const std::exception& error) {

@@ -3,6 +3,8 @@
 // ("manipid: error: ...") and an exit status: 0 success, 2 usage or input error, 1 otherwise.
 #include "commands.h"
 
+#include "manipid/core/identification.h"
+
 #include <cstdio>
 #include <exception>
 #include <new>
@@ -87,6 +89,8 @@ int main(int argc, char** argv) {
     return run(argc, argv);
   } catch (const manipid::InputError& error) {
     return report(error.what(), exit_usage);
+  } catch (const manipid::IdentificationError& error) {
+    return report(error.what(), exit_usage);  // the starting values or the data leave no finite cost
   } catch (const UsageError& error) {
     return report(error.what(), exit_usage);
   } catch (const OutputError& error) {

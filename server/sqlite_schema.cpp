@@ -10,7 +10,7 @@ namespace manipid::server::sqlite {
 namespace {
 
 // kMigrations[i] takes user_version i to i + 1, and sets it.
-constexpr std::array<const char*, 1> kMigrations = {
+constexpr std::array<const char*, 2> kMigrations = {
     // 0 → 1: the first schema.
     R"sql(
     -- seq orders datasets newest first for keyset paging; AUTOINCREMENT never hands out a
@@ -82,6 +82,13 @@ constexpr std::array<const char*, 1> kMigrations = {
     CREATE INDEX idempotency_keys_by_resource ON idempotency_keys (resource_id);
 
     PRAGMA user_version = 1;
+    )sql",
+
+    // 1 → 2: how often a job's worker died while running it (start-up recovery counts), so a
+    // job that crashes the process is failed after --max-attempts deaths instead of looping.
+    R"sql(
+    ALTER TABLE jobs ADD COLUMN worker_losses INTEGER NOT NULL DEFAULT 0;
+    PRAGMA user_version = 2;
     )sql",
 };
 

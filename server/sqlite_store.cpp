@@ -456,26 +456,43 @@ class SqliteStore final : public Store {
 
   // ---- the process's life ----
 
-  int recover_interrupted_jobs() override {
+  RecoveryOutcome recover_interrupted_jobs(int max_attempts,
+                                           const std::function<std::string(int losses)>& lost_error) override {
     auto connection = pool_.checkout();
     return sqlite::run_transaction(*connection, TransactionKind::write, [&] {
+      RecoveryOutcome outcome;
       const std::string now = sqlite::now_rfc3339();
       // Cancellation was asked for before the crash: honour it rather than run the job again.
       auto cancel = connection->prepare(
           "UPDATE jobs SET state = 'cancelled', finished_at = ?1 WHERE state = 'running' AND cancel_requested = 1");
       cancel.bind_text(1, now);
       cancel.run();
-      const int cancelled = connection->changes();
+      outcome.cancelled = connection->changes();
+      connection->prepare("UPDATE jobs SET worker_losses = worker_losses + 1 WHERE state = 'running'").run();
+      // The attempt that died leaves nothing behind: its history and estimates go.
       connection
           ->prepare("DELETE FROM job_history WHERE job_id IN (SELECT id FROM jobs WHERE state = 'running')")
           .run();
       connection->prepare("DELETE FROM estimates WHERE job_id IN (SELECT id FROM jobs WHERE state = 'running')").run();
+      // A job that took its worker down max_attempts times is failed, never run again.
+      std::vector<std::pair<std::string, int>> lost;
+      auto poisoned = connection->prepare("SELECT id, worker_losses FROM jobs WHERE state = 'running' AND worker_losses >= ?1");
+      poisoned.bind_integer(1, max_attempts);
+      while (poisoned.step()) lost.emplace_back(poisoned.text(0), static_cast<int>(poisoned.integer(1)));
+      for (const auto& [id, losses] : lost) {
+        auto fail = connection->prepare(
+            "UPDATE jobs SET state = 'failed', finished_at = ?2, error = ?3 WHERE id = ?1 AND state = 'running'");
+        fail.bind_text(1, id).bind_text(2, now).bind_text(3, lost_error(losses));
+        fail.run();
+        outcome.failed.push_back(id);
+      }
       connection
           ->prepare(
               "UPDATE jobs SET state = 'queued', started_at = NULL, evaluations = 0, best_cost = NULL "
               "WHERE state = 'running'")
           .run();
-      return cancelled + connection->changes();
+      outcome.requeued = connection->changes();
+      return outcome;
     });
   }
 

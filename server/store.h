@@ -14,6 +14,7 @@
 #include "manipid/api/records.h"
 #include "manipid/core/trajectory.h"
 
+#include <functional>
 #include <map>
 #include <memory>
 #include <optional>
@@ -63,6 +64,13 @@ struct EstimateRow {
 
 enum class CancelOutcome { not_found, cancelled_now, requested, already_finished };
 
+/// What start-up recovery did with the jobs a dead process left running.
+struct RecoveryOutcome {
+  int requeued = 0;                  ///< back in the queue, to run again
+  int cancelled = 0;                 ///< their cancellation had been asked for: cancelled
+  std::vector<std::string> failed;   ///< ids of jobs whose worker died too often: failed for good
+};
+
 class Store {
  public:
   virtual ~Store() = default;
@@ -106,9 +114,13 @@ class Store {
   virtual std::optional<api::HistoryOverview> history_overview(const std::string& id, long max_points) = 0;
 
   // ---- the process's life ----
-  /// At start-up: every job left running by a dead process goes back to queued (history
-  /// cleared). Returns how many.
-  virtual int recover_interrupted_jobs() = 0;
+  /// At start-up: every job left running by a dead process counts one more worker loss and
+  /// goes back to queued (history cleared) — unless its cancellation had been asked for
+  /// (cancelled), or it has now lost its worker `max_attempts` times: then it is failed with
+  /// the error `lost_error(losses)` and never runs again, so a job that kills the process
+  /// cannot kill it on every restart. One transaction.
+  virtual RecoveryOutcome recover_interrupted_jobs(int max_attempts,
+                                                   const std::function<std::string(int losses)>& lost_error) = 0;
   virtual std::map<api::JobState, long> count_jobs_by_state() = 0;
 };
 

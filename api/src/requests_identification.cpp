@@ -173,6 +173,7 @@ IdentificationSpec identification_from_json(const nlohmann::json& body) {
     fields::read_parameter_object(*initial, "initial", joints, true,
                                   [&](int index, double number, const std::string&) { theta[index] = number; });
     options.initial = Parameters::from_vector(theta);
+    check_parameter_ranges(options.initial, "initial");
   }
   read_bounds(object, joints, options);
   if (const Json* kp = object.find("kp")) options.controller->kp = fields::read_gains(*kp, "kp", joints);

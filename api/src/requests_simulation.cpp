@@ -120,6 +120,7 @@ SimulationSpec read_simulation(const Json& body, const std::string& path) {
     read_parameter_object(*parameters, object.path("parameters"), joints, true,
                           [&](int index, double number, const std::string&) { theta[index] = number; });
     spec.parameters = Parameters::from_vector(theta);
+    check_parameter_ranges(spec.parameters, object.path("parameters"));
   }
   if (const Json* kp = object.find("kp")) preset.controller.kp = read_gains(*kp, object.path("kp"), joints);
   if (const Json* kd = object.find("kd")) preset.controller.kd = read_gains(*kd, object.path("kd"), joints);

@@ -59,6 +59,7 @@ Setup validate(const RobotModel& model, const Trajectory& data, const Identifica
                               std::to_string(n));
   }
   check_parameters(model, options.initial);
+  check_parameter_ranges(options.initial, "initial");
   setup.names = parameter_names(n);
   setup.initial = options.initial.vector();
   setup.free.assign(2 * n, options.free.empty());
@@ -154,6 +155,27 @@ void apply_uncertainty(IdentificationResult& result, const detail::Uncertainty& 
   result.std_errors = uncertainty.std_errors;
   result.correlation = uncertainty.correlation;
   result.identifiability = uncertainty.report;
+  if (!uncertainty.unavailable.empty()) {
+    result.warnings.push_back("no standard errors or identifiability report: " + uncertainty.unavailable);
+  }
+}
+
+std::string describe_value(double value) {
+  return std::isnan(value) ? "not a number (NaN)" : value > 0 ? "infinite" : "-infinite";
+}
+
+/// A cost that is not a finite number leaves nothing to estimate: fail with the reason.
+void require_finite_costs(const IdentificationResult& result) {
+  if (!std::isfinite(result.initial_cost)) {
+    throw IdentificationError(
+        "the cost at the starting values is " + describe_value(result.initial_cost) +
+        ": the model's torque or the filtered data overflow there; check the initial values and the data's "
+        "sample period and units");
+  }
+  if (!std::isfinite(result.final_cost)) {
+    throw IdentificationError("the cost at the end of the search is " + describe_value(result.final_cost) +
+                              "; narrow the bounds (lower/upper) around physically meaningful values");
+  }
 }
 
 // Gauss–Newton polish of an input-error minimum. The Gram form makes each step exact and
@@ -182,6 +204,7 @@ int refine_input_error(const InputErrorCost& cost, Eigen::VectorXd& theta, doubl
     }
     for (int a = 0; a < p; ++a)
       for (int b = 0; b < p; ++b) H(a, b) = scale[a] * information(free_index[a], free_index[b]) * scale[b];
+    if (!H.allFinite() || !g.allFinite()) break;  // nothing to polish with; never NaN into a solver
     const Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd> eigen(H);
     const double largest = eigen.eigenvalues().maxCoeff();
     Eigen::VectorXd step = Eigen::VectorXd::Zero(p);
@@ -251,6 +274,7 @@ IdentificationResult identify(const RobotModel& model, const Trajectory& data, c
     };
     const detail::MinimizeOutcome outcome = detail::minimize(cost, setup.initial, minimize_settings(options, setup, history));
     apply_outcome(result, outcome);
+    require_finite_costs(result);
     if (options.refine && !result.cancelled) {
       long index = result.evaluations;
       result.refinement_steps =
@@ -301,6 +325,7 @@ IdentificationResult identify(const RobotModel& model, const Trajectory& data, c
       const detail::MinimizeOutcome outcome =
           detail::minimize(cost, setup.initial, minimize_settings(options, setup, history));
       apply_outcome(result, outcome);
+      require_finite_costs(result);
       output_error.evaluate(Parameters::from_vector(result.estimate), &residual);
       jacobian = detail::output_error_jacobian(output_error, result.estimate, residual, setup.free, basis);
     } else {
@@ -315,6 +340,7 @@ IdentificationResult identify(const RobotModel& model, const Trajectory& data, c
       result.cancelled = outcome.cancelled;
       residual = outcome.residual;
       jacobian = outcome.jacobian;
+      require_finite_costs(result);
     }
     result.simulations = output_error.simulations();
     const double dof = std::max(1.0, static_cast<double>(output_error.residual_count() - free_count));
@@ -329,6 +355,7 @@ IdentificationResult identify(const RobotModel& model, const Trajectory& data, c
     apply_uncertainty(result, detail::assess_uncertainty(uncertainty));
   }
 
+  require_finite_costs(result);
   result.history = history.records();
   result.wall_seconds = std::chrono::duration<double>(Clock::now() - started).count();
   return result;

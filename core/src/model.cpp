@@ -3,6 +3,7 @@
 
 #include <charconv>
 #include <cmath>
+#include <sstream>
 
 namespace manipid {
 
@@ -82,6 +83,23 @@ void check_parameters(const RobotModel& model, const Parameters& parameters) {
   const Eigen::VectorXd theta = parameters.vector();
   for (int i = 0; i < theta.size(); ++i) {
     if (!std::isfinite(theta[i])) throw InputError(names[i], names[i] + " is not a finite number");
+  }
+}
+
+void check_parameter_ranges(const Parameters& parameters, const std::string& prefix) {
+  const int n = parameters.joint_count();
+  const auto names = parameter_names(n);
+  const Eigen::VectorXd theta = parameters.vector();
+  for (int i = 0; i < theta.size(); ++i) {
+    const bool mass = i < n;
+    const ValueRange range = mass ? kMassRange : kLengthRange;
+    if (theta[i] >= range.lowest && theta[i] <= range.highest) continue;  // false for NaN too
+    const std::string field = prefix.empty() ? names[i] : prefix + "." + names[i];
+    std::ostringstream text;
+    text.precision(6);
+    text << field << " = " << theta[i] << (mass ? " kg" : " m") << " is not a sensible link " << (mass ? "mass" : "length")
+         << ": give a value from " << range.lowest << " to " << range.highest << (mass ? " kg" : " m");
+    throw InputError(field, text.str());
   }
 }
 

@@ -107,6 +107,14 @@ double objective(unsigned dimension, const double* x, double* gradient_out, void
   }
   if (settings.history) settings.history->add(index, cost, context.theta);
   if (settings.on_evaluation) settings.on_evaluation(index, cost, context.theta);
+  if (!std::isfinite(cost)) {
+    // Nothing can be learnt from a start without a cost: stop at once, the caller says why.
+    if (context.evaluations == 1) throw nlopt::forced_stop();
+    // Later, a point where the model overflows is one to move away from: NLopt's models
+    // take +inf as "worse than anything", NaN would poison them.
+    if (gradient_out) std::fill(gradient_out, gradient_out + dimension, 0.0);
+    return std::numeric_limits<double>::infinity();
+  }
   return cost;
 }
 
@@ -175,6 +183,7 @@ MinimizeOutcome minimize(const CostFunction& cost, const Eigen::VectorXd& initia
   }
   outcome.cancelled = context.cancelled;
   if (context.cancelled) outcome.stop_reason = "cancelled";
+  if (context.evaluations > 0 && !std::isfinite(context.first_cost)) outcome.stop_reason = "non_finite_start";
   // Report the best point evaluated: NLopt's x is not always the best after a forced stop.
   outcome.theta = context.best_theta;
   outcome.cost = context.evaluations > 0 ? context.best_cost : cost(initial, nullptr);

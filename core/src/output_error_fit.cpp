@@ -96,6 +96,10 @@ GaussNewtonOutcome gauss_newton_output_error(const OutputErrorCost& cost, const 
     }
     const Eigen::MatrixXd normal = reduced.transpose() * reduced;
     const Eigen::VectorXd gradient = reduced.transpose() * outcome.residual;
+    if (!normal.allFinite() || !gradient.allFinite()) {  // a diverged simulation: no step to solve for
+      outcome.stop_reason = "non_finite_jacobian";
+      break;
+    }
     const double largest = normal.diagonal().maxCoeff();
     // Statistically converged: the full Gauss–Newton step is under a tenth of a standard
     // error (its Mahalanobis length under the residual variance), so further steps would

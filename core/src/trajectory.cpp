@@ -72,6 +72,12 @@ void Trajectory::validate() const {
   // Every algorithm uses one sample period, so successive differences must all equal
   // t[1] − t[0]; 1e-6 relative leaves room for times printed with limited digits.
   const double period = t[1] - t[0];
+  if (period > 0.0 && !(period >= kShortestSamplePeriod && period <= kLongestSamplePeriod)) {
+    std::ostringstream text;
+    text << "the sample period t[1] - t[0] = " << period << " s is outside the range manipid works with, "
+         << kShortestSamplePeriod << " to " << kLongestSamplePeriod << " s";
+    throw InputError("t", text.str());
+  }
   const double tolerance = 1e-6 * period;
   for (Eigen::Index i = 1; i < t.size(); ++i) {
     const double step = t[i] - t[i - 1];

@@ -51,13 +51,24 @@ Uncertainty assess_uncertainty(const UncertaintyInput& input) {
   result.correlation = Eigen::MatrixXd::Constant(p, p, nan);
   if (p == 0) return result;
 
+  // Nothing non-finite ever reaches an eigensolver (Eigen 3.4's SelfAdjointEigenSolver reads
+  // out of bounds on NaN input): say why instead.
+  const Eigen::MatrixXd& structure = input.structure.size() ? input.structure : input.information;
+  if (!input.theta.allFinite()) {
+    result.unavailable = "the estimate is not a finite number";
+    return result;
+  }
+  if (!input.information.allFinite() || !structure.allFinite() || !std::isfinite(input.residual_variance)) {
+    result.unavailable = "the model's sensitivities at the estimate are not finite numbers";
+    return result;
+  }
+
   Eigen::VectorXd scale(p);
   for (int a = 0; a < p; ++a) scale[a] = input.theta[free_index[a]] != 0.0 ? std::abs(input.theta[free_index[a]]) : 1.0;
   IdentifiabilityReport& report = result.report;
 
   // Which directions the data cannot see, decided on the exact-structure matrix.
   Eigen::MatrixXd null_basis;
-  const Eigen::MatrixXd& structure = input.structure.size() ? input.structure : input.information;
   const Eigen::MatrixXd basis = identifiable_basis(structure, input.theta, input.free, &null_basis);
   std::vector<Eigen::VectorXd> null_directions;
   std::set<int> unidentifiable;  // free positions
@@ -74,8 +85,13 @@ Uncertainty assess_uncertainty(const UncertaintyInput& input) {
   for (int a = 0; a < p; ++a)
     for (int b = 0; b < p; ++b) scaled(a, b) = scale[a] * input.information(free_index[a], free_index[b]) * scale[b];
   const Eigen::MatrixXd reduced = basis.transpose() * scaled * basis;
-  const Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd> eigen(reduced);
-  const Eigen::VectorXd values = eigen.eigenvalues().cwiseMax(0.0);  // ascending
+  Eigen::VectorXd values;  // ascending
+  Eigen::MatrixXd vectors;
+  if (reduced.size() > 0) {  // an empty matrix when the data see no direction at all
+    const Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd> eigen(reduced);
+    values = eigen.eigenvalues().cwiseMax(0.0);
+    vectors = eigen.eigenvectors();
+  }
   const double largest = values.size() ? values.maxCoeff() : 0.0;
   Eigen::VectorXd singular = Eigen::VectorXd::Zero(p);
   singular.head(values.size()) = values.reverse().cwiseSqrt();
@@ -83,14 +99,16 @@ Uncertainty assess_uncertainty(const UncertaintyInput& input) {
 
   Eigen::MatrixXd inverse = Eigen::MatrixXd::Zero(p, p);
   for (int k = 0; k < values.size(); ++k) {
-    const Eigen::VectorXd v = basis * eigen.eigenvectors().col(k);
+    const Eigen::VectorXd v = basis * vectors.col(k);
     const double ratio = largest > 0 ? std::sqrt(values[k] / largest) : 0.0;
     if (values[k] <= 0.0) continue;
     inverse += v * v.transpose() / values[k];
     if (ratio < kWeakRatio) {
+      // The parameters that carry this direction: its components within a third of the largest.
       std::vector<std::string> involved;
+      const double biggest = v.cwiseAbs().maxCoeff();
       for (int a = 0; a < p; ++a) {
-        if (std::abs(v[a]) > 0.2) involved.push_back(input.names[free_index[a]]);
+        if (std::abs(v[a]) >= biggest / 3.0) involved.push_back(input.names[free_index[a]]);
       }
       std::ostringstream text;
       text << "the data barely separate " << join(involved) << " (relative singular value " << ratio
@@ -184,9 +202,13 @@ Eigen::MatrixXd identifiable_basis(const Eigen::MatrixXd& information, const Eig
       scaled(a, b) = sa * information(free_index[a], free_index[b]) * sb;
     }
   }
+  if (p == 0 || !scaled.allFinite()) {
+    if (null_basis) *null_basis = Eigen::MatrixXd::Identity(p, p);
+    return Eigen::MatrixXd(p, 0);
+  }
   const Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd> eigen(scaled);
   const Eigen::VectorXd values = eigen.eigenvalues().cwiseMax(0.0);
-  const double largest = p ? values.maxCoeff() : 0.0;
+  const double largest = values.maxCoeff();
   int null_count = 0;
   while (null_count < p && (largest <= 0 || std::sqrt(values[null_count] / largest) < kUnidentifiableRatio)) ++null_count;
   if (null_basis) *null_basis = eigen.eigenvectors().leftCols(null_count);

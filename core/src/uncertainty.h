@@ -29,6 +29,8 @@ struct Uncertainty {
   Eigen::VectorXd std_errors;   // all parameters; NaN when fixed or unidentifiable
   Eigen::MatrixXd correlation;  // free × free; NaN rows for unidentifiable ones
   IdentifiabilityReport report;
+  // Why nothing could be assessed (a non-finite estimate or information matrix), else empty.
+  std::string unavailable;
 };
 
 /// Directions whose scaled singular value is below this fraction of the largest are
@@ -39,7 +41,9 @@ constexpr double kWeakRatio = 1e-3;
 Uncertainty assess_uncertainty(const UncertaintyInput& input);
 
 /// Orthonormal basis (columns, in relative coordinates δθ_i/θ_i over the free parameters) of
-/// the directions `information` can see, and of those it cannot (`null_basis`).
+/// the directions `information` can see, and of those it cannot (`null_basis`). A matrix or
+/// θ with a non-finite entry sees nothing: every direction goes to the null basis (no
+/// eigensolver is ever handed NaN or an empty matrix).
 Eigen::MatrixXd identifiable_basis(const Eigen::MatrixXd& information, const Eigen::VectorXd& theta,
                                    const std::vector<bool>& free, Eigen::MatrixXd* null_basis = nullptr);
 

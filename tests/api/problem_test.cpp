@@ -33,6 +33,9 @@ const std::vector<ExpectedRow>& table() {
       {ProblemKind::queue_full, 429, "QUEUE_FULL"},
       {ProblemKind::shutting_down, 503, "SHUTTING_DOWN"},
       {ProblemKind::internal, 500, "INTERNAL"},
+      {ProblemKind::job_failed, 500, "JOB_FAILED"},
+      {ProblemKind::not_computable, 422, "NOT_COMPUTABLE"},
+      {ProblemKind::worker_lost, 500, "WORKER_LOST"},
   };
   return rows;
 }

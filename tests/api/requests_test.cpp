@@ -688,6 +688,12 @@ TEST(IdentificationJson, InitialValueErrors) {
   expect_identification_error(with(identify_dataset, "initial", {{"m2", -25}}), "initial.m2", "must not be negative, got -25");
   expect_identification_error(with(identify_dataset, "initial", {{"m2", nullptr}}), "initial.m2", "got null");
   expect_identification_error(with(identify_dataset, "initial", {{"M2", 1}}), "initial.M2", "unknown parameter");
+  // The core's one range rule, with the request's field names (hardening item 1).
+  expect_identification_error(with(identify_dataset, "initial", {{"m1", 1e-100}}), "initial.m1",
+                              "initial.m1 = 1e-100 kg is not a sensible link mass: give a value from 0.001 to 100000 kg");
+  expect_identification_error(with(identify_dataset, "initial", {{"m2", 1e300}}), "initial.m2", "1e+300 kg");
+  expect_identification_error(with(identify_dataset, "initial", {{"l4", 0}}), "initial.l4", "sensible link length");
+  expect_simulation_error({{"parameters", {{"m3", 1e-100}}}}, "parameters.m3", "is not a sensible link mass");
 }
 
 TEST(IdentificationJson, BoundsFillBothVectorsWithTheCoreDefaults) {

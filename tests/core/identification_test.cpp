@@ -234,13 +234,16 @@ TEST(Identification, FlagsNothingWhenEverythingIsIdentifiable) {
   for (int i = 0; i < 4; ++i) EXPECT_FALSE(std::isnan(result.std_errors[i])) << i;
 }
 
-void expect_input_error(const std::function<void()>& action, const std::string& field) {
+/// Runs `action`, expects an InputError naming `field`, returns its message.
+std::string expect_input_error(const std::function<void()>& action, const std::string& field) {
   try {
     action();
     ADD_FAILURE() << "expected InputError on " << field;
   } catch (const InputError& error) {
     EXPECT_EQ(error.field(), field) << error.what();
+    return error.what();
   }
+  return "";
 }
 
 TEST(Identification, RejectsUnusableRequestsNamingTheField) {
@@ -276,6 +279,57 @@ TEST(Identification, RejectsUnusableRequestsNamingTheField) {
     identify(preset.model, data, options);
   }, "samples");
   expect_input_error([&] { parse_identification_method("gradient-descent"); }, "method");
+}
+
+TEST(Identification, StartingValuesOutsideTheSensibleRangeAreInputErrors) {
+  // 1e-100 everywhere once crashed the process in the eigensolver of assess_uncertainty.
+  const Preset preset = cedro2009();
+  const Trajectory& data = paper_run(KineticEnergy::complete);
+  for (const double value : {0.0, 1e-100, 1e-320, -1.0, 1e300}) {
+    for (const char* algorithm : {"LN_BOBYQA", "LD_SLSQP", "LN_SBPLX"}) {
+      SCOPED_TRACE(std::to_string(value) + " " + algorithm);
+      IdentificationOptions options = paper_options(preset);
+      options.algorithm = algorithm;
+      options.initial = Parameters(Eigen::VectorXd::Constant(4, value), Eigen::VectorXd::Constant(4, value));
+      expect_input_error([&] { identify(preset.model, data, options); }, "initial.m1");
+    }
+  }
+  IdentificationOptions options = paper_options(preset);
+  options.initial.length[2] = 2e-4;
+  expect_input_error([&] { identify(preset.model, data, options); }, "initial.l3");
+  options.initial.length[2] = kLengthRange.lowest;  // the edges themselves are sensible
+  options.initial.mass[0] = kMassRange.highest;
+  options.max_evaluations = 5;
+  EXPECT_NO_THROW(identify(preset.model, data, options));
+}
+
+TEST(Identification, ACostThatIsNotFiniteAtTheStartIsAnIdentificationError) {
+  // Torques of 1e200 N·m: each squared residual overflows, there is nothing to minimise. This
+  // used to end "succeeded" with a null cost and the start as the estimate.
+  const Preset preset = cedro2009();
+  Trajectory data = paper_run(KineticEnergy::complete);
+  data.tau.setConstant(1e200);
+  for (const auto method : {IdentificationMethod::input_error, IdentificationMethod::two_stage}) {
+    IdentificationOptions options = paper_options(preset);
+    options.method = method;
+    try {
+      identify(preset.model, data, options);
+      ADD_FAILURE() << "expected an IdentificationError";
+    } catch (const IdentificationError& error) {
+      EXPECT_NE(std::string(error.what()).find("the cost at the starting values is infinite"), std::string::npos)
+          << error.what();
+    }
+  }
+}
+
+TEST(ParameterRanges, NameTheFieldTheUnitAndTheRange) {
+  Parameters parameters(Eigen::Vector2d(1.0, 2.0), Eigen::Vector2d(0.5, 0.5));
+  EXPECT_NO_THROW(check_parameter_ranges(parameters, "initial"));
+  parameters.length[1] = 1e3;
+  const std::string message = expect_input_error([&] { check_parameter_ranges(parameters, "initial"); }, "initial.l2");
+  EXPECT_EQ(message, "initial.l2 = 1000 m is not a sensible link length: give a value from 0.001 to 100 m");
+  parameters.length[1] = NAN;
+  expect_input_error([&] { check_parameter_ranges(parameters, ""); }, "l2");
 }
 
 }  // namespace

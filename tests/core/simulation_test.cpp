@@ -562,5 +562,20 @@ TEST(Trajectory, ValidateChecksTheClock) {
   expect_input_error([&] { trajectory.validate(); }, "t");
 }
 
+TEST(Trajectory, ValidateChecksTheSamplePeriodIsInAWorkableRange) {
+  // A period of 1e-320 s was accepted at upload; the filters' 1/Δ² then overflow.
+  for (const double period : {1e-320, 1e-7, 11.0}) {
+    SCOPED_TRACE(period);
+    Trajectory trajectory = small_trajectory();
+    for (Eigen::Index i = 0; i < trajectory.t.size(); ++i) trajectory.t[i] = static_cast<double>(i) * period;
+    EXPECT_NE(expect_input_error([&] { trajectory.validate(); }, "t").find("sample period"), std::string::npos);
+  }
+  for (const double period : {kShortestSamplePeriod, kLongestSamplePeriod}) {
+    Trajectory trajectory = small_trajectory();
+    for (Eigen::Index i = 0; i < trajectory.t.size(); ++i) trajectory.t[i] = static_cast<double>(i) * period;
+    EXPECT_NO_THROW(trajectory.validate());
+  }
+}
+
 }  // namespace
 }  // namespace manipid

@@ -112,6 +112,12 @@ class StoreTest : public ::testing::Test {
     return outcome.job.id;
   }
 
+  /// Start-up recovery as `manipid serve` does it, with the default of 3 worker deaths.
+  RecoveryOutcome recover(int max_attempts = 3) {
+    return store_->recover_interrupted_jobs(max_attempts,
+                                            [](int losses) { return "{\"lost\": " + std::to_string(losses) + "}"; });
+  }
+
   fs::path directory_;
   std::string path_;
   std::unique_ptr<Store> store_;
@@ -561,7 +567,10 @@ TEST_F(StoreTest, RecoverInterruptedJobsAfterReopen) {
   ASSERT_EQ(store_->cancel_job(cancelling), CancelOutcome::requested);
 
   reopen();  // as if the process had died with the jobs running
-  EXPECT_EQ(store_->recover_interrupted_jobs(), 2);
+  const RecoveryOutcome recovered = recover();
+  EXPECT_EQ(recovered.requeued, 1);
+  EXPECT_EQ(recovered.cancelled, 1);
+  EXPECT_TRUE(recovered.failed.empty());
   auto job = store_->find_job(interrupted);
   EXPECT_EQ(job->state, JobState::queued);
   EXPECT_EQ(job->attempts, 1);
@@ -570,7 +579,7 @@ TEST_F(StoreTest, RecoverInterruptedJobsAfterReopen) {
   EXPECT_TRUE(store_->history(interrupted, {})->items.empty());
   EXPECT_EQ(store_->find_job(cancelling)->state, JobState::cancelled);
   EXPECT_EQ(store_->find_job(waiting)->state, JobState::queued);
-  EXPECT_EQ(store_->recover_interrupted_jobs(), 0);
+  EXPECT_EQ(recover().requeued, 0);
 
   // Back in submission order; the interrupted job starts its second attempt.
   const auto first = store_->claim_next_job();
@@ -578,6 +587,49 @@ TEST_F(StoreTest, RecoverInterruptedJobsAfterReopen) {
   EXPECT_EQ(first->id, interrupted);
   EXPECT_EQ(first->attempts, 2);
   EXPECT_EQ(store_->claim_next_job()->id, waiting);
+}
+
+TEST_F(StoreTest, AJobThatKillsItsWorkerThreeTimesIsFailedNotRunAgain) {
+  const auto poison = submit();
+  const auto innocent = submit();
+  for (int death = 1; death <= 3; ++death) {
+    SCOPED_TRACE(death);
+    const auto claimed = store_->claim_next_job();
+    ASSERT_TRUE(claimed);
+    ASSERT_EQ(claimed->id, poison);  // oldest first: the poison job always comes back first
+    reopen();                        // the process died while running it
+    const RecoveryOutcome recovered = recover();
+    if (death < 3) {
+      EXPECT_EQ(recovered.requeued, 1);
+      EXPECT_TRUE(recovered.failed.empty());
+      EXPECT_EQ(store_->find_job(poison)->state, JobState::queued);
+    } else {
+      EXPECT_EQ(recovered.requeued, 0);
+      EXPECT_EQ(recovered.failed, std::vector<std::string>{poison});
+      const auto job = store_->find_job(poison);
+      EXPECT_EQ(job->state, JobState::failed);
+      EXPECT_EQ(job->error, "{\"lost\": 3}");
+      EXPECT_NE(job->finished_at, "");
+    }
+  }
+  // The queue moves on: the next claim is the innocent job, and nothing else is left.
+  const auto next = store_->claim_next_job();
+  ASSERT_TRUE(next);
+  EXPECT_EQ(next->id, innocent);
+  EXPECT_FALSE(store_->claim_next_job());
+}
+
+TEST_F(StoreTest, AGracefulRequeueIsNotAWorkerDeath) {
+  const auto id = submit();
+  for (int shutdown = 0; shutdown < 5; ++shutdown) {
+    ASSERT_EQ(store_->claim_next_job()->id, id);
+    store_->requeue_job(id);  // SIGTERM: the job was handed back, not lost
+  }
+  ASSERT_EQ(store_->claim_next_job()->id, id);
+  reopen();
+  const RecoveryOutcome recovered = recover();
+  EXPECT_EQ(recovered.requeued, 1);  // one death so far, not six
+  EXPECT_TRUE(recovered.failed.empty());
 }
 
 TEST_F(StoreTest, EverythingSurvivesReopen) {

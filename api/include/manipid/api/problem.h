@@ -29,6 +29,10 @@ enum class ProblemKind {
   queue_full,            ///< 429 the job queue is at --queue-limit (with Retry-After)
   shutting_down,         ///< 503 the server is stopping
   internal,              ///< 500 a bug; the detail never carries internals
+  // A job's `error` (the request was accepted; the run could not finish):
+  job_failed,            ///< 500 the computation could not finish (a diverging simulation, a store failure)
+  not_computable,        ///< 422 the data and starting values give no finite cost to minimise
+  worker_lost,           ///< 500 the process running the job died --max-attempts times: never run again
 };
 
 struct Problem {

@@ -29,6 +29,7 @@
 #include <atomic>
 #include <functional>
 #include <optional>
+#include <stdexcept>
 #include <string>
 #include <vector>
 
@@ -162,9 +163,19 @@ struct IdentificationResult {
   std::vector<HistoryRecord> history;  ///< bounded, see IdentificationOptions::history_limit
 };
 
+/// The identification could not produce an estimate although each input was well-formed on
+/// its own: the cost is not a finite number at the starting values (or at the end). The
+/// message says so in the user's terms and what to check.
+class IdentificationError : public std::runtime_error {
+ public:
+  using std::runtime_error::runtime_error;
+};
+
 /// Estimates the parameters of `model` from `data`. Throws InputError for unusable input
-/// (unknown names, bounds that exclude the start, too few samples for the filter, missing
-/// ref/gains for the chosen method, ...); everything else is reported in the result.
+/// (unknown names, starting values outside kMassRange/kLengthRange, bounds that exclude the
+/// start, too few samples for the filter, missing ref/gains for the chosen method, ...) and
+/// IdentificationError when the cost is not finite at the start or the end; everything else
+/// is reported in the result.
 IdentificationResult identify(const RobotModel& model, const Trajectory& data, const IdentificationOptions& options);
 
 }  // namespace manipid

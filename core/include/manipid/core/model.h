@@ -108,4 +108,21 @@ int parameter_index(const std::string& name, int joint_count);
 /// Throws InputError unless the parameters fit the model (sizes) and are finite.
 void check_parameters(const RobotModel& model, const Parameters& parameters);
 
+/// The values a link's mass and length can sensibly take, for values a user gives: starting
+/// values of an identification and the robot a simulation runs. A gram to a hundred tonnes,
+/// a millimetre to a hundred metres — wide for any manipulator, narrow enough that products
+/// such as m·l² (down to 1e-9, up to 1e9) and the filtered torques stay far from underflow
+/// and overflow. Where the optimiser may go afterwards is set by the bounds, not by these.
+struct ValueRange {
+  double lowest = 0.0;
+  double highest = 0.0;
+};
+inline constexpr ValueRange kMassRange{1e-3, 1e5};    ///< kg
+inline constexpr ValueRange kLengthRange{1e-3, 1e2};  ///< m
+
+/// Throws InputError unless every mass lies in kMassRange and every length in kLengthRange.
+/// The field is `prefix` + "." + the parameter name ("initial.m2"), or the bare name when
+/// `prefix` is empty; the message says the value, the unit and the range.
+void check_parameter_ranges(const Parameters& parameters, const std::string& prefix);
+
 }  // namespace manipid

@@ -5,6 +5,12 @@
 
 namespace manipid {
 
+/// The sample periods a trajectory may have, s: a megahertz logger to one sample in ten
+/// seconds. Outside them the differential filters' scaling (1/Δ, 1/Δ²) leaves the range
+/// where double arithmetic is meaningful, or no robot motion is left to see.
+inline constexpr double kShortestSamplePeriod = 1e-6;
+inline constexpr double kLongestSamplePeriod = 10.0;
+
 /// Uniformly sampled joint data. Matrices are samples × joints (column-major, so each
 /// joint's signal is contiguous). Units: t s, q rad, tau N·m, ref rad.
 struct Trajectory {
@@ -21,7 +27,7 @@ struct Trajectory {
   double dt() const { return samples() > 1 ? t[1] - t[0] : 0.0; }
 
   /// Throws InputError unless sizes agree, every value is finite and t is increasing and
-  /// uniform to a relative 1e-6 of dt.
+  /// uniform to a relative 1e-6 of dt, with dt in [kShortestSamplePeriod, kLongestSamplePeriod].
   void validate() const;
 };
 
