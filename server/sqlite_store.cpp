@@ -91,7 +91,7 @@ class SqliteStore final : public Store {
       dataset.source_job = source_job;
       dataset.joints = joints;
       dataset.samples = samples;
-      dataset.dt = data.dt();
+      dataset.dt = data.sample_period();  // uniform: t[1] − t[0]; jittery: the median step
       dataset.has_torque = data.has_torque();
       dataset.has_reference = data.has_reference();
 

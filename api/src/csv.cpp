@@ -369,12 +369,14 @@ Trajectory trajectory_from_csv(const CsvTable& table, bool require_torque) {
                                  std::to_string(joint_count) + " are required)");
   }
   const int reference_count = numbered_group(table, "ref", joint_count);
+  const int rate_count = numbered_group(table, "qd", joint_count);
 
   Trajectory trajectory;
   trajectory.t = table.column("t");
   trajectory.q = gather(table, "q", joint_count);
   trajectory.tau = gather(table, "tau", torque_count);
   trajectory.ref = gather(table, "ref", reference_count);
+  trajectory.qd = gather(table, "qd", rate_count);
   trajectory.validate();
   return trajectory;
 }
@@ -392,6 +394,7 @@ CsvTable trajectory_to_csv(const Trajectory& trajectory) {
   check_rows(trajectory.q, "q");
   check_rows(trajectory.tau, "tau");
   check_rows(trajectory.ref, "ref");
+  check_rows(trajectory.qd, "qd");
 
   CsvTable table;
   table.columns.emplace_back("t");
@@ -402,6 +405,9 @@ CsvTable trajectory_to_csv(const Trajectory& trajectory) {
   if (trajectory.has_reference()) {
     for (int joint = 1; joint <= joint_count; ++joint) table.columns.push_back(numbered("ref", joint));
   }
+  if (trajectory.has_rates()) {
+    for (int joint = 1; joint <= joint_count; ++joint) table.columns.push_back(numbered("qd", joint));
+  }
   table.data.resize(samples, static_cast<Eigen::Index>(table.columns.size()));
   Eigen::Index column = 0;
   table.data.col(column++) = trajectory.t;
@@ -411,7 +417,11 @@ CsvTable trajectory_to_csv(const Trajectory& trajectory) {
     table.data.middleCols(column, joint_count) = trajectory.tau;
     column += joint_count;
   }
-  if (trajectory.has_reference()) table.data.middleCols(column, joint_count) = trajectory.ref;
+  if (trajectory.has_reference()) {
+    table.data.middleCols(column, joint_count) = trajectory.ref;
+    column += joint_count;
+  }
+  if (trajectory.has_rates()) table.data.middleCols(column, joint_count) = trajectory.qd;
   return table;
 }
 

@@ -3,6 +3,7 @@
 
 #include "manipid/api/requests.h"
 #include "manipid/core/input_error.h"
+#include "manipid/core/resample.h"
 
 #include <cmath>
 
@@ -59,6 +60,7 @@ Trajectory thin(const Trajectory& data, long max_points) {
   if (plot_stride(data.samples(), max_points) == 1) return data;
   const std::vector<long> rows = plot_indices(data.samples(), max_points);
   const auto pick_rows = [&rows](const Eigen::MatrixXd& matrix) {
+    if (matrix.cols() == 0) return Eigen::MatrixXd();  // an absent block stays absent
     Eigen::MatrixXd out(static_cast<Eigen::Index>(rows.size()), matrix.cols());
     for (std::size_t r = 0; r < rows.size(); ++r) out.row(static_cast<Eigen::Index>(r)) = matrix.row(rows[r]);
     return out;
@@ -68,6 +70,7 @@ Trajectory thin(const Trajectory& data, long max_points) {
   thinned.q = pick_rows(data.q);
   thinned.tau = pick_rows(data.tau);
   thinned.ref = pick_rows(data.ref);
+  thinned.qd = pick_rows(data.qd);
   return thinned;
 }
 
@@ -80,8 +83,10 @@ nlohmann::ordered_json trajectory_to_json(const Trajectory& data) {
 }
 
 nlohmann::ordered_json torque_fit_to_json(const std::string& request_json, const std::string& result_json,
-                                          const Trajectory& data, long max_points) {
+                                          const Trajectory& stored, long max_points) {
   const IdentificationSpec spec = identification_from_json(nlohmann::json::parse(request_json));
+  // The samples the identification saw: trimmed and on its uniform grid.
+  const Trajectory data = prepare_data(stored, spec.options.preparation);
   const nlohmann::json result = nlohmann::json::parse(result_json);
   const RobotModel& model = spec.preset.model;
   if (data.joint_count() != model.joint_count()) {

@@ -240,10 +240,11 @@ int refine_input_error(const InputErrorCost& cost, Eigen::VectorXd& theta, doubl
 
 }  // namespace
 
-IdentificationResult identify(const RobotModel& model, const Trajectory& data, const IdentificationOptions& options) {
-  const Setup setup = validate(model, data, options);
+IdentificationResult identify(const RobotModel& model, const Trajectory& measured, const IdentificationOptions& options) {
   const auto started = Clock::now();
   IdentificationResult result;
+  const Trajectory data = prepare_data(measured, options.preparation, &result.warnings);
+  const Setup setup = validate(model, data, options);
   result.method = options.method;
   result.algorithm = options.algorithm;
   result.names = setup.names;

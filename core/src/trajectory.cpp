@@ -1,9 +1,10 @@
 // trajectory.cpp — consistency checks of sampled joint data (Trajectory::validate), so that
-// every algorithm downstream can assume matching sizes, finite values and a uniform clock.
+// every algorithm downstream can assume matching sizes, finite values and increasing time.
 #include "manipid/core/trajectory.h"
 
 #include "manipid/core/model.h"
 
+#include <algorithm>
 #include <cmath>
 #include <sstream>
 #include <string>
@@ -52,6 +53,23 @@ void check_finite(const std::string& field, const Eigen::MatrixXd& values, const
 
 }  // namespace
 
+double Trajectory::median_step() const {
+  if (samples() < 2) return 0.0;
+  Eigen::VectorXd steps = t.tail(t.size() - 1) - t.head(t.size() - 1);
+  auto middle = steps.data() + steps.size() / 2;
+  std::nth_element(steps.data(), middle, steps.data() + steps.size());
+  return *middle;
+}
+
+bool Trajectory::is_uniform() const {
+  if (samples() < 2) return true;
+  const double period = t[1] - t[0];
+  for (Eigen::Index i = 1; i < t.size(); ++i) {
+    if (std::abs((t[i] - t[i - 1]) - period) > 1e-6 * period) return false;
+  }
+  return true;
+}
+
 void Trajectory::validate() const {
   if (q.cols() < 1) throw InputError("q", "q has no joint columns");
   if (t.size() < 2) {
@@ -62,6 +80,7 @@ void Trajectory::validate() const {
   check_columns("q", q, sample_count, joints, false);
   check_columns("tau", tau, sample_count, joints, true);
   check_columns("ref", ref, sample_count, joints, true);
+  check_columns("qd", qd, sample_count, joints, true);
 
   for (Eigen::Index i = 0; i < t.size(); ++i) {
     if (!std::isfinite(t[i])) {
@@ -69,33 +88,23 @@ void Trajectory::validate() const {
                                 describe_sample(t, i));
     }
   }
-  // Every algorithm uses one sample period, so successive differences must all equal
-  // t[1] − t[0]; 1e-6 relative leaves room for times printed with limited digits.
-  const double period = t[1] - t[0];
-  if (period > 0.0 && !(period >= kShortestSamplePeriod && period <= kLongestSamplePeriod)) {
-    std::ostringstream text;
-    text << "the sample period t[1] - t[0] = " << period << " s is outside the range manipid works with, "
-         << kShortestSamplePeriod << " to " << kLongestSamplePeriod << " s";
-    throw InputError("t", text.str());
-  }
-  const double tolerance = 1e-6 * period;
   for (Eigen::Index i = 1; i < t.size(); ++i) {
-    const double step = t[i] - t[i - 1];
-    if (!(step > 0.0)) {
+    if (!(t[i] > t[i - 1])) {
       throw InputError("t", "t is not strictly increasing at " + describe_sample(t, i) +
                                 " (previous t = " + std::to_string(t[i - 1]) + " s)");
     }
-    if (std::abs(step - period) > tolerance) {
-      std::ostringstream text;
-      text.precision(12);
-      text << "t is not uniformly sampled at " << describe_sample(t, i) << ": the step is " << step
-           << " s but t[1] - t[0] = " << period << " s";
-      throw InputError("t", text.str());
-    }
+  }
+  const double period = sample_period();
+  if (!(period >= kShortestSamplePeriod && period <= kLongestSamplePeriod)) {
+    std::ostringstream text;
+    text << "the sample period (the median step of t) is " << period << " s, outside the range manipid works with, "
+         << kShortestSamplePeriod << " to " << kLongestSamplePeriod << " s";
+    throw InputError("t", text.str());
   }
   check_finite("q", q, t);
   check_finite("tau", tau, t);
   check_finite("ref", ref, t);
+  check_finite("qd", qd, t);
 }
 
 }  // namespace manipid

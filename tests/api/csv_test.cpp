@@ -266,13 +266,16 @@ TEST(CsvTrajectory, MismatchedCounts) {
   const InputError gap = trajectory_error("t,q1,q2,q4\n0,1,2,3\n");
   EXPECT_EQ(gap.field(), "q3");
   EXPECT_TRUE(contains(gap.what(), "missing column q3"));
-  // qd1, q_offset and q01 are not angle columns and do not disturb the numbering.
+  // qd1 (a rate), q_offset and q01 are not angle columns and do not disturb the numbering.
   EXPECT_EQ(trajectory_from_csv(parse_csv("t,q1,qd1,q_offset,q01\n0,1,2,3,4\n1,1,2,3,4\n")).joint_count(), 1);
 }
 
 TEST(CsvTrajectory, TimeIsValidated) {
-  // Trajectory::validate (core) checks that time increases uniformly.
-  EXPECT_THROW(trajectory_from_csv(parse_csv("t,q1\n0,1\n0.1,1\n0.5,1\n")), InputError);
+  // Trajectory::validate (core) checks that time strictly increases; jittery steps are accepted
+  // (real loggers), and qd columns are read.
+  const Trajectory jittery = trajectory_from_csv(parse_csv("t,q1,qd1\n0,1,5\n0.1,1,6\n0.25,1,7\n"));
+  EXPECT_EQ(jittery.qd, (Eigen::MatrixXd(3, 1) << 5, 6, 7).finished());
+  EXPECT_EQ(format_csv(trajectory_to_csv(jittery)), "t,q1,qd1\n0,1,5\n0.1,1,6\n0.25,1,7\n");
   EXPECT_THROW(trajectory_from_csv(parse_csv("t,q1\n0,1\n0,1\n")), InputError);
   EXPECT_THROW(trajectory_from_csv(parse_csv("t,q1\n0,1\n")), InputError);  // one sample has no dt
 }

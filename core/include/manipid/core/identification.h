@@ -20,6 +20,7 @@
 
 #include "manipid/core/filters.h"
 #include "manipid/core/model.h"
+#include "manipid/core/resample.h"
 #include "manipid/core/simulation.h"
 #include "manipid/core/trajectory.h"
 
@@ -57,6 +58,9 @@ enum class JointWeighting {
 
 struct IdentificationOptions {
   IdentificationMethod method = IdentificationMethod::input_error;
+  /// What is done to the data first: ramps trimmed, non-uniform time stamps resampled onto a
+  /// uniform grid (with a warning saying so), see resample.h.
+  DataPreparation preparation;
   /// NLopt algorithm: LN_BOBYQA (default), LN_NELDERMEAD, LN_SBPLX (derivative-free),
   /// LD_LBFGS, LD_SLSQP (exact gradient).
   std::string algorithm = "LN_BOBYQA";
