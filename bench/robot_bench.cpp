@@ -1,4 +1,4 @@
-// robot_bench.cpp — cost per call of manipid's robot RNEA and regressor beside Orocos KDL's ChainIdSolver_RNE, on the Panda-like 7-DOF arm.
+// robot_bench.cpp — manipid's robot RNEA and regressor beside KDL's ChainIdSolver_RNE, Panda-like 7-DOF arm.
 //
 // Both solvers run on the same chain (KDL's built straight from urdfdom, tests/core/robot/kdl_reference.h)
 // and cycle through the same 1,024 random states, so neither benefits from a repeated input. KDL's solver

@@ -1,4 +1,4 @@
-// forward_pass.h — the outward sweep shared by the RNEA and the regressor: joint transforms and body kinematics (not installed).
+// forward_pass.h — the outward kinematic sweep shared by the RNEA and the regressor (not installed).
 #pragma once
 
 #include "manipid/core/model.h"

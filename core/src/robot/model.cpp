@@ -1,4 +1,4 @@
-// model.cpp — rigid transforms, the standard inertial parameters' algebra and the Data workspace (robot/model.h, robot/data.h).
+// model.cpp — rigid transforms, standard inertial parameters and the Data workspace (robot/model.h, data.h).
 #include "manipid/core/robot/data.h"
 #include "manipid/core/robot/model.h"
 

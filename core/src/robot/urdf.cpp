@@ -1,4 +1,4 @@
-// urdf.cpp — URDF text → robot::Model: urdfdom parses, this file picks the chain, merges fixed links and checks (robot/urdf.h).
+// urdf.cpp — URDF text → robot::Model: urdfdom parses; chain, merging and checks here (robot/urdf.h).
 #include "manipid/core/robot/urdf.h"
 
 #include "manipid/core/model.h"
@@ -118,7 +118,7 @@ Placement placement_of(const urdf::Pose& pose, const std::string& field, const c
   const Eigen::Quaterniond quaternion(pose.rotation.w, pose.rotation.x, pose.rotation.y, pose.rotation.z);
   placement.rotation = quaternion.toRotationMatrix();
   if (!finite(placement.translation) || !finite(placement.rotation)) {
-    throw InputError(field, field + " has a non-finite " + what + " <origin>");
+    throw InputError(field, field + " has a non-finite " + what);
   }
   return placement;
 }
@@ -127,7 +127,7 @@ Placement placement_of(const urdf::Pose& pose, const std::string& field, const c
 InertialParameters inertial_parameters(const urdf::Link& link, std::vector<std::string>& warnings) {
   const urdf::Inertial& inertial = *link.inertial;
   const std::string field = "link " + link.name;
-  const Placement frame = placement_of(inertial.origin, field, "inertial");
+  const Placement frame = placement_of(inertial.origin, field, "<inertial> <origin>");
   Eigen::Matrix3d inertia;  // about the centre of mass, in the inertial frame
   inertia << inertial.ixx, inertial.ixy, inertial.ixz,  //
       inertial.ixy, inertial.iyy, inertial.iyz,          //
@@ -323,7 +323,8 @@ std::string pick_tip(const Tree& tree, const std::string& base) {
     throw InputError("tip", "the URDF has " + std::to_string(leaves.size()) + " leaves below base link " + base +
                                 " (" + join(leaves) + "): choose the tip link");
   }
-  return leaves.front();  // the base itself when nothing hangs below it
+  if (leaves.front() == base) throw InputError("base", "no joint hangs below base link " + base);
+  return leaves.front();
 }
 
 Eigen::Vector3d gravity_in_base(const Tree& tree, const UrdfOptions& options, const std::string& base) {
@@ -337,7 +338,8 @@ Eigen::Vector3d gravity_in_base(const Tree& tree, const UrdfOptions& options, co
                                    "), so gravity given in the root's frame has no fixed direction in the base's: "
                                    "give gravity in the base frame (GravityFrame::base)");
     }
-    rotation = rotation * placement_of(joint->parent_to_joint_origin_transform, "joint " + joint->name, "joint").rotation;
+    const std::string field = "joint " + joint->name;
+    rotation = rotation * placement_of(joint->parent_to_joint_origin_transform, field, "<origin>").rotation;
   }
   return rotation.transpose() * options.gravity;
 }
@@ -348,6 +350,18 @@ ParsedUrdf parse_urdf(const std::string& xml, const UrdfOptions& options) {
   ParsedUrdf result;
   std::vector<std::string>& warnings = result.warnings;
   const urdf::ModelInterfaceSharedPtr urdf = parse_quietly(xml, warnings);
+  // urdfdom's links hold their children through shared_ptr: in a URDF with a kinematic loop (refused
+  // below) they form a cycle that would never be freed. Cut the links' pointers when done, whatever happens.
+  struct CutLinksOnExit {
+    urdf::ModelInterface& urdf;
+    ~CutLinksOnExit() {
+      for (auto& entry : urdf.links_) {
+        entry.second->child_links.clear();
+        entry.second->child_joints.clear();
+        entry.second->parent_joint.reset();
+      }
+    }
+  } cut_links_on_exit{*urdf};
   const Tree tree(*urdf);
 
   for (const auto& [option, name] : {std::pair{"base", &options.base}, std::pair{"tip", &options.tip}}) {
@@ -377,7 +391,7 @@ ParsedUrdf parse_urdf(const std::string& xml, const UrdfOptions& options) {
     check_chain_joint(*joint);
     on_chain.insert(joint);
     const std::string field = "joint " + joint->name;
-    const Placement joint_pose = pose * placement_of(joint->parent_to_joint_origin_transform, field, "joint");
+    const Placement joint_pose = pose * placement_of(joint->parent_to_joint_origin_transform, field, "<origin>");
     if (is_moving(*joint)) {
       model.joints.push_back(model_joint(*joint, joint_pose, warnings));
       members.emplace_back();
@@ -402,7 +416,7 @@ ParsedUrdf parse_urdf(const std::string& xml, const UrdfOptions& options) {
         if (!is_moving(*joint)) {
           if (b > 0 && joint->mimic) check_chain_joint(*joint);  // a mimic tag on a merged joint: refused
           const Placement child_pose =
-              member.pose * placement_of(joint->parent_to_joint_origin_transform, "joint " + joint->name, "joint");
+              member.pose * placement_of(joint->parent_to_joint_origin_transform, "joint " + joint->name, "<origin>");
           members[b].push_back({&tree.link(joint->child_link_name), child_pose});
         } else {
           warnings.push_back("joint " + joint->name + " (" + type_name(*joint) + ") is not on the chain from " + base +

@@ -1,4 +1,4 @@
-// kdl_reference.h — Orocos KDL chains and trees built straight from urdfdom's parse: the independent reference for the robot tests and bench.
+// kdl_reference.h — Orocos KDL chains and trees built straight from urdfdom: the tests' independent reference.
 //
 // Nothing here goes through manipid's Model: joint origins, axes, types and inertials are read from
 // urdf::ModelInterface and handed to KDL, which does its own fixed-joint merging (Joint::None segments),

@@ -1,4 +1,4 @@
-// kdl_test.cpp — manipid's robot RNEA against Orocos KDL's, with KDL's chain or tree built straight from urdfdom (kdl_reference.h), not from manipid's Model.
+// kdl_test.cpp — manipid's robot RNEA against Orocos KDL's, KDL's chain built from urdfdom, not from our Model.
 #include "kdl_reference.h"
 #include "manipid/core/robot/rnea.h"
 #include "manipid/core/robot/urdf.h"
@@ -51,11 +51,13 @@ TEST(Kdl, ChainIdSolverAgreesOnTheTestArm) {
 }
 
 TEST(Kdl, ChainIdSolverAgreesWithAPrismaticJoint) {
-  const std::string xml = testing::with_replaced(testing::arm7_urdf(), R"(name="j5" type="revolute")", R"(name="j5" type="prismatic")");
+  const std::string xml =
+      testing::with_replaced(testing::arm7_urdf(), R"(name="j5" type="revolute")", R"(name="j5" type="prismatic")");
   const Model model = parse_urdf(xml).model;
   const auto urdf = testing::kdl::parse(xml);
   testing::kdl::ChainDynamics kdl(testing::kdl::chain(*urdf, "world", "flange"), kGravity);
-  worst_relative_error(model, kRigid, standard_parameters(model, kRigid), kdl, 200, 2, "arm7 with prismatic j5 vs ChainIdSolver_RNE");
+  worst_relative_error(model, kRigid, standard_parameters(model, kRigid), kdl, 200, 2,
+                       "arm7 with prismatic j5 vs ChainIdSolver_RNE");
 }
 
 TEST(Kdl, TreeIdSolverAgreesWithSideBranches) {

@@ -1,4 +1,4 @@
-// regressor_test.cpp — τ = Y π against the RNEA on random states and consistent parameters, the stacked layout, π's order and names, the URDF's own π.
+// regressor_test.cpp — τ = Y π against the RNEA, the stacked layout, π's order and names, the URDF's own π.
 #include "manipid/core/model.h"
 #include "manipid/core/robot/regressor.h"
 #include "manipid/core/robot/rnea.h"
@@ -15,7 +15,8 @@ using testing::random_vector;
 std::vector<ParameterLayout> all_layouts() {
   std::vector<ParameterLayout> layouts;
   for (int bits = 0; bits < 16; ++bits) {
-    layouts.push_back({.viscous = bool(bits & 1), .coulomb = bool(bits & 2), .offset = bool(bits & 4), .armature = bool(bits & 8)});
+    layouts.push_back(
+        {.viscous = bool(bits & 1), .coulomb = bool(bits & 2), .offset = bool(bits & 4), .armature = bool(bits & 8)});
   }
   return layouts;
 }

@@ -1,4 +1,4 @@
-// rnea_test.cpp — the robot RNEA against closed forms (pendulums, a lifted and a whirled slider), friction terms and sign(0) = 0, symmetry of M, size checks.
+// rnea_test.cpp — the robot RNEA against closed forms, friction terms and sign(0) = 0, M's symmetry, sizes.
 #include "manipid/core/model.h"
 #include "manipid/core/robot/rnea.h"
 #include "manipid/core/robot/urdf.h"
@@ -75,7 +75,8 @@ TEST(Rnea, WhirlingSliderHasCentrifugalAndCoriolisTerms) {
   const double J = 0.25, m = 3.0;
   const Model slider = parse_urdf(R"(<robot name="slider"><link name="base"/>
   <joint name="turn" type="continuous"><parent link="base"/><child link="arm"/><axis xyz="0 0 1"/></joint>
-  <link name="arm"><inertial><mass value="2"/><inertia ixx="0.1" ixy="0" ixz="0" iyy="0.15" iyz="0" izz="0.25"/></inertial></link>
+  <link name="arm"><inertial><mass value="2"/>
+    <inertia ixx="0.1" ixy="0" ixz="0" iyy="0.15" iyz="0" izz="0.25"/></inertial></link>
   <joint name="slide" type="prismatic"><parent link="arm"/><child link="bead"/><axis xyz="1 0 0"/>
     <limit lower="0" upper="1" effort="100" velocity="1"/></joint>
   <link name="bead"><inertial><mass value="3"/><inertia ixx="0" ixy="0" ixz="0" iyy="0" iyz="0" izz="0"/></inertial></link>

@@ -1,4 +1,4 @@
-// robot_test_support.h — shared helpers of the robot tests: test files, random states and physically consistent parameters.
+// robot_test_support.h — robot test helpers: test files, random states, physically consistent parameters.
 #pragma once
 
 #include "manipid/core/robot/model.h"

@@ -1,4 +1,4 @@
-// urdf_test.cpp — URDF → robot::Model: conventions (rpy, axes, inertial frames, parallel axis, merging), chain selection, every refusal and warning.
+// urdf_test.cpp — URDF → robot::Model: conventions, merging, chain selection, every refusal and warning.
 #include "manipid/core/model.h"
 #include "manipid/core/robot/parameters.h"
 #include "manipid/core/robot/rnea.h"
@@ -15,6 +15,7 @@
 #include <filesystem>
 #include <initializer_list>
 #include <limits>
+#include <thread>
 
 namespace manipid::robot {
 namespace {
@@ -130,6 +131,28 @@ TEST(Urdf, ParsingASoundUrdfPrintsNothing) {
   EXPECT_EQ(parsed.model.joint_count(), 7);
 }
 
+TEST(Urdf, ConcurrentParsesKeepTheirOwnMessages) {
+  // urdfdom's console handler is process-global: each parse must still get exactly its own errors.
+  const std::string good = arm7_urdf();
+  const std::string bad = with_replaced(good, R"(<mass value="2.4"/>)", R"(<mass value="heavy"/>)");
+  std::vector<std::thread> threads;
+  std::vector<int> failures(4, 0);
+  for (int t = 0; t < 4; ++t) {
+    threads.emplace_back([&, t] {
+      for (int i = 0; i < 25; ++i) {
+        try {
+          const ParsedUrdf parsed = parse_urdf(t % 2 ? bad : good);
+          if (t % 2 || !parsed.warnings.empty() || parsed.model.joint_count() != 7) ++failures[t];
+        } catch (const InputError& error) {
+          if (!(t % 2) || error.field() != "link link3" || contains(error.what(), "effort")) ++failures[t];
+        }
+      }
+    });
+  }
+  for (std::thread& thread : threads) thread.join();
+  EXPECT_EQ(failures, std::vector<int>(4, 0));
+}
+
 // ---- conventions ---------------------------------------------------------------------------------------
 
 TEST(Urdf, RpyIsFixedAxisRollPitchYaw) {
@@ -222,7 +245,10 @@ TEST(Urdf, FixedFlangeMergesLikeAHandMergedInertial) {
   const std::string arm_head = R"(<robot name="two"><link name="base"/>
   <joint name="j1" type="revolute"><parent link="base"/><child link="link1"/><origin xyz="0 0 0.3" rpy="0.1 0 0"/>
     <axis xyz="0 0 1"/><limit lower="-3" upper="3" effort="10" velocity="2"/></joint>
-  <link name="link1">)" + inertial_xml(2.5, "0.01 0.02 0.1", "0 0 0", R"(ixx="0.03" ixy="0" ixz="0" iyy="0.03" iyz="0" izz="0.01")") + R"(</link>
+  <link name="link1">)" +
+                               inertial_xml(2.5, "0.01 0.02 0.1", "0 0 0",
+                                            R"(ixx="0.03" ixy="0" ixz="0" iyy="0.03" iyz="0" izz="0.01")") +
+                               R"(</link>
   <joint name="j2" type="revolute"><parent link="link1"/><child link="link2"/><origin xyz="0.05 0 0.2" rpy="0 0.4 0"/>
     <axis xyz="0 1 0"/><limit lower="-3" upper="3" effort="10" velocity="2"/></joint>)";
   const std::string with_flange = arm_head + R"(<link name="link2">)" + inertial_xml(m1, text(c1), text(rpy1), inertia_text(I1)) +
@@ -286,7 +312,8 @@ TEST(Urdf, SeveralLeavesAreListed) {
 TEST(Urdf, BodiesBeyondAMovingJointOffTheChainAreLeftOutWithAWarning) {
   const std::string finger = R"(<joint name="finger_joint" type="prismatic"><parent link="flange"/><child link="finger"/>
     <axis xyz="1 0 0"/><limit lower="0" upper="0.04" effort="20" velocity="0.2"/></joint>
-  <link name="finger"><inertial><mass value="0.1"/><inertia ixx="1e-5" ixy="0" ixz="0" iyy="1e-5" iyz="0" izz="1e-5"/></inertial></link>
+  <link name="finger"><inertial><mass value="0.1"/>
+    <inertia ixx="1e-5" ixy="0" ixz="0" iyy="1e-5" iyz="0" izz="1e-5"/></inertial></link>
   <joint name="finger_tip_joint" type="fixed"><parent link="finger"/><child link="finger_tip"/></joint>
   <link name="finger_tip"/>
 )";
@@ -345,7 +372,8 @@ TEST(Urdf, BaseAndTipSelectASubChain) {
   }
 
   // Gravity in the root frame is refused when the base moves relative to the root ...
-  expect_refused(arm7_urdf(), UrdfOptions{.base = "link3"}, "base", {"base link link3 moves relative to the root link world (joint j1 is revolute)"});
+  expect_refused(arm7_urdf(), UrdfOptions{.base = "link3"}, "base",
+                 {"base link link3 moves relative to the root link world (joint j1 is revolute)"});
   // ... and rotated through fixed joints when it does not: the mount turns by 0.3 rad about z.
   const Eigen::Vector3d tilted(1.0, 0.0, -9.81);
   const Model on_link0 = parse_urdf(arm7_urdf(), UrdfOptions{.base = "link0", .gravity = tilted}).model;
@@ -360,7 +388,9 @@ TEST(Urdf, BaseAndTipSelectASubChain) {
   // A tip above the base, the base itself, a chain without a moving joint.
   expect_refused(arm7_urdf(), UrdfOptions{.base = "link5", .tip = "link2"}, "tip", {"link2 is not below base link link5"});
   expect_refused(arm7_urdf(), UrdfOptions{.base = "link5", .tip = "link5"}, "tip", {"is the base link"});
-  expect_refused(arm7_urdf(), UrdfOptions{.tip = "link0"}, "tip", {"no moving joint between base link world and tip link link0"});
+  expect_refused(arm7_urdf(), UrdfOptions{.base = "flange"}, "base", {"no joint hangs below base link flange"});
+  expect_refused(arm7_urdf(), UrdfOptions{.tip = "link0"}, "tip",
+                 {"no moving joint between base link world and tip link link0"});
 }
 
 // ---- refusals ------------------------------------------------------------------------------------------
@@ -450,9 +480,11 @@ TEST(UrdfRefuses, InertiaThatIsNotPositiveSemiDefinite) {
 TEST(UrdfWarns, InertiaBreakingTheTriangleInequality) {
   // Positive semi-definite, yet no rigid body has principal moments 1, 1, 3.
   const ParsedUrdf parsed = parse_urdf(one_joint(
-      "revolute", "0 0 0", "0 0 0", "0 0 1", inertial_xml(1.0, "0 0 0", "0 0 0", R"(ixx="1" ixy="0" ixz="0" iyy="1" iyz="0" izz="3")")));
+      "revolute", "0 0 0", "0 0 0", "0 0 1",
+      inertial_xml(1.0, "0 0 0", "0 0 0", R"(ixx="1" ixy="0" ixz="0" iyy="1" iyz="0" izz="3")")));
   ASSERT_EQ(parsed.warnings.size(), 1u);
-  EXPECT_TRUE(contains(parsed.warnings[0], "link body: principal moments of inertia 1, 1, 3 kg·m² break the triangle inequality"));
+  EXPECT_TRUE(contains(parsed.warnings[0],
+                       "link body: principal moments of inertia 1, 1, 3 kg·m² break the triangle inequality"));
 }
 
 TEST(UrdfRefuses, LimitsOutOfOrderAndNonFiniteGravity) {
@@ -513,7 +545,9 @@ TEST(UrdfExamples, RealRobotsParseWhenPresent) {
       }
       const ParsedUrdf parsed = parse_urdf(xml);
       EXPECT_EQ(parsed.model.joint_count(), 7) << entry.path();
-      for (const std::string& warning : parsed.warnings) std::printf("%s: %s\n", entry.path().filename().c_str(), warning.c_str());
+      for (const std::string& warning : parsed.warnings) {
+        std::printf("%s: %s\n", entry.path().filename().c_str(), warning.c_str());
+      }
       ++parsed_count;
     }
   }

@@ -1,4 +1,4 @@
-// model.h — a rigid-body serial robot as a constant model: joints, bodies and their standard inertial parameters.
+// model.h — a rigid-body serial robot as a constant model: joints, bodies, standard inertial parameters.
 //
 // The `robot` family sits beside the paper's point-mass chain (manipid/core/model.h): any serial arm
 // described by a URDF (robot/urdf.h), with recursive Newton–Euler inverse dynamics (robot/rnea.h) and a

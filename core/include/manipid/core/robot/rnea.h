@@ -1,4 +1,4 @@
-// rnea.h — inverse dynamics of a robot Model by the recursive Newton–Euler algorithm, in the standard parameters.
+// rnea.h — inverse dynamics of a robot Model by recursive Newton–Euler, in the standard parameters.
 //
 //     τ = M(q) q̈ + C(q, q̇) q̇ + g(q) + τ_f(q̇, q̈)
 //
