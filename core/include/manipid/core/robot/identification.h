@@ -1,0 +1,96 @@
+// identification.h — a rigid-body robot's base parameters from measured q and τ, by the paper's
+// input-error method, which is linear here: one least-squares solve, no iterative optimiser.
+//
+// The steps (each its own header):
+//   1. prepare the data: trim the ramps, drop stale repeated rows, resample onto a uniform grid
+//      (resample.h);
+//   2. filter: q^f, q̇^f, q̈^f from the differential filters, Y(q^f, q̇^f, q̈^f), then L Y beside L τ —
+//      both sides through the same low-pass (robot/filtered_regressor.h);
+//   3. solve (L Y_b) β = L τ for the base parameters β (robot/base_parameters.h) by QR on column-scaled
+//      rows, optionally weighting each joint by its residual variance; directions the data do not excite
+//      (relative singular value < 1e-10) stay at the prior's value and a warning names them;
+//   4. report: standard errors σ²(W_bᵀW_b)⁻¹ with σ² from the residual, corrected for the filter's
+//      correlation (white noise through L keeps Σc² of its variance, and rows D apart are not
+//      independent: factor 1/(D Σc²), never below 1), correlations, the scaled regressor's condition
+//      number, the standard parameters no data can determine, and `point`: the full standard vector with
+//      the estimated base parameters that is nearest (Euclidean) to the prior — the URDF's own values —
+//      so what the data cannot see stays at the CAD values.
+#pragma once
+
+#include "manipid/core/filters.h"
+#include "manipid/core/resample.h"
+#include "manipid/core/robot/base_parameters.h"
+#include "manipid/core/robot/filtered_regressor.h"
+#include "manipid/core/robot/model.h"
+#include "manipid/core/robot/parameters.h"
+#include "manipid/core/trajectory.h"
+
+#include <Eigen/Core>
+
+#include <atomic>
+#include <optional>
+#include <string>
+#include <vector>
+
+namespace manipid::robot {
+
+enum class JointWeighting {
+  unit,       ///< every joint's squared torque error counts alike
+  per_joint,  ///< each joint divided by its residual variance from a first, unweighted fit
+};
+
+struct IdentificationOptions {
+  /// Friction and armature terms estimated beside the 10 inertial parameters per body.
+  ParameterLayout layout;
+  /// Trim and uniform grid (resample.h).
+  DataPreparation preparation;
+  /// The differential filters' half-length M and band Ωg (rad/sample); 0 = chosen from the data (both).
+  int half_length = 0;
+  double band = 0.0;
+  JointWeighting weighting = JointWeighting::unit;
+  /// The prior standard vector (the CAD values; dim layout.size(n)); empty = the model's own
+  /// (standard_parameters(model, layout)).
+  Eigen::VectorXd prior;
+  BaseParameterOptions base;
+  /// Checked while the rows are built; when it becomes true identify() returns with `cancelled` set.
+  const std::atomic<bool>* cancel = nullptr;
+};
+
+struct IdentificationResult {
+  std::vector<std::string> standard_names;  ///< π's names, robot/parameters.h
+  Eigen::VectorXd prior;                    ///< the prior π (the URDF's values unless given)
+  BaseParameters base;                      ///< names and combinations of the base parameters
+  Eigen::VectorXd estimate;                 ///< β̂, base order
+  Eigen::VectorXd std_errors;               ///< of β̂; NaN for a direction the data do not excite
+  Eigen::MatrixXd correlation;              ///< of β̂
+  /// σ_max/σ_min of the column-scaled base regressor the data gave (excitation quality; ∞ when some base
+  /// direction is not excited).
+  double condition_number = 0.0;
+  /// Base parameters (names) the data barely or do not excite (relative singular value < 1e-10): their
+  /// estimates are the prior's.
+  std::vector<std::string> unexcited;
+  /// The full standard vector: estimated base parameters, nearest to the prior.
+  Eigen::VectorXd point;
+  /// Standard parameters that never enter the torque (the base parameter names list the rest).
+  std::vector<std::string> unidentifiable;
+
+  FilterSettings filter;
+  bool filter_chosen_automatically = false;
+  int decimation = 1;
+  int rows = 0;                      ///< least-squares rows (instants × joints)
+  Eigen::VectorXd residual_rms;      ///< per joint, N·m, of L τ − (L Y_b) β̂
+  Eigen::VectorXd joint_weights;     ///< per joint, as used (1 for unit weighting)
+  double residual_variance = 0.0;    ///< σ² of one (unweighted) filtered residual
+  std::vector<std::string> warnings;
+  double wall_seconds = 0.0;
+  bool cancelled = false;
+};
+
+/// Identifies the base parameters of `model` from `data` (with tau columns; any time stamps). Throws
+/// InputError for unusable input (joint counts, no torque, too short for the filter, a bad prior).
+IdentificationResult identify(const Model& model, const Trajectory& data, const IdentificationOptions& options);
+
+/// The filter identify() chooses for uniform `data` when none is given (see identification.cpp).
+FilterSettings choose_filter(const Model& model, const Trajectory& data, const ParameterLayout& layout);
+
+}  // namespace manipid::robot

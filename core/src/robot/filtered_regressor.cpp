@@ -1,0 +1,155 @@
+// filtered_regressor.cpp — differential filters, regressor, and the regressor's columns low-passed like
+// the torque, decimated to the band (robot/filtered_regressor.h).
+#include "manipid/core/robot/filtered_regressor.h"
+
+#include "manipid/core/model.h"
+#include "manipid/core/robot/data.h"
+#include "manipid/core/robot/regressor.h"
+#include "manipid/core/robot/rnea.h"
+
+#include <algorithm>
+#include <cmath>
+#include <numbers>
+#include <string>
+
+namespace manipid::robot {
+namespace {
+
+/// q^f, q̇^f, q̈^f (n × N1, one column per filtered sample) and L τ (N1 × n) for the first pass.
+struct FirstPass {
+  Eigen::MatrixXd q, qd, qdd;
+  Eigen::MatrixXd tau;  // N1 × n; empty without torque
+  int samples = 0;      // N1
+};
+
+FirstPass first_pass(const Model& model, const Trajectory& data, const DifferentialFilter& filter) {
+  const int n = model.joint_count();
+  if (data.joint_count() != n) {
+    throw InputError("q", "the data has " + std::to_string(data.joint_count()) + " joints, the robot " +
+                              std::to_string(n));
+  }
+  const int M = filter.settings().half_length;
+  // Two passes of 2M + 1 taps each, and at least one instant left after both.
+  if (data.samples() < 4 * M + 3) {
+    throw InputError("samples", "the filter (half-length M = " + std::to_string(M) + ") is applied twice and needs at least " +
+                                    std::to_string(4 * M + 3) + " samples; the data has " + std::to_string(data.samples()) +
+                                    " (" + std::to_string(data.t[data.samples() - 1] - data.t[0]) + " s)");
+  }
+  FirstPass pass;
+  pass.samples = filter.output_length(data.samples());
+  Eigen::VectorXd q(pass.samples), qd(pass.samples), qdd(pass.samples);
+  pass.q.resize(n, pass.samples);
+  pass.qd.resize(n, pass.samples);
+  pass.qdd.resize(n, pass.samples);
+  for (int k = 0; k < n; ++k) {
+    filter.apply_all(data.q.col(k), q, qd, qdd);
+    pass.q.row(k) = q.transpose();
+    pass.qd.row(k) = qd.transpose();
+    pass.qdd.row(k) = qdd.transpose();
+  }
+  if (data.has_torque()) {
+    pass.tau.resize(pass.samples, n);
+    for (int k = 0; k < n; ++k) filter.apply(FilterOrder::lowpass, data.tau.col(k), pass.tau.col(k));
+  }
+  return pass;
+}
+
+}  // namespace
+
+FilteredRegressor filtered_regressor(const Model& model, const ParameterLayout& layout, const Trajectory& data,
+                                     const FilterSettings& settings, const std::atomic<bool>* cancel) {
+  settings.validate();
+  const auto filter = cached_filter(settings);
+  const FirstPass pass = first_pass(model, data, *filter);
+  const int n = model.joint_count();
+  const int p = layout.size(n);
+  const int M = settings.half_length;
+  const Eigen::VectorXd& taps = filter->coefficients(FilterOrder::lowpass);
+
+  FilteredRegressor result;
+  result.filter = settings;
+  result.lowpass_energy = taps.squaredNorm();
+  result.decimation = std::max(1, static_cast<int>(std::floor(std::numbers::pi / (2.0 * settings.band))));
+  const int D = result.decimation;
+  const int second = pass.samples - 2 * M - 1;  // doubly filtered outputs
+  const int R = (second - 1) / D + 1;
+  result.instants = R;
+  result.t.resize(R);
+  for (int r = 0; r < R; ++r) result.t[r] = data.t[2 * M + r * D];
+  if (data.has_torque()) {
+    result.tau.resize(static_cast<Eigen::Index>(R) * n);
+    for (int r = 0; r < R; ++r) result.tau.segment(static_cast<Eigen::Index>(r) * n, n) = pass.tau.row(M + r * D).transpose();
+  }
+
+  // Row-major, so that adding one joint's row of Y is a contiguous update.
+  Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor> W =
+      Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor>::Zero(static_cast<Eigen::Index>(R) * n, p);
+  Data workspace(model);
+  Eigen::MatrixXd Y(n, p);
+  std::vector<int> friction_columns;
+  for (int begin : {layout.viscous_begin(n), layout.coulomb_begin(n), layout.offset_begin(n), layout.armature_begin(n)}) {
+    if (begin >= 0) friction_columns.push_back(begin);
+  }
+  const int last_sample = std::min(pass.samples - 1, (R - 1) * D + 2 * M);
+  for (int s = 0; s <= last_sample; ++s) {
+    if (cancel && (s & 1023) == 0 && cancel->load(std::memory_order_relaxed)) return FilteredRegressor{};
+    regressor(model, workspace, layout, pass.q.col(s), pass.qd.col(s), pass.qdd.col(s), Y);
+    // Outputs r whose window [r·D, r·D + 2M] covers s; tap index s − r·D.
+    const int first = std::max(0, (s - 2 * M + D - 1) / D);
+    const int last = std::min(R - 1, s / D);
+    for (int r = first; r <= last; ++r) {
+      const double weight = taps[s - r * D];
+      for (int k = 0; k < n; ++k) {
+        // Row k of Y is zero left of body k's block (a body never loads the joints beyond it), and
+        // its friction entries sit on the diagonal of each block.
+        const int from = kInertialParametersPerBody * k;
+        const int width = kInertialParametersPerBody * (n - k);
+        auto row = W.row(static_cast<Eigen::Index>(r) * n + k);
+        row.segment(from, width) += weight * Y.row(k).segment(from, width);
+        for (int begin : friction_columns) row[begin + k] += weight * Y(k, begin + k);
+      }
+    }
+  }
+  result.W = W;
+  return result;
+}
+
+TorquePrediction predict_torque(const Model& model, const ParameterLayout& layout, const Eigen::VectorXd& pi,
+                                const Trajectory& data, const FilterSettings& settings) {
+  settings.validate();
+  if (!data.has_torque()) throw InputError("tau", "the data has no tau columns to compare the prediction with");
+  const int n = model.joint_count();
+  if (pi.size() != layout.size(n)) {
+    throw InputError("parameters", "the parameter vector has " + std::to_string(pi.size()) + " entries, the robot " +
+                                       std::to_string(layout.size(n)));
+  }
+  const auto filter = cached_filter(settings);
+  const FirstPass pass = first_pass(model, data, *filter);
+  const int M = settings.half_length;
+
+  Eigen::MatrixXd modelled(pass.samples, n);
+  Data workspace(model);
+  Eigen::VectorXd tau(n);
+  for (int s = 0; s < pass.samples; ++s) {
+    inverse_dynamics(model, workspace, layout, pi, pass.q.col(s), pass.qd.col(s), pass.qdd.col(s), tau);
+    modelled.row(s) = tau.transpose();
+  }
+  TorquePrediction prediction;
+  const int second = filter->output_length(pass.samples);
+  prediction.t = data.t.segment(2 * M, second);
+  prediction.model.resize(second, n);
+  prediction.measured = pass.tau.middleRows(M, second);
+  for (int k = 0; k < n; ++k) filter->apply(FilterOrder::lowpass, modelled.col(k), prediction.model.col(k));
+  const Eigen::MatrixXd error = prediction.model - prediction.measured;
+  prediction.rms_error = (error.colwise().squaredNorm() / static_cast<double>(second)).cwiseSqrt().transpose();
+  prediction.relative_error.resize(n);
+  for (int k = 0; k < n; ++k) {
+    const double norm = prediction.measured.col(k).norm();
+    prediction.relative_error[k] = norm > 0 ? error.col(k).norm() / norm : std::numeric_limits<double>::quiet_NaN();
+  }
+  const double total = prediction.measured.norm();
+  prediction.overall_relative_error = total > 0 ? error.norm() / total : std::numeric_limits<double>::quiet_NaN();
+  return prediction;
+}
+
+}  // namespace manipid::robot
