@@ -129,8 +129,10 @@ CLI::App* add_identify_command(CLI::App& app, IdentifyOptions& options) {
                       "auto (measured tau if present), measured, or reference (tau = Kp(r-q) - Kd qd)")
       ->check(CLI::IsMember({"auto", "measured", "reference"}))
       ->capture_default_str();
-  command->add_option("--weights", options.weights, "unit (the paper) or inverse-variance")
-      ->check(CLI::IsMember({"unit", "inverse-variance"}))
+  command->add_option("--weights", options.weights,
+                      "unit (the paper), inverse-variance (each joint by its filtered torque's variance) or, with "
+                      "--robot, per-joint (each joint by its residual's variance)")
+      ->check(CLI::IsMember({"unit", "inverse-variance", "per-joint"}))
       ->capture_default_str();
   command->add_option("--max-evaluations", options.max_evaluations, "Evaluation budget")
       ->check(integer_between(1, 100'000'000))
@@ -138,10 +140,43 @@ CLI::App* add_identify_command(CLI::App& app, IdentifyOptions& options) {
   command->add_option("--max-seconds", options.max_seconds, "Time budget in s")->check(positive_number())->capture_default_str();
   command->add_option("--history", options.history, "Write the cost history (index,cost,m1..ln) as CSV");
   command->add_flag("--json", options.json, "Print the result as JSON (the service's result object)");
+
+  // A URDF robot: its base parameters by linear input-error; the paper model's options do not apply.
+  add_urdf_options(*command, options.urdf, false);
+  CLI::Option* robot = command->get_option("--robot");
+  for (const char* paper_only : {"--preset", "--kinetic-energy", "--free", "--init", "--algorithm", "--kp", "--kd",
+                                 "--torque-source", "--max-evaluations", "--max-seconds", "--history"}) {
+    command->get_option(paper_only)->excludes(robot);
+  }
+  command->add_option("--friction", options.friction, "With --robot: friction terms per joint, any of viscous,coulomb,offset, or none")
+      ->capture_default_str()
+      ->needs(robot);
+  command->add_flag("--armature", options.armature, "With --robot: estimate each joint's rotor inertia Ia (tau += Ia qdd)")
+      ->needs(robot);
+  command->add_flag("--physical", options.physical,
+                    "With --robot: a physically consistent estimate (every link a real rigid body, friction >= 0)")
+      ->needs(robot);
+  command->add_option("--validate", options.validate,
+                      "With --robot: a second run's CSV to predict with the estimate (and with the URDF's values)")
+      ->needs(robot);
+  command->add_option("--trim", options.trim, "With --robot: seconds dropped at the start and the end, START,END")
+      ->needs(robot);
+  command->add_option("--dt", options.dt, "With --robot: resample onto this period, s (default: the median time step)")
+      ->check(positive_number())
+      ->needs(robot);
+  command->add_option("--comparison-half-length", options.comparison_half_length,
+                      "With --robot: half-length of the low-pass applied to tau and the regressor alike, or 'auto'")
+      ->capture_default_str()
+      ->needs(robot);
+  command->add_option("--comparison-band", options.comparison_band,
+                      "With --robot: its band edge in rad/sample, or 'auto'")
+      ->capture_default_str()
+      ->needs(robot);
   return command;
 }
 
 int run_identify(const IdentifyOptions& options) {
+  if (!options.urdf.urdf.empty()) return run_identify_robot(options);
   const KineticEnergy energy = parse_kinetic_energy(options.kinetic_energy);
   const Preset preset = find_preset(options.preset, energy);
   const int n = preset.model.joint_count();
@@ -176,6 +211,10 @@ int run_identify(const IdentifyOptions& options) {
   identification.torque_source = options.torque_source == "measured"    ? TorqueSource::measured
                                  : options.torque_source == "reference" ? TorqueSource::reference
                                                                         : TorqueSource::automatic;
+  if (options.weights == "per-joint") {
+    throw UsageError("--weights per-joint weighs a URDF robot's joints by their residuals (with --robot); the paper's "
+                     "model takes unit or inverse-variance");
+  }
   identification.weighting =
       options.weights == "inverse-variance" ? JointWeighting::inverse_variance : JointWeighting::unit;
   identification.max_evaluations = options.max_evaluations;

@@ -1,9 +1,15 @@
-// command_torque.cpp — `manipid torque`: inverse dynamics τ(q, q̇, q̈, θ) row by row for a
-// CSV of states with columns q1..qn, qd1..qdn, qdd1..qddn; writes [t,] tau1..taun.
+// command_torque.cpp — `manipid torque`: inverse dynamics τ(q, q̇, q̈) row by row for a CSV of states
+// with columns q1..qn, qd1..qdn, qdd1..qddn, of a preset robot or (--robot) a URDF robot; writes
+// [t,] tau1..taun.
 #include "commands.h"
 
 #include "manipid/api/csv.h"
+#include "manipid/api/robot_json.h"
 #include "manipid/core/dynamics.h"
+#include "manipid/core/robot/data.h"
+#include "manipid/core/robot/rnea.h"
+
+#include <nlohmann/json.hpp>
 
 #include <cstdio>
 #include <string>
@@ -38,12 +44,76 @@ CLI::App* add_torque_command(CLI::App& app, TorqueOptions& options) {
       "Inverse dynamics: read q1..qn, qd1..qdn, qdd1..qddn (rad, rad/s, rad/s^2) per row and "
       "write tau1..taun (N*m); a t column is passed through.");
   add_robot_options(*command, options.robot);
+  add_urdf_options(*command, options.urdf, false);
+  CLI::Option* robot = command->get_option("--robot");
+  for (const char* preset_only : {"--preset", "--param", "--kinetic-energy"}) command->get_option(preset_only)->excludes(robot);
+  command->add_option("--params", options.parameters,
+                      "With --robot: the parameters, as an 'identify --json' result (its point) or a JSON object "
+                      "{\"m1\": ..., \"fv1\": ...}; parameters not given keep the URDF's values")
+      ->needs(robot);
   command->add_option("--in", options.input, "Input CSV file of states, '-' for stdin")->required();
   command->add_option("--out", options.output, "Output CSV file, '-' for stdout")->capture_default_str();
   return command;
 }
 
+namespace {
+
+/// The URDF robot's torque for every row: parameters from --params, else the URDF's own.
+int run_urdf_torque(const TorqueOptions& options) {
+  const robot::Model model = load_urdf_robot(options.urdf);
+  api::ParameterValues parameters;
+  if (options.parameters.empty()) {
+    parameters.values = robot::standard_parameters(model, parameters.layout);  // the URDF's damping and friction
+  } else {
+    nlohmann::json json;
+    try {
+      json = nlohmann::json::parse(read_text(options.parameters));
+    } catch (const nlohmann::json::exception&) {
+      throw InputError("params", input_name(options.parameters) + ": not a JSON document");
+    }
+    parameters = api::parameters_from_json(model, json, input_name(options.parameters));
+  }
+  const int joint_count = model.joint_count();
+  const api::CsvTable states = read_table(options.input);
+  const std::string last = std::to_string(joint_count);
+  const std::string needs = "the " + std::to_string(joint_count) + "-joint robot " + model.name + " needs q1..q" + last +
+                            ", qd1..qd" + last + ", qdd1..qdd" + last;
+  std::vector<int> q_columns, qd_columns, qdd_columns;
+  try {
+    q_columns = joint_columns(states, "q", joint_count, needs);
+    qd_columns = joint_columns(states, "qd", joint_count, needs);
+    qdd_columns = joint_columns(states, "qdd", joint_count, needs);
+  } catch (const InputError& error) {
+    rethrow_with_source(error, input_name(options.input));
+  }
+  const int time_column = states.column_index("t");
+  api::CsvTable torques;
+  if (time_column >= 0) torques.columns.emplace_back("t");
+  for (int joint = 1; joint <= joint_count; ++joint) torques.columns.push_back("tau" + std::to_string(joint));
+  const int first_torque = time_column >= 0 ? 1 : 0;
+  torques.data.resize(states.rows(), static_cast<Eigen::Index>(torques.columns.size()));
+  robot::Data workspace(model);
+  Eigen::VectorXd q(joint_count), qd(joint_count), qdd(joint_count), tau(joint_count);
+  for (int row = 0; row < states.rows(); ++row) {
+    for (int joint = 0; joint < joint_count; ++joint) {
+      q[joint] = states.data(row, q_columns[static_cast<std::size_t>(joint)]);
+      qd[joint] = states.data(row, qd_columns[static_cast<std::size_t>(joint)]);
+      qdd[joint] = states.data(row, qdd_columns[static_cast<std::size_t>(joint)]);
+    }
+    robot::inverse_dynamics(model, workspace, parameters.layout, parameters.values, q, qd, qdd, tau);
+    if (time_column >= 0) torques.data(row, 0) = states.data(row, time_column);
+    torques.data.row(row).segment(first_torque, joint_count) = tau.transpose();
+  }
+  write_table(options.output, torques);
+  std::fprintf(stderr, "manipid torque: %s (%s): %d rows -> %s\n", model.name.c_str(), input_name(options.urdf.urdf).c_str(),
+               states.rows(), output_name(options.output).c_str());
+  return exit_success;
+}
+
+}  // namespace
+
 int run_torque(const TorqueOptions& options) {
+  if (!options.urdf.urdf.empty()) return run_urdf_torque(options);
   const Robot robot = resolve_robot(options.robot);
   const RobotModel& model = robot.preset.model;
   const int joint_count = model.joint_count();

@@ -3,6 +3,9 @@
 // --preset/--param/--kinetic-energy into a robot model with parameters.
 #include "commands.h"
 
+#include "manipid/api/robot_json.h"
+#include "manipid/core/robot/urdf.h"
+
 #include <cerrno>
 #include <charconv>
 #include <cmath>
@@ -248,6 +251,65 @@ Robot resolve_robot(const RobotOptions& options) {
     rethrow_with_source(error, "--param");
   }
   return robot;
+}
+
+void add_urdf_options(CLI::App& command, UrdfRobotOptions& options, bool required) {
+  CLI::Option* robot = command.add_option("--robot", options.urdf, "The robot's URDF file (a serial arm)");
+  if (required) robot->required();
+  command.add_option("--base", options.base, "URDF link fixed to the world (default: the root)")->needs(robot);
+  command.add_option("--tip", options.tip, "URDF link that ends the chain (default: the only leaf)")->needs(robot);
+  command.add_option("--gravity", options.gravity, "Gravity in the root link's frame, GX,GY,GZ m/s^2 (default 0,0,-9.81)")
+      ->needs(robot);
+}
+
+robot::Model load_urdf_robot(const UrdfRobotOptions& options) {
+  const std::string text = read_text(options.urdf);
+  robot::UrdfOptions parse;
+  parse.base = options.base;
+  parse.tip = options.tip;
+  if (!options.gravity.empty()) {
+    const std::vector<std::string> items = [&] {
+      std::vector<std::string> parts;
+      std::string part;
+      for (char c : options.gravity + ",") {
+        if (c == ',') {
+          parts.push_back(part);
+          part.clear();
+        } else {
+          part += c;
+        }
+      }
+      return parts;
+    }();
+    if (items.size() != 3) throw InputError("gravity", "--gravity needs three comma-separated numbers GX,GY,GZ (m/s^2)");
+    for (int i = 0; i < 3; ++i) parse.gravity[i] = parse_number_option(items[static_cast<std::size_t>(i)], "--gravity");
+  }
+  try {
+    robot::ParsedUrdf parsed = robot::parse_urdf(text, parse);
+    for (const std::string& warning : parsed.warnings) {
+      std::fprintf(stderr, "manipid: warning: %s: %s\n", input_name(options.urdf).c_str(), warning.c_str());
+    }
+    return std::move(parsed.model);
+  } catch (const InputError& error) {
+    rethrow_with_source(error, input_name(options.urdf));
+  }
+}
+
+robot::ParameterLayout parameter_layout(const std::string& friction, bool armature) {
+  std::vector<std::string> terms;
+  std::string term;
+  for (char c : friction + ",") {
+    if (c == ',') {
+      if (!term.empty()) terms.push_back(term);
+      term.clear();
+    } else if (c != ' ') {
+      term += c;
+    }
+  }
+  robot::ParameterLayout layout;
+  api::parse_friction(terms, layout, "--friction");
+  layout.armature = armature;
+  return layout;
 }
 
 }  // namespace manipid::server

@@ -9,6 +9,8 @@
 #include "manipid/api/csv.h"
 #include "manipid/core/model.h"
 #include "manipid/core/presets.h"
+#include "manipid/core/robot/model.h"
+#include "manipid/core/robot/parameters.h"
 
 #include <CLI/CLI.hpp>
 
@@ -94,6 +96,22 @@ struct Robot {
 };
 Robot resolve_robot(const RobotOptions& options);
 
+// ---- A robot from a URDF file (identify --robot, torque --robot, excitation) ---------------
+
+struct UrdfRobotOptions {
+  std::string urdf;     ///< --robot FILE
+  std::string base;     ///< --base LINK (default: the URDF's root)
+  std::string tip;      ///< --tip LINK (default: the only leaf)
+  std::string gravity;  ///< --gravity GX,GY,GZ in the root frame, m/s² (default 0,0,-9.81)
+};
+/// Declares --robot, --base, --tip, --gravity on `command`; --robot is required when `required`.
+void add_urdf_options(CLI::App& command, UrdfRobotOptions& options, bool required);
+/// Reads and parses the URDF; its warnings go to stderr as "manipid: warning: ..." lines.
+/// Errors name the file: "arm.urdf: joint j3: ...".
+robot::Model load_urdf_robot(const UrdfRobotOptions& options);
+/// "viscous,coulomb,offset" (a list, "none" for no friction) and --armature → the parameter layout.
+robot::ParameterLayout parameter_layout(const std::string& friction, bool armature);
+
 // ---- simulate ----------------------------------------------------------------------------
 
 struct SimulateOptions {
@@ -115,6 +133,8 @@ int run_simulate(const SimulateOptions& options);
 
 struct TorqueOptions {
   RobotOptions robot;
+  UrdfRobotOptions urdf;       ///< with --robot: a URDF robot instead of a preset
+  std::string parameters;      ///< --params FILE: an identify --json result or {"name": value}
   std::string input;
   std::string output = "-";
 };
@@ -153,9 +173,21 @@ struct IdentifyOptions {
   double max_seconds = 120.0;
   std::string history;               ///< CSV path, empty = none
   bool json = false;
+  // A URDF robot (--robot): linear input-error identification of its base parameters.
+  UrdfRobotOptions urdf;
+  std::string friction = "viscous,coulomb";
+  bool armature = false;
+  bool physical = false;
+  std::string validate;              ///< a second run's CSV, empty = none
+  std::string trim;                  ///< "START,END" seconds dropped, empty = none
+  double dt = 0.0;                   ///< resampling period, 0 = the median step
+  std::string comparison_half_length = "auto";
+  std::string comparison_band = "auto";
 };
 CLI::App* add_identify_command(CLI::App& app, IdentifyOptions& options);
 int run_identify(const IdentifyOptions& options);
+/// identify --robot: a URDF robot's base parameters (command_identify_robot.cpp).
+int run_identify_robot(const IdentifyOptions& options);
 
 // ---- serve -------------------------------------------------------------------------------
 

@@ -5,11 +5,16 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
 #include <sstream>
 #include <vector>
 
 namespace manipid {
 namespace {
+
+/// A logger that misses a sample logs the previous one again under the new time stamp, once or a few
+/// times in a row (the Panda's log: runs of 1–2); more identical rows than this are a robot at rest.
+constexpr Eigen::Index kLongestStaleRun = 3;
 
 /// The measured blocks of a trajectory, in one list, so every step treats them alike.
 std::vector<const Eigen::MatrixXd*> blocks(const Trajectory& data) { return {&data.q, &data.tau, &data.ref, &data.qd}; }
@@ -38,7 +43,8 @@ std::string milliseconds(double value) {
 
 /// Piecewise-cubic Hermite interpolation of the columns of `values` (rows at times `t`) at the
 /// uniform times t0 + k·dt. Slopes at the knots are the derivative of the parabola through the
-/// knot and its neighbours (exact for quadratics on any spacing); one-sided at the ends.
+/// knot and its neighbours (exact for quadratics on any spacing; one-sided at the ends), limited so
+/// that the interpolant never overshoots the data.
 Eigen::MatrixXd interpolate(const Eigen::VectorXd& t, const Eigen::MatrixXd& values, double t0, double dt, Eigen::Index count) {
   const Eigen::Index n = t.size();
   Eigen::MatrixXd slopes(n, values.cols());
@@ -54,6 +60,28 @@ Eigen::MatrixXd interpolate(const Eigen::VectorXd& t, const Eigen::MatrixXd& val
     const double wb = -(2 * x + ha - hc) / (ha * hc);
     const double wc = (2 * x + ha) / (hc * (ha + hc));
     slopes.row(i) = wa * values.row(a) + wb * values.row(b) + wc * values.row(c);
+  }
+  // No overshoot (Fritsch & Carlson's limiter): where the data turn (the secants either side of a knot
+  // differ in sign) the slope is 0, elsewhere at most 3× the smaller secant. A smooth signal keeps its
+  // three-point slopes (the limit binds only at turning points, where the slope is small anyway); a jump —
+  // a torque's Coulomb friction reversing between two logged samples — is bridged monotonically instead
+  // of ringing into its neighbours, which biased Coulomb friction by 0.3 % in a test.
+  for (Eigen::Index i = 0; i < n; ++i) {
+    for (Eigen::Index c = 0; c < values.cols(); ++c) {
+      const double left = i > 0 ? (values(i, c) - values(i - 1, c)) / (t[i] - t[i - 1]) : NAN;
+      const double right = i + 1 < n ? (values(i + 1, c) - values(i, c)) / (t[i + 1] - t[i]) : NAN;
+      double& slope = slopes(i, c);
+      if (i > 0 && i + 1 < n && left * right <= 0.0) {
+        slope = 0.0;
+        continue;
+      }
+      double limit = std::numeric_limits<double>::infinity();
+      if (i > 0) limit = std::min(limit, 3.0 * std::abs(left));
+      if (i + 1 < n) limit = std::min(limit, 3.0 * std::abs(right));
+      const double reference = i > 0 ? left : right;
+      if (slope * reference < 0.0) slope = 0.0;  // at an end, never against the data's direction
+      slope = std::clamp(slope, -limit, limit);
+    }
   }
   Eigen::MatrixXd out(count, values.cols());
   Eigen::Index segment = 0;
@@ -103,16 +131,22 @@ Trajectory make_uniform(const Trajectory& data, const UniformOptions& options, T
     return data;
   }
 
-  // 1. Stale repeats: a row equal in every measured value to the one before it.
-  std::vector<Eigen::Index> kept{0};
+  // 1. Stale repeats: a row equal in every measured value to the one before it, in a run of at most
+  //    kLongestStaleRun such rows. A longer run is the robot at rest, measured: kept.
+  std::vector<Eigen::Index> kept;
   found.min_step = data.t[1] - data.t[0];
-  for (Eigen::Index i = 1; i < data.t.size(); ++i) {
-    found.min_step = std::min(found.min_step, data.t[i] - data.t[i - 1]);
-    if (same_row(data, i, i - 1)) {
-      ++found.repeats_dropped;
-    } else {
+  for (Eigen::Index i = 1; i < data.t.size(); ++i) found.min_step = std::min(found.min_step, data.t[i] - data.t[i - 1]);
+  for (Eigen::Index i = 0; i < data.t.size();) {
+    Eigen::Index end = i + 1;  // rows i+1 .. end-1 repeat row i
+    while (end < data.t.size() && same_row(data, end, i)) ++end;
+    const Eigen::Index repeats = end - i - 1;
+    if (repeats <= kLongestStaleRun) {
       kept.push_back(i);
+      found.repeats_dropped += static_cast<int>(repeats);
+    } else {
+      for (Eigen::Index k = i; k < end; ++k) kept.push_back(k);
     }
+    i = end;
   }
   if (kept.size() < 2) throw InputError("t", "every row repeats the first: the data hold a single measurement");
   Trajectory distinct;

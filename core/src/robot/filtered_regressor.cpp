@@ -9,47 +9,50 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
 #include <numbers>
 #include <string>
 
 namespace manipid::robot {
 namespace {
 
-/// q^f, q̇^f, q̈^f (n × N1, one column per filtered sample) and L τ (N1 × n) for the first pass.
+/// q^f, q̇^f, q̈^f from D (n × N1, one column per filtered sample: sample M + s of the data) and L τ
+/// (N_L × n: sample M_c + j of the data).
 struct FirstPass {
   Eigen::MatrixXd q, qd, qdd;
-  Eigen::MatrixXd tau;  // N1 × n; empty without torque
+  Eigen::MatrixXd tau;  // empty without torque
   int samples = 0;      // N1
 };
 
-FirstPass first_pass(const Model& model, const Trajectory& data, const DifferentialFilter& filter) {
+FirstPass first_pass(const Model& model, const Trajectory& data, const FilterPair& filters,
+                     const DifferentialFilter& differentiation, const DifferentialFilter& comparison) {
   const int n = model.joint_count();
   if (data.joint_count() != n) {
     throw InputError("q", "the data has " + std::to_string(data.joint_count()) + " joints, the robot " +
                               std::to_string(n));
   }
-  const int M = filter.settings().half_length;
-  // Two passes of 2M + 1 taps each, and at least one instant left after both.
-  if (data.samples() < 4 * M + 3) {
-    throw InputError("samples", "the filter (half-length M = " + std::to_string(M) + ") is applied twice and needs at least " +
-                                    std::to_string(4 * M + 3) + " samples; the data has " + std::to_string(data.samples()) +
-                                    " (" + std::to_string(data.t[data.samples() - 1] - data.t[0]) + " s)");
+  if (data.samples() < filters.shortest_data()) {
+    throw InputError("samples", "the filters (half-lengths M = " + std::to_string(filters.differentiation.half_length) +
+                                    " and M_c = " + std::to_string(filters.comparison.half_length) +
+                                    ") need at least " + std::to_string(filters.shortest_data()) + " samples; the data has " +
+                                    std::to_string(data.samples()) + " (" +
+                                    std::to_string(data.t[data.samples() - 1] - data.t[0]) + " s)");
   }
   FirstPass pass;
-  pass.samples = filter.output_length(data.samples());
+  pass.samples = differentiation.output_length(data.samples());
   Eigen::VectorXd q(pass.samples), qd(pass.samples), qdd(pass.samples);
   pass.q.resize(n, pass.samples);
   pass.qd.resize(n, pass.samples);
   pass.qdd.resize(n, pass.samples);
   for (int k = 0; k < n; ++k) {
-    filter.apply_all(data.q.col(k), q, qd, qdd);
+    differentiation.apply_all(data.q.col(k), q, qd, qdd);
     pass.q.row(k) = q.transpose();
     pass.qd.row(k) = qd.transpose();
     pass.qdd.row(k) = qdd.transpose();
   }
   if (data.has_torque()) {
-    pass.tau.resize(pass.samples, n);
-    for (int k = 0; k < n; ++k) filter.apply(FilterOrder::lowpass, data.tau.col(k), pass.tau.col(k));
+    pass.tau.resize(comparison.output_length(data.samples()), n);
+    for (int k = 0; k < n; ++k) comparison.apply(FilterOrder::lowpass, data.tau.col(k), pass.tau.col(k));
   }
   return pass;
 }
@@ -57,25 +60,29 @@ FirstPass first_pass(const Model& model, const Trajectory& data, const Different
 }  // namespace
 
 FilteredRegressor filtered_regressor(const Model& model, const ParameterLayout& layout, const Trajectory& data,
-                                     const FilterSettings& settings, const std::atomic<bool>* cancel) {
-  settings.validate();
-  const auto filter = cached_filter(settings);
-  const FirstPass pass = first_pass(model, data, *filter);
+                                     const FilterPair& filters, const std::atomic<bool>* cancel) {
+  filters.differentiation.validate();
+  filters.comparison.validate();
+  const auto differentiation = cached_filter(filters.differentiation);
+  const auto comparison = cached_filter(filters.comparison);
+  const FirstPass pass = first_pass(model, data, filters, *differentiation, *comparison);
   const int n = model.joint_count();
   const int p = layout.size(n);
-  const int M = settings.half_length;
-  const Eigen::VectorXd& taps = filter->coefficients(FilterOrder::lowpass);
+  const int M = filters.differentiation.half_length;
+  const int Mc = filters.comparison.half_length;
+  const Eigen::VectorXd& taps = comparison->coefficients(FilterOrder::lowpass);
 
   FilteredRegressor result;
-  result.filter = settings;
+  result.filters = filters;
   result.lowpass_energy = taps.squaredNorm();
-  result.decimation = std::max(1, static_cast<int>(std::floor(std::numbers::pi / (2.0 * settings.band))));
+  result.decimation = std::max(1, static_cast<int>(std::floor(std::numbers::pi / (2.0 * filters.comparison.band))));
   const int D = result.decimation;
-  const int second = pass.samples - 2 * M - 1;  // doubly filtered outputs
+  const int second = comparison->output_length(pass.samples);  // compared instants
   const int R = (second - 1) / D + 1;
   result.instants = R;
   result.t.resize(R);
-  for (int r = 0; r < R; ++r) result.t[r] = data.t[2 * M + r * D];
+  // Instant r is data sample M + M_c + r·D: the centre of L's window r·D .. r·D + 2M_c over the first pass.
+  for (int r = 0; r < R; ++r) result.t[r] = data.t[M + Mc + r * D];
   if (data.has_torque()) {
     result.tau.resize(static_cast<Eigen::Index>(R) * n);
     for (int r = 0; r < R; ++r) result.tau.segment(static_cast<Eigen::Index>(r) * n, n) = pass.tau.row(M + r * D).transpose();
@@ -90,12 +97,12 @@ FilteredRegressor filtered_regressor(const Model& model, const ParameterLayout& 
   for (int begin : {layout.viscous_begin(n), layout.coulomb_begin(n), layout.offset_begin(n), layout.armature_begin(n)}) {
     if (begin >= 0) friction_columns.push_back(begin);
   }
-  const int last_sample = std::min(pass.samples - 1, (R - 1) * D + 2 * M);
+  const int last_sample = std::min(pass.samples - 1, (R - 1) * D + 2 * Mc);
   for (int s = 0; s <= last_sample; ++s) {
     if (cancel && (s & 1023) == 0 && cancel->load(std::memory_order_relaxed)) return FilteredRegressor{};
     regressor(model, workspace, layout, pass.q.col(s), pass.qd.col(s), pass.qdd.col(s), Y);
-    // Outputs r whose window [r·D, r·D + 2M] covers s; tap index s − r·D.
-    const int first = std::max(0, (s - 2 * M + D - 1) / D);
+    // Outputs r whose window [r·D, r·D + 2M_c] covers s; tap index s − r·D.
+    const int first = std::max(0, (s - 2 * Mc + D - 1) / D);
     const int last = std::min(R - 1, s / D);
     for (int r = first; r <= last; ++r) {
       const double weight = taps[s - r * D];
@@ -115,17 +122,20 @@ FilteredRegressor filtered_regressor(const Model& model, const ParameterLayout& 
 }
 
 TorquePrediction predict_torque(const Model& model, const ParameterLayout& layout, const Eigen::VectorXd& pi,
-                                const Trajectory& data, const FilterSettings& settings) {
-  settings.validate();
+                                const Trajectory& data, const FilterPair& filters) {
+  filters.differentiation.validate();
+  filters.comparison.validate();
   if (!data.has_torque()) throw InputError("tau", "the data has no tau columns to compare the prediction with");
   const int n = model.joint_count();
   if (pi.size() != layout.size(n)) {
     throw InputError("parameters", "the parameter vector has " + std::to_string(pi.size()) + " entries, the robot " +
                                        std::to_string(layout.size(n)));
   }
-  const auto filter = cached_filter(settings);
-  const FirstPass pass = first_pass(model, data, *filter);
-  const int M = settings.half_length;
+  const auto differentiation = cached_filter(filters.differentiation);
+  const auto comparison = cached_filter(filters.comparison);
+  const FirstPass pass = first_pass(model, data, filters, *differentiation, *comparison);
+  const int M = filters.differentiation.half_length;
+  const int Mc = filters.comparison.half_length;
 
   Eigen::MatrixXd modelled(pass.samples, n);
   Data workspace(model);
@@ -135,11 +145,11 @@ TorquePrediction predict_torque(const Model& model, const ParameterLayout& layou
     modelled.row(s) = tau.transpose();
   }
   TorquePrediction prediction;
-  const int second = filter->output_length(pass.samples);
-  prediction.t = data.t.segment(2 * M, second);
+  const int second = comparison->output_length(pass.samples);
+  prediction.t = data.t.segment(M + Mc, second);
   prediction.model.resize(second, n);
   prediction.measured = pass.tau.middleRows(M, second);
-  for (int k = 0; k < n; ++k) filter->apply(FilterOrder::lowpass, modelled.col(k), prediction.model.col(k));
+  for (int k = 0; k < n; ++k) comparison->apply(FilterOrder::lowpass, modelled.col(k), prediction.model.col(k));
   const Eigen::MatrixXd error = prediction.model - prediction.measured;
   prediction.rms_error = (error.colwise().squaredNorm() / static_cast<double>(second)).cwiseSqrt().transpose();
   prediction.relative_error.resize(n);

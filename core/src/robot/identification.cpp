@@ -5,10 +5,12 @@
 #include "manipid/core/model.h"
 
 #include <Eigen/QR>
+#include <unsupported/Eigen/FFT>
 #include <Eigen/SVD>
 
 #include <algorithm>
 #include <chrono>
+#include <complex>
 #include <cmath>
 #include <limits>
 #include <numbers>
@@ -88,19 +90,82 @@ Eigen::VectorXd joint_residual_rms(const Eigen::VectorXd& residual, int n) {
   return (rms / static_cast<double>(std::max<Eigen::Index>(instants, 1))).cwiseSqrt();
 }
 
+/// The filters: each given one as given (half-length and band together), the others chosen.
+FilterPair filters_for(const Trajectory& data, const IdentificationOptions& options, IdentificationResult& result) {
+  if ((options.half_length > 0) != (options.band > 0.0)) {
+    throw InputError(options.band > 0.0 ? "half_length" : "band",
+                     "give the differentiation filter's half_length and band together, or neither (chosen from the data)");
+  }
+  if ((options.comparison_half_length > 0) != (options.comparison_band > 0.0)) {
+    throw InputError(options.comparison_band > 0.0 ? "comparison_half_length" : "comparison_band",
+                     "give the comparison filter's half_length and band together, or neither (chosen from the data)");
+  }
+  FilterPair filters;
+  const bool both_given = options.half_length > 0 && options.comparison_half_length > 0;
+  if (!both_given) {
+    filters = choose_filters(data);
+    result.filters_chosen_automatically = true;
+    result.motion_band_hz = motion_band(data);
+  }
+  if (options.half_length > 0) filters.differentiation = FilterSettings{options.half_length, options.band, data.dt()};
+  if (options.comparison_half_length > 0) {
+    filters.comparison = FilterSettings{options.comparison_half_length, options.comparison_band, data.dt()};
+  }
+  return filters;
+}
+
 }  // namespace
 
-FilterSettings choose_filter(const Model& model, const Trajectory& data, const ParameterLayout& layout) {
-  (void)model;
-  (void)layout;
-  // Placeholder rule, replaced below by the data-driven choice.
+double motion_band(const Trajectory& data, double tail) {
+  const Eigen::Index N = data.samples();
+  Eigen::Index size = 1;
+  while (size < N) size *= 2;
+  Eigen::FFT<double> fft;
+  std::vector<double> signal(static_cast<std::size_t>(size), 0.0);
+  std::vector<std::complex<double>> spectrum;
+  Eigen::VectorXd power = Eigen::VectorXd::Zero(size / 2 + 1);
+  for (int k = 0; k < data.joint_count(); ++k) {
+    const Eigen::VectorXd q = data.q.col(k);
+    const double first = q[0], last = q[N - 1];
+    for (Eigen::Index i = 0; i < N; ++i) {
+      const double x = static_cast<double>(i) / static_cast<double>(std::max<Eigen::Index>(N - 1, 1));
+      const double hann = 0.5 - 0.5 * std::cos(2.0 * std::numbers::pi * x);
+      signal[static_cast<std::size_t>(i)] = (q[i] - first - (last - first) * x) * hann;
+    }
+    fft.fwd(spectrum, signal);
+    for (Eigen::Index f = 0; f <= size / 2; ++f) power[f] += std::norm(spectrum[static_cast<std::size_t>(f)]);
+  }
+  const double total = power.sum();
+  if (!(total > 0.0)) return 0.0;  // no motion at all
+  double cumulative = 0.0;
+  Eigen::Index f = 0;
+  for (; f <= size / 2; ++f) {
+    cumulative += power[f];
+    if (cumulative >= (1.0 - tail) * total) break;
+  }
+  return static_cast<double>(std::min(f, size / 2)) / (static_cast<double>(size) * data.dt());
+}
+
+FilterPair choose_filters(const Trajectory& data) {
   const double dt = data.dt();
-  const double cutoff_hz = 5.0;
-  FilterSettings settings;
-  settings.dt = dt;
-  settings.band = std::min(std::numbers::pi, 2.0 * std::numbers::pi * cutoff_hz * dt);
-  settings.half_length = std::max(2, static_cast<int>(std::ceil(6.4 * std::numbers::pi / settings.band)));
-  return settings;
+  const double nyquist_band = std::numbers::pi;
+  // Ω_m: at least one frequency bin, so a motionless or very slow record still gets finite filters.
+  const double resolution = 2.0 * std::numbers::pi / static_cast<double>(data.samples());
+  const double motion = std::max(2.0 * std::numbers::pi * motion_band(data) * dt, resolution);
+  const auto half_length = [](double band) { return std::max(2, static_cast<int>(std::ceil(6.4 * std::numbers::pi / band))); };
+  FilterPair filters;
+  filters.differentiation.dt = filters.comparison.dt = dt;
+  filters.differentiation.band = std::min(nyquist_band / 2, 100.0 * motion);
+  filters.differentiation.half_length = half_length(filters.differentiation.band);
+  filters.comparison.band = std::min(filters.differentiation.band, 5.0 * motion);
+  filters.comparison.half_length = half_length(filters.comparison.band);
+  // The filters consume M + M_c samples at each end; keep at least two thirds of the data.
+  const int budget = std::max(2, (data.samples() / 3 - 3) / 2 - filters.differentiation.half_length);
+  if (filters.comparison.half_length > budget) {
+    filters.comparison.half_length = budget;
+    filters.comparison.band = std::min(nyquist_band, 6.4 * std::numbers::pi / budget);
+  }
+  return filters;
 }
 
 IdentificationResult identify(const Model& model, const Trajectory& measured, const IdentificationOptions& options) {
@@ -127,18 +192,8 @@ IdentificationResult identify(const Model& model, const Trajectory& measured, co
   const BaseParameters& base = result.base;
   for (int index : base.absent) result.unidentifiable.push_back(result.standard_names[static_cast<std::size_t>(index)]);
 
-  if ((options.half_length > 0) != (options.band > 0.0)) {
-    throw InputError(options.band > 0.0 ? "half_length" : "band",
-                     "give the filter's half_length and band together, or neither (both chosen from the data)");
-  }
-  if (options.half_length > 0) {
-    result.filter = FilterSettings{options.half_length, options.band, data.dt()};
-  } else {
-    result.filter = choose_filter(model, data, layout);
-    result.filter_chosen_automatically = true;
-  }
-
-  const FilteredRegressor rows = filtered_regressor(model, layout, data, result.filter, options.cancel);
+  result.filters = filters_for(data, options, result);
+  const FilteredRegressor rows = filtered_regressor(model, layout, data, result.filters, options.cancel);
   if (rows.instants == 0) {
     result.cancelled = true;
     result.wall_seconds = std::chrono::duration<double>(Clock::now() - started).count();
@@ -147,6 +202,12 @@ IdentificationResult identify(const Model& model, const Trajectory& measured, co
   result.decimation = rows.decimation;
   result.rows = static_cast<int>(rows.W.rows());
   const int b = base.size();
+  if (result.rows < 2 * b) {
+    throw InputError("samples", "after filtering, the data give " + std::to_string(rows.instants) + " instants x " +
+                                    std::to_string(n) + " joints = " + std::to_string(result.rows) + " rows for " +
+                                    std::to_string(b) + " base parameters (at least " + std::to_string(2 * b) +
+                                    " are needed): give longer data or a wider comparison band");
+  }
   Eigen::MatrixXd W_b(rows.W.rows(), b);
   for (int i = 0; i < b; ++i) W_b.col(i) = rows.W.col(base.independent[static_cast<std::size_t>(i)]);
   const Eigen::VectorXd beta_prior = base.combination * result.prior;
@@ -191,9 +252,9 @@ IdentificationResult identify(const Model& model, const Trajectory& measured, co
       result.correlation(i, j) = covariance(i, j) / std::sqrt(covariance(i, i) * covariance(j, j));
     }
   }
-  const double smallest = solution.singular_values.size() ? solution.singular_values[excited - 1] : 0.0;
-  result.condition_number = solution.null_directions.cols() > 0 ? std::numeric_limits<double>::infinity()
-                                                                 : solution.singular_values[0] / smallest;
+  result.condition_number = solution.null_directions.cols() > 0 || excited == 0
+                                ? std::numeric_limits<double>::infinity()
+                                : solution.singular_values[0] / solution.singular_values[excited - 1];
   if (!result.unexcited.empty()) {
     result.warnings.push_back("the data do not excite " + join(result.unexcited) +
                               ": these base parameters keep the prior's (URDF's) values; a richer excitation "
@@ -206,6 +267,22 @@ IdentificationResult identify(const Model& model, const Trajectory& measured, co
   result.point = result.prior + C.transpose() * correction;
   result.wall_seconds = std::chrono::duration<double>(Clock::now() - started).count();
   return result;
+}
+
+ValidationReport validate(const Model& model, const ParameterLayout& layout, const IdentificationResult& result,
+                          const Trajectory& data, const DataPreparation& preparation) {
+  if (data.joint_count() != model.joint_count()) {
+    throw InputError("q", "the validation data has " + std::to_string(data.joint_count()) + " joints, the robot (" +
+                              model.name + ") has " + std::to_string(model.joint_count()));
+  }
+  if (!data.has_torque()) throw InputError("tau", "the validation data has no tau columns to compare the prediction with");
+  ValidationReport report;
+  DataPreparation same_grid = preparation;
+  same_grid.uniform.dt = result.filters.differentiation.dt;  // the filters are built for this period
+  const Trajectory uniform = prepare_data(data, same_grid, &report.warnings);
+  report.estimate = predict_torque(model, layout, result.point, uniform, result.filters);
+  report.prior = predict_torque(model, layout, result.prior, uniform, result.filters);
+  return report;
 }
 
 }  // namespace manipid::robot

@@ -7,7 +7,8 @@
 // as uniform moves every sample in time by up to several Δ, which the filters' derivatives turn
 // into torque errors (measured: 1.89 % instead of 1.14 % validation error on the Panda). So:
 //  1. rows whose every measured value equals the previous row's are dropped (they carry no new
-//     measurement, and their time stamp is wrong for the values they repeat);
+//     measurement, and their time stamp is wrong for the values they repeat) — in runs of up to three:
+//     a longer run of identical rows is the robot at rest, as measured, and is kept;
 //  2. the rest are interpolated onto t0, t0 + Δ, ... by piecewise-cubic Hermite interpolation
 //     with three-point slopes (exact for quadratics on any spacing, C¹), so q̈ of the
 //     interpolant stays close to q̈ of the signal — linear interpolation would put a kink at

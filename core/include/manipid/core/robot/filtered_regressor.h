@@ -1,20 +1,27 @@
 // filtered_regressor.h — the paper's input-error filtering for a rigid-body robot, filtered consistently.
 //
-// The measured angles go through the differential filters (filters.h): q^f, q̇^f, q̈^f. The regressor is
-// formed from them, Y(q^f, q̇^f, q̈^f). Then — the step that makes the comparison consistent — the same
-// low-pass L that gives τ^f = L τ is applied to every column of Y ("parallel filtering"):
+// Two filters of the paper's family (filters.h), each with its own job:
+//  - the differentiation filter D (M, Ωg) gives q^f, q̇^f, q̈^f, and the regressor is formed from them,
+//    Y(q^f, q̇^f, q̈^f). Its band must lie far above the motion: the windowed differentiators are exact
+//    only near DC (the second derivative's gain is off by ~1e-3 across most of its passband, by 1.4e-5 at
+//    2 % of Ωg), and a biased q̈ biases every inertial parameter;
+//  - the comparison filter L (M_c, Ω_c) — the low-pass that gives τ^f = L τ — is applied to every column
+//    of Y too ("parallel filtering"):
 //
-//     L τ = L (Y(q, q̇, q̈) π) = (L Y) π   and   L Y(q, q̇, q̈) ≈ L Y(q^f, q̇^f, q̈^f)
+//        L τ = L (Y(q, q̇, q̈) π) = (L Y) π   and   L Y(q, q̇, q̈) ≈ L Y(q^f, q̇^f, q̈^f),
 //
-// as long as the band passes the motion (q^f ≈ q). Without it, Y keeps the sharp sign(q̇) edges of Coulomb
-// friction and the products of the nonlinear terms while τ^f has them smoothed, and least squares moves
-// Coulomb friction into viscous (measured: fv +40 %). Filtered twice, the regressor's valid samples start
-// 2M after the data's; τ^f is taken at the same instants.
+//    exact for any linear L; the only approximation is Y(q^f, ..) ≈ Y(q, ..), which D's wide band makes
+//    good. L decides which frequencies the fit weighs: narrow, around the motion, it keeps the torque the
+//    motion makes and drops the noise and the vibrations no rigid-body model explains. Without parallel
+//    filtering, Y keeps the sharp sign(q̇) edges of Coulomb friction while τ^f has them smoothed, and least
+//    squares moves Coulomb friction into viscous (measured: fv +40 %).
+// The compared instants start M + M_c after the data's first sample; τ^f is taken at the same instants.
 //
-// The doubly filtered signals hold nothing above the band Ωg, so keeping every D-th row with
-// D = max(1, ⌊π / (2 Ωg)⌋) (twice the Nyquist rate of the band) loses no information while cutting the
-// least-squares work by D. The rows are accumulated sample by sample (each Y(q^f_s) added to the ≈ (2M+1)/D
-// outputs whose window covers s), so memory stays O(rows × dim π) whatever the number of samples.
+// The doubly filtered signals hold nothing above Ω_c, so keeping every D-th instant with
+// D = max(1, ⌊π / (2 Ω_c)⌋) (twice the Nyquist rate of the band) loses no information while cutting the
+// least-squares work by D. The rows are accumulated sample by sample (each Y(q^f_s) added to the
+// ≈ (2M_c+1)/D outputs whose window covers s), so memory stays O(rows × dim π) whatever the number of
+// samples.
 #pragma once
 
 #include "manipid/core/filters.h"
@@ -28,10 +35,19 @@
 
 namespace manipid::robot {
 
+/// The two filters: D differentiates q, L low-passes τ and the regressor's columns alike.
+struct FilterPair {
+  FilterSettings differentiation;
+  FilterSettings comparison;
+  /// Samples the two filters consume at each end together (M + M_c), and at least the data must have.
+  int margin() const { return differentiation.half_length + comparison.half_length; }
+  int shortest_data() const { return 2 * margin() + 3; }
+};
+
 /// The rows least squares compares: (L Y) π against L τ, joint-major within each kept instant.
 struct FilteredRegressor {
-  FilterSettings filter;
-  int decimation = 1;        ///< D: every D-th doubly filtered instant is a row block
+  FilterPair filters;
+  int decimation = 1;        ///< D: every D-th compared instant is a row block
   int instants = 0;          ///< R: row blocks; rows = R · n
   Eigen::VectorXd t;         ///< R: the time of each row block, s
   Eigen::MatrixXd W;         ///< (R · n) × dim π: row r·n + k−1 is joint k at instant r
@@ -41,10 +57,10 @@ struct FilteredRegressor {
 };
 
 /// Builds the rows for `data` (uniform samples: prepare_data first). Throws InputError when the data is
-/// too short for two passes of the filter (4M + 2 samples), the joint counts differ, or the settings are
-/// invalid. Returns with `instants` = 0 when `cancel` is set part way.
+/// shorter than filters.shortest_data(), the joint counts differ, or the settings are invalid. Returns
+/// with `instants` = 0 when `cancel` is set part way.
 FilteredRegressor filtered_regressor(const Model& model, const ParameterLayout& layout, const Trajectory& data,
-                                     const FilterSettings& filter, const std::atomic<bool>* cancel = nullptr);
+                                     const FilterPair& filters, const std::atomic<bool>* cancel = nullptr);
 
 /// What a parameter vector predicts against the measured torque, both through the same filters.
 struct TorquePrediction {
@@ -57,8 +73,8 @@ struct TorquePrediction {
 };
 
 /// The torque `pi` predicts on `data` (uniform samples with torque), filtered as identification filters
-/// (every doubly filtered instant, no decimation), beside the measured torque and the error figures.
+/// (every compared instant, no decimation), beside the measured torque and the error figures.
 TorquePrediction predict_torque(const Model& model, const ParameterLayout& layout, const Eigen::VectorXd& pi,
-                                const Trajectory& data, const FilterSettings& filter);
+                                const Trajectory& data, const FilterPair& filters);
 
 }  // namespace manipid::robot

@@ -5,7 +5,13 @@
 //   1. prepare the data: trim the ramps, drop stale repeated rows, resample onto a uniform grid
 //      (resample.h);
 //   2. filter: q^f, q̇^f, q̈^f from the differential filters, Y(q^f, q̇^f, q̈^f), then L Y beside L τ —
-//      both sides through the same low-pass (robot/filtered_regressor.h);
+//      both sides through the same low-pass (robot/filtered_regressor.h). Chosen from the data unless
+//      given: the motion's band f_m — the frequency below which all but 1e-6 of the power of the
+//      detrended angles lies — then differentiation band Ωg = 100·Ω_m (the differentiators exact to
+//      ~1e-5 on the motion; at most π/2) and comparison band Ω_c = 5·Ω_m (the torque the motion makes,
+//      its nonlinear harmonics included; not the noise), each with M = ⌈6.4π/Ω⌉ (the paper's
+//      M = 100, Ωg = 0.2 proportion), M_c shortened if the filters would consume more than a third of
+//      the data;
 //   3. solve (L Y_b) β = L τ for the base parameters β (robot/base_parameters.h) by QR on column-scaled
 //      rows, optionally weighting each joint by its residual variance; directions the data do not excite
 //      (relative singular value < 1e-10) stay at the prior's value and a warning names them;
@@ -44,9 +50,12 @@ struct IdentificationOptions {
   ParameterLayout layout;
   /// Trim and uniform grid (resample.h).
   DataPreparation preparation;
-  /// The differential filters' half-length M and band Ωg (rad/sample); 0 = chosen from the data (both).
+  /// The differentiation filter's half-length M and band Ωg (rad/sample); 0 = chosen from the data (both).
   int half_length = 0;
   double band = 0.0;
+  /// The comparison filter's (the low-pass of τ and of the regressor's columns); 0 = chosen (both).
+  int comparison_half_length = 0;
+  double comparison_band = 0.0;
   JointWeighting weighting = JointWeighting::unit;
   /// The prior standard vector (the CAD values; dim layout.size(n)); empty = the model's own
   /// (standard_parameters(model, layout)).
@@ -74,8 +83,9 @@ struct IdentificationResult {
   /// Standard parameters that never enter the torque (the base parameter names list the rest).
   std::vector<std::string> unidentifiable;
 
-  FilterSettings filter;
-  bool filter_chosen_automatically = false;
+  FilterPair filters;
+  bool filters_chosen_automatically = false;
+  double motion_band_hz = 0.0;       ///< f_m found in the data (0 when both filters were given)
   int decimation = 1;
   int rows = 0;                      ///< least-squares rows (instants × joints)
   Eigen::VectorXd residual_rms;      ///< per joint, N·m, of L τ − (L Y_b) β̂
@@ -86,11 +96,28 @@ struct IdentificationResult {
   bool cancelled = false;
 };
 
+/// How well a model predicts a second run: the estimate beside the prior (the URDF's own values), both
+/// through the identification's filters (robot/filtered_regressor.h).
+struct ValidationReport {
+  TorquePrediction estimate;  ///< with IdentificationResult::point
+  TorquePrediction prior;     ///< with IdentificationResult::prior
+  std::vector<std::string> warnings;  ///< e.g. the second run's resampling
+};
+
+/// Predicts `data`'s torque (any time stamps; trimmed and resampled as `preparation` says, onto the
+/// identification's sample period) with the estimate and with the prior.
+ValidationReport validate(const Model& model, const ParameterLayout& layout, const IdentificationResult& result,
+                          const Trajectory& data, const DataPreparation& preparation);
+
 /// Identifies the base parameters of `model` from `data` (with tau columns; any time stamps). Throws
 /// InputError for unusable input (joint counts, no torque, too short for the filter, a bad prior).
 IdentificationResult identify(const Model& model, const Trajectory& data, const IdentificationOptions& options);
 
-/// The filter identify() chooses for uniform `data` when none is given (see identification.cpp).
-FilterSettings choose_filter(const Model& model, const Trajectory& data, const ParameterLayout& layout);
+/// The motion's band f_m, Hz: the frequency below which all but `tail` of the power of the angles lies
+/// (each joint detrended by its end-point line, Hann window, zero-padded FFT; joints summed). Uniform data.
+double motion_band(const Trajectory& data, double tail = 1e-6);
+
+/// The filters identify() uses for uniform `data` when none are given (see the file comment).
+FilterPair choose_filters(const Trajectory& data);
 
 }  // namespace manipid::robot

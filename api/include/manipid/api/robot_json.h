@@ -1,0 +1,56 @@
+// robot_json.h — a rigid-body robot's identification as JSON: the object `manipid identify --robot --json`
+// prints (and the service will return), and parameter vectors read back from it.
+//
+// Shape (numbers that do not exist are null, never NaN):
+//   { "method": "input-error (linear least squares)",
+//     "robot": {"name", "base_link", "tip_link", "joints": [{"name", "link", "type"}]},
+//     "parameters": {"friction": ["viscous", ...], "armature": false},
+//     "base_parameters": [{"name": "Izz1 + Iyy2 + ...", "estimate", "std_error", "relative_std_error"}],
+//     "correlation": [[...]]  (base × base),
+//     "condition_number", "unexcited": [...],
+//     "point": {"m1": ..., ..., "fv1": ...}   every standard parameter: the base estimate, nearest to the prior,
+//     "prior": {...}                         the URDF's own values,
+//     "unidentifiable": [...]                standard parameters no motion can determine,
+//     "friction": [{"joint", "fv", "fc", "fo"}]   per joint, from point (only the layout's terms),
+//     "filters": {"differentiation": {"half_length", "band", "dt", "cutoff_hz"},
+//                 "comparison": {...}, "automatic", "motion_band_hz"},
+//     "rows", "decimation",
+//     "fit": {"residual_rms": [...], "relative_error": [...], "overall_relative_error"},
+//     "validation": {"relative_error": [...], "rms_error": [...], "overall_relative_error",
+//                    "prior": {"relative_error": [...], "rms_error": [...], "overall_relative_error"}}  (if any),
+//     "warnings": [...], "wall_seconds" }
+#pragma once
+
+#include "manipid/core/robot/identification.h"
+#include "manipid/core/robot/model.h"
+
+#include <nlohmann/json.hpp>
+
+#include <optional>
+#include <string>
+#include <vector>
+
+namespace manipid::api {
+
+/// The friction terms a layout has, by name: "viscous", "coulomb", "offset".
+std::vector<std::string> friction_names(const robot::ParameterLayout& layout);
+/// "viscous,coulomb,offset" (any subset, any order; "none" for no friction) → the layout's friction
+/// flags; throws InputError(field) for an unknown or repeated term.
+void parse_friction(const std::vector<std::string>& terms, robot::ParameterLayout& layout, const std::string& field);
+
+nlohmann::ordered_json robot_result_to_json(const robot::Model& model, const robot::ParameterLayout& layout,
+                                            const robot::IdentificationResult& result,
+                                            const robot::TorquePrediction& fit,
+                                            const std::optional<robot::ValidationReport>& validation);
+
+/// A standard parameter vector for `model` from JSON: an identify result (its "point") or a flat
+/// {"name": value} object. The layout follows the names given (fv*/fc*/fo*/Ia* present → that block);
+/// parameters not given keep the URDF's values. Throws InputError(field) for unknown names or values
+/// that are not finite numbers.
+struct ParameterValues {
+  robot::ParameterLayout layout;
+  Eigen::VectorXd values;
+};
+ParameterValues parameters_from_json(const robot::Model& model, const nlohmann::json& json, const std::string& field);
+
+}  // namespace manipid::api

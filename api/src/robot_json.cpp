@@ -1,0 +1,170 @@
+// robot_json.cpp — rigid-body identification results to JSON and parameter vectors back (robot_json.h).
+#include "manipid/api/robot_json.h"
+
+#include "manipid/core/model.h"
+
+#include <algorithm>
+#include <cmath>
+#include <numbers>
+#include <set>
+
+namespace manipid::api {
+namespace {
+
+using Json = nlohmann::ordered_json;
+
+Json number(double value) { return std::isfinite(value) ? Json(value) : Json(nullptr); }
+
+Json numbers(const Eigen::VectorXd& values) {
+  Json array = Json::array();
+  for (Eigen::Index i = 0; i < values.size(); ++i) array.push_back(number(values[i]));
+  return array;
+}
+
+Json by_name(const std::vector<std::string>& names, const Eigen::VectorXd& values) {
+  Json object = Json::object();
+  for (std::size_t i = 0; i < names.size(); ++i) object[names[i]] = number(values[static_cast<Eigen::Index>(i)]);
+  return object;
+}
+
+Json filter_json(const FilterSettings& filter) {
+  return {{"half_length", filter.half_length},
+          {"band", filter.band},
+          {"dt", filter.dt},
+          {"cutoff_hz", number(filter.band / (2.0 * std::numbers::pi * filter.dt))}};
+}
+
+Json prediction_json(const robot::TorquePrediction& prediction) {
+  return {{"relative_error", numbers(prediction.relative_error)},
+          {"rms_error", numbers(prediction.rms_error)},
+          {"overall_relative_error", number(prediction.overall_relative_error)}};
+}
+
+}  // namespace
+
+std::vector<std::string> friction_names(const robot::ParameterLayout& layout) {
+  std::vector<std::string> names;
+  if (layout.viscous) names.emplace_back("viscous");
+  if (layout.coulomb) names.emplace_back("coulomb");
+  if (layout.offset) names.emplace_back("offset");
+  return names;
+}
+
+void parse_friction(const std::vector<std::string>& terms, robot::ParameterLayout& layout, const std::string& field) {
+  layout.viscous = layout.coulomb = layout.offset = false;
+  std::set<std::string> seen;
+  for (const std::string& term : terms) {
+    if (!seen.insert(term).second) throw InputError(field, field + " lists '" + term + "' twice");
+    if (term == "viscous") layout.viscous = true;
+    else if (term == "coulomb") layout.coulomb = true;
+    else if (term == "offset") layout.offset = true;
+    else if (term == "none" && terms.size() == 1) continue;
+    else {
+      throw InputError(field, field + ": unknown friction term '" + term +
+                                  "' (expected any of viscous, coulomb, offset, or none alone)");
+    }
+  }
+}
+
+nlohmann::ordered_json robot_result_to_json(const robot::Model& model, const robot::ParameterLayout& layout,
+                                            const robot::IdentificationResult& result,
+                                            const robot::TorquePrediction& fit,
+                                            const std::optional<robot::ValidationReport>& validation) {
+  const int n = model.joint_count();
+  Json joints = Json::array();
+  for (const robot::Joint& joint : model.joints) {
+    joints.push_back({{"name", joint.name}, {"link", joint.link}, {"type", robot::to_string(joint.type)}});
+  }
+  Json base = Json::array();
+  for (int i = 0; i < result.base.size(); ++i) {
+    const double estimate = result.estimate[i], error = result.std_errors[i];
+    base.push_back({{"name", result.base.names[static_cast<std::size_t>(i)]},
+                    {"estimate", number(estimate)},
+                    {"std_error", number(error)},
+                    {"relative_std_error", number(estimate != 0.0 ? std::abs(error / estimate) : NAN)}});
+  }
+  Json correlation = Json::array();
+  for (Eigen::Index a = 0; a < result.correlation.rows(); ++a) correlation.push_back(numbers(result.correlation.row(a).transpose()));
+  Json friction = Json::array();
+  for (int k = 0; k < n; ++k) {
+    Json entry = {{"joint", model.joints[static_cast<std::size_t>(k)].name}};
+    if (layout.viscous) entry["fv"] = number(result.point[layout.viscous_begin(n) + k]);
+    if (layout.coulomb) entry["fc"] = number(result.point[layout.coulomb_begin(n) + k]);
+    if (layout.offset) entry["fo"] = number(result.point[layout.offset_begin(n) + k]);
+    if (layout.armature) entry["Ia"] = number(result.point[layout.armature_begin(n) + k]);
+    friction.push_back(entry);
+  }
+  Json json = {
+      {"method", "input-error (linear least squares)"},
+      {"robot", {{"name", model.name}, {"base_link", model.base_link}, {"tip_link", model.tip_link}, {"joints", joints}}},
+      {"parameters", {{"friction", friction_names(layout)}, {"armature", layout.armature}}},
+      {"base_parameters", base},
+      {"correlation", correlation},
+      {"condition_number", number(result.condition_number)},
+      {"unexcited", result.unexcited},
+      {"point", by_name(result.standard_names, result.point)},
+      {"prior", by_name(result.standard_names, result.prior)},
+      {"unidentifiable", result.unidentifiable},
+      {"friction", friction},
+      {"filters",
+       {{"differentiation", filter_json(result.filters.differentiation)},
+        {"comparison", filter_json(result.filters.comparison)},
+        {"automatic", result.filters_chosen_automatically},
+        {"motion_band_hz", number(result.motion_band_hz)}}},
+      {"rows", result.rows},
+      {"decimation", result.decimation},
+      {"fit",
+       {{"residual_rms", numbers(result.residual_rms)},
+        {"relative_error", numbers(fit.relative_error)},
+        {"overall_relative_error", number(fit.overall_relative_error)}}},
+  };
+  if (validation) {
+    Json figures = prediction_json(validation->estimate);
+    figures["prior"] = prediction_json(validation->prior);
+    json["validation"] = figures;
+  }
+  std::vector<std::string> warnings = result.warnings;
+  if (validation) {
+    for (const std::string& warning : validation->warnings) warnings.push_back("validation data: " + warning);
+  }
+  json["warnings"] = warnings;
+  json["wall_seconds"] = result.wall_seconds;
+  return json;
+}
+
+ParameterValues parameters_from_json(const robot::Model& model, const nlohmann::json& json, const std::string& field) {
+  const int n = model.joint_count();
+  const nlohmann::json* values = &json;
+  if (json.is_object() && json.contains("point")) values = &json.at("point");
+  if (!values->is_object()) {
+    throw InputError(field, field + " must be an identify result (with \"point\") or an object of parameter values by name");
+  }
+  ParameterValues result;
+  result.layout.viscous = result.layout.coulomb = false;
+  const auto has_prefix = [&](const char* prefix) {
+    return std::any_of(values->items().begin(), values->items().end(), [&](const auto& item) {
+      return item.key().rfind(prefix, 0) == 0 && item.key().size() > std::string(prefix).size() &&
+             std::isdigit(static_cast<unsigned char>(item.key()[std::string(prefix).size()]));
+    });
+  };
+  result.layout.viscous = has_prefix("fv");
+  result.layout.coulomb = has_prefix("fc");
+  result.layout.offset = has_prefix("fo");
+  result.layout.armature = has_prefix("Ia");
+  const std::vector<std::string> names = robot::standard_parameter_names(n, result.layout);
+  result.values = robot::standard_parameters(model, result.layout);
+  for (const auto& item : values->items()) {
+    const auto found = std::find(names.begin(), names.end(), item.key());
+    if (found == names.end()) {
+      throw InputError(field, field + ": '" + item.key() + "' is not a parameter of this " + std::to_string(n) +
+                                  "-joint robot (m1, mx1, ..., Izz" + std::to_string(n) + ", fv1, fc1, fo1, Ia1, ...)");
+    }
+    if (!item.value().is_number() || !std::isfinite(item.value().get<double>())) {
+      throw InputError(field, field + ": " + item.key() + " must be a finite number");
+    }
+    result.values[found - names.begin()] = item.value().get<double>();
+  }
+  return result;
+}
+
+}  // namespace manipid::api

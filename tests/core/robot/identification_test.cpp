@@ -1,0 +1,371 @@
+// identification_test.cpp — a URDF robot's base parameters from data this test makes: structural base
+// parameters against closed forms, noise-free and noisy round trips, jittery loggers, trimmed ramps, a
+// flange and 7 joints, friction kept apart, honest standard errors, validation, and refusals.
+#include "manipid/core/robot/identification.h"
+
+#include "manipid/core/model.h"
+#include "manipid/core/robot/base_parameters.h"
+#include "manipid/core/robot/regressor.h"
+#include "manipid/core/robot/rnea.h"
+#include "manipid/core/robot/urdf.h"
+#include "robot_test_support.h"
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <numbers>
+#include <random>
+
+namespace manipid::robot {
+namespace {
+
+using testing::read_file;
+using testing::source_path;
+
+Model example(const std::string& name) { return parse_urdf(read_file(source_path("examples/robots/" + name))).model; }
+
+/// A finite Fourier series per joint (Swevers' form): q_k(t) = Σ_l a_kl/(ω l) sin(ω l t) − b_kl/(ω l) cos(ω l t).
+struct Fourier {
+  double period = 10.0;
+  Eigen::MatrixXd a, b;  // n × harmonics
+
+  static Fourier random(int n, int harmonics, std::mt19937_64& engine, double amplitude = 0.25) {
+    std::uniform_real_distribution<double> uniform(-amplitude, amplitude);
+    Fourier f;
+    f.a.resize(n, harmonics);
+    f.b.resize(n, harmonics);
+    for (int k = 0; k < n; ++k) {
+      for (int l = 0; l < harmonics; ++l) {
+        f.a(k, l) = uniform(engine);
+        f.b(k, l) = uniform(engine);
+      }
+    }
+    return f;
+  }
+  void state(double t, Eigen::VectorXd& q, Eigen::VectorXd& qd, Eigen::VectorXd& qdd) const {
+    const double w0 = 2.0 * std::numbers::pi / period;
+    q.setZero(a.rows());
+    qd.setZero(a.rows());
+    qdd.setZero(a.rows());
+    for (Eigen::Index l = 0; l < a.cols(); ++l) {
+      const double w = w0 * static_cast<double>(l + 1), s = std::sin(w * t), c = std::cos(w * t);
+      q += (a.col(l) * s - b.col(l) * c) / w;
+      qd += a.col(l) * c + b.col(l) * s;
+      qdd += (-a.col(l) * s + b.col(l) * c) * w;
+    }
+  }
+};
+
+/// τ = RNEA(π) sampled at the given times along the trajectory.
+Trajectory measure(const Model& model, const ParameterLayout& layout, const Eigen::VectorXd& pi, const Fourier& motion,
+                   const Eigen::VectorXd& times) {
+  const int n = model.joint_count();
+  Trajectory data;
+  data.t = times;
+  data.q.resize(times.size(), n);
+  data.tau.resize(times.size(), n);
+  Data workspace(model);
+  Eigen::VectorXd q, qd, qdd, tau(n);
+  for (Eigen::Index s = 0; s < times.size(); ++s) {
+    motion.state(times[s], q, qd, qdd);
+    inverse_dynamics(model, workspace, layout, pi, q, qd, qdd, tau);
+    data.q.row(s) = q.transpose();
+    data.tau.row(s) = tau.transpose();
+  }
+  return data;
+}
+
+Eigen::VectorXd uniform_times(double duration, double dt) {
+  return Eigen::VectorXd::LinSpaced(static_cast<Eigen::Index>(std::round(duration / dt)) + 1, 0.0, duration);
+}
+
+/// The URDF's values with every entry moved by up to ±20 % and friction of plausible size: the truth the
+/// data are made with, different from the prior identification starts from.
+Eigen::VectorXd perturbed_truth(const Model& model, const ParameterLayout& layout, std::mt19937_64& engine) {
+  const int n = model.joint_count();
+  Eigen::VectorXd pi = standard_parameters(model, layout);
+  std::uniform_real_distribution<double> spread(0.8, 1.2), friction(0.2, 1.5), offset(-0.3, 0.3);
+  for (Eigen::Index i = 0; i < 10 * n; ++i) pi[i] *= spread(engine);
+  for (int k = 0; k < n; ++k) {
+    if (layout.viscous) pi[layout.viscous_begin(n) + k] = friction(engine);
+    if (layout.coulomb) pi[layout.coulomb_begin(n) + k] = 2.0 * friction(engine);
+    if (layout.offset) pi[layout.offset_begin(n) + k] = offset(engine);
+  }
+  return pi;
+}
+
+/// ‖τ(π̂) − τ(π)‖ / ‖τ(π)‖ over random states within the joint limits (q̇, q̈ standard normal).
+double random_state_error(const Model& model, const ParameterLayout& layout, const Eigen::VectorXd& estimate,
+                          const Eigen::VectorXd& truth, std::mt19937_64& engine) {
+  const int n = model.joint_count();
+  std::normal_distribution<double> normal;
+  Data workspace(model);
+  Eigen::VectorXd q(n), qd(n), qdd(n), a(n), b(n);
+  double difference = 0.0, size = 0.0;
+  for (int i = 0; i < 500; ++i) {
+    for (int k = 0; k < n; ++k) {
+      const JointLimits& limits = model.joints[static_cast<std::size_t>(k)].limits;
+      const double lower = std::isfinite(limits.lower) ? limits.lower : -std::numbers::pi;
+      const double upper = std::isfinite(limits.upper) ? limits.upper : std::numbers::pi;
+      q[k] = std::uniform_real_distribution<double>(lower, upper)(engine);
+      qd[k] = normal(engine);
+      qdd[k] = normal(engine);
+    }
+    inverse_dynamics(model, workspace, layout, estimate, q, qd, qdd, a);
+    inverse_dynamics(model, workspace, layout, truth, q, qd, qdd, b);
+    difference += (a - b).squaredNorm();
+    size += b.squaredNorm();
+  }
+  return std::sqrt(difference / size);
+}
+
+ParameterLayout with_offset() {
+  ParameterLayout layout;
+  layout.offset = true;
+  return layout;
+}
+
+// ---- base parameters ----
+
+TEST(BaseParameters, ThePlanarTwoLinkArmHasSixRegroupedAsTheTextbookSays) {
+  // Two parallel z axes, the second 0.5 m along x, gravity in the plane (−y): six base inertial
+  // parameters (Gautier & Khalil): Izz1 + a²·m2, mx1 + a·m2, my1, Izz2, mx2, my2.
+  const std::string urdf = R"(<robot name="planar">
+    <link name="base"/>
+    <joint name="j1" type="continuous"><parent link="base"/><child link="l1"/><axis xyz="0 0 1"/></joint>
+    <link name="l1"><inertial><origin xyz="0.25 0 0"/><mass value="2"/><inertia ixx="0.01" ixy="0" ixz="0" iyy="0.05" iyz="0" izz="0.05"/></inertial></link>
+    <joint name="j2" type="continuous"><parent link="l1"/><child link="l2"/><origin xyz="0.5 0 0"/><axis xyz="0 0 1"/></joint>
+    <link name="l2"><inertial><origin xyz="0.2 0 0"/><mass value="1"/><inertia ixx="0.01" ixy="0" ixz="0" iyy="0.03" iyz="0" izz="0.03"/></inertial></link>
+  </robot>)";
+  UrdfOptions options;
+  options.gravity = Eigen::Vector3d(0.0, -9.81, 0.0);
+  const Model model = parse_urdf(urdf, options).model;
+  ParameterLayout layout;
+  layout.viscous = layout.coulomb = false;
+  const BaseParameters base = base_parameters(model, layout);
+  EXPECT_EQ(base.names, (std::vector<std::string>{"mx1 + 0.5*m2", "my1", "Izz1 + 0.25*m2", "mx2", "my2", "Izz2"}));
+  // Never in the torque: m1 (its origin never moves), and of each body mz, Ixx, Ixy, Ixz, Iyy, Iyz.
+  EXPECT_EQ(base.absent, (std::vector<int>{0, 3, 4, 5, 6, 7, 8, 13, 14, 15, 16, 17, 18}));
+  EXPECT_EQ(base.dependent, std::vector<int>{10});  // m2, regrouped into mx1 and Izz1
+}
+
+TEST(BaseParameters, TheBaseRegressorReproducesTheFullOneForEveryMotion) {
+  // τ = Y π = Y_b (C π) at states the base was not computed from: the regrouping is exact.
+  for (const char* name : {"ur5_like.urdf", "panda_like.urdf"}) {
+    SCOPED_TRACE(name);
+    const Model model = example(name);
+    const ParameterLayout layout = with_offset();
+    const BaseParameters base = base_parameters(model, layout);
+    std::mt19937_64 engine(99);
+    const Eigen::VectorXd pi = testing::random_parameters(engine, model.joint_count(), layout);
+    for (int trial = 0; trial < 20; ++trial) {
+      const int n = model.joint_count();
+      const Eigen::MatrixXd Y = regressor(model, layout, testing::random_vector(engine, n, 3.0),
+                                          testing::random_vector(engine, n, 2.0), testing::random_vector(engine, n, 5.0));
+      Eigen::MatrixXd Y_b(n, base.size());
+      for (int i = 0; i < base.size(); ++i) Y_b.col(i) = Y.col(base.independent[static_cast<std::size_t>(i)]);
+      EXPECT_LT(testing::relative_error(Y_b * (base.combination * pi), Y * pi), 1e-12);
+    }
+  }
+}
+
+TEST(BaseParameters, CountsOfTheExampleArms) {
+  // The 6-joint arm: 36 inertial base parameters of 60 (48 with viscous and Coulomb friction, as a
+  // numpy pipeline found for a 6-DOF arm), plus 3 friction terms per joint; the 7-joint Panda-like one 43
+  // of 70 (as the real Panda's and KUKA's logs have it).
+  EXPECT_EQ(base_parameters(example("ur5_like.urdf"), ParameterLayout{}).size(), 48);
+  EXPECT_EQ(base_parameters(example("ur5_like.urdf"), with_offset()).size(), 36 + 18);
+  EXPECT_EQ(base_parameters(example("panda_like.urdf"), with_offset()).size(), 43 + 21);
+}
+
+// ---- round trips ----
+
+TEST(RobotIdentification, NoiseFreeRoundTripPredictsRandomStatesTo1e5) {
+  const Model model = example("ur5_like.urdf");
+  const ParameterLayout layout = with_offset();
+  std::mt19937_64 engine(1);
+  const Eigen::VectorXd truth = perturbed_truth(model, layout, engine);
+  const Fourier motion = Fourier::random(model.joint_count(), 5, engine);
+  const Trajectory data = measure(model, layout, truth, motion, uniform_times(20.0, 1e-3));
+  IdentificationOptions options;
+  options.layout = layout;
+  const IdentificationResult result = identify(model, data, options);
+  EXPECT_TRUE(result.filters_chosen_automatically);
+  // The fifth harmonic of a 10 s period is 0.5 Hz; the Hann window's leakage adds a few bins.
+  EXPECT_GE(result.motion_band_hz, 0.5);
+  EXPECT_LE(result.motion_band_hz, 1.0);
+  EXPECT_TRUE(result.unexcited.empty());
+  EXPECT_LT(random_state_error(model, layout, result.point, truth, engine), 1e-5);
+  // The estimate is the truth's base parameters.
+  const Eigen::VectorXd true_base = result.base.combination * truth;
+  EXPECT_LT((result.estimate - true_base).cwiseAbs().maxCoeff() / true_base.cwiseAbs().maxCoeff(), 1e-5);
+}
+
+TEST(RobotIdentification, CoulombFrictionStaysCoulombBecauseBothSidesAreFilteredAlike) {
+  // The trap: low-passing τ while the regressor keeps sign(q̇) sharp moves Coulomb friction into
+  // viscous (fv +40 %). Here Coulomb friction dominates; both must come back to 1e-4.
+  const Model model = example("ur5_like.urdf");
+  ParameterLayout layout;  // viscous and Coulomb
+  std::mt19937_64 engine(5);
+  Eigen::VectorXd truth = perturbed_truth(model, layout, engine);
+  const int n = model.joint_count();
+  for (int k = 0; k < n; ++k) truth[layout.coulomb_begin(n) + k] = 5.0 + k;
+  const Trajectory data = measure(model, layout, truth, Fourier::random(n, 5, engine), uniform_times(20.0, 1e-3));
+  IdentificationOptions options;
+  options.layout = layout;
+  const IdentificationResult result = identify(model, data, options);
+  for (int k = 0; k < n; ++k) {
+    const int fv = layout.viscous_begin(n) + k, fc = layout.coulomb_begin(n) + k;
+    EXPECT_NEAR(result.point[fv], truth[fv], 1e-4 * truth[fv]) << "fv" << k + 1;
+    EXPECT_NEAR(result.point[fc], truth[fc], 1e-4 * truth[fc]) << "fc" << k + 1;
+  }
+}
+
+TEST(RobotIdentification, SevenJointsWithAFlangeFromAJitteryLoggerWithRepeatsAndRamps) {
+  // Real-world conditions: time stamps 0.7–1.3 ms with a 9 ms gap every 500 rows (0.7–9 ms around a 1 ms
+  // median), every 20th row a stale repeat, the robot at rest for 1 s at each end (trimmed), a fixed flange
+  // merged into link 7.
+  const Model model = example("panda_like.urdf");
+  ASSERT_EQ(model.joint_count(), 7);
+  for (const bool coulomb : {false, true}) {
+    SCOPED_TRACE(coulomb ? "with Coulomb friction" : "viscous friction and offsets");
+    ParameterLayout layout = with_offset();
+    layout.coulomb = coulomb;
+    std::mt19937_64 engine(7);
+    const Eigen::VectorXd truth = perturbed_truth(model, layout, engine);
+    const Fourier motion = Fourier::random(7, 5, engine, 0.15);
+    std::vector<double> stamps{0.0};
+    std::uniform_real_distribution<double> jitter(0.7e-3, 1.3e-3);
+    while (stamps.back() < 22.0) stamps.push_back(stamps.back() + (stamps.size() % 500 == 0 ? 9e-3 : jitter(engine)));
+    const Eigen::VectorXd times = Eigen::Map<Eigen::VectorXd>(stamps.data(), static_cast<Eigen::Index>(stamps.size()));
+    // Ramps: at rest at q(0) before t = 1 s and at q(20) after t = 21 s.
+    const Eigen::VectorXd moving = (times.array() - 1.0).cwiseMax(0.0).cwiseMin(20.0).matrix();
+    Trajectory data = measure(model, layout, truth, motion, moving);
+    data.t = times;
+    for (Eigen::Index s = 20; s < data.t.size(); s += 20) {
+      data.q.row(s) = data.q.row(s - 1);
+      data.tau.row(s) = data.tau.row(s - 1);
+    }
+    IdentificationOptions options;
+    options.layout = layout;
+    options.preparation.trim_start = 1.0;
+    options.preparation.trim_end = 1.0;
+    const IdentificationResult result = identify(model, data, options);
+    ASSERT_FALSE(result.warnings.empty());
+    EXPECT_NE(result.warnings.front().find("repeated rows dropped"), std::string::npos) << result.warnings.front();
+    EXPECT_EQ(result.base.size(), coulomb ? 64 : 57);
+    // Smooth torques survive resampling to 1e-5. A Coulomb reversal is a jump between two logged rows:
+    // on the new grid the one sample inside it is interpolated while sign(q̇) is exact, a mismatch of up
+    // to fc for 1 ms at each reversal (≈ 1 ms per second of motion), which costs ~1e-3 here and is part of
+    // what resampling a jittery log costs.
+    EXPECT_LT(random_state_error(model, layout, result.point, truth, engine), coulomb ? 5e-3 : 1e-5);
+  }
+}
+
+TEST(RobotIdentification, StandardErrorsCoverTheTruthOnNoisyData) {
+  // τ noise 1 % of each joint's spread: each base parameter's 3σ interval holds its true value (a
+  // few may miss by chance: at most 2 of 54), and the errors are not all far inside (σ not inflated 10×).
+  const Model model = example("ur5_like.urdf");
+  const ParameterLayout layout = with_offset();
+  std::mt19937_64 engine(11);
+  const Eigen::VectorXd truth = perturbed_truth(model, layout, engine);
+  Trajectory data = measure(model, layout, truth, Fourier::random(6, 5, engine), uniform_times(20.0, 1e-3));
+  const Eigen::VectorXd spread = data.tau.colwise().maxCoeff() - data.tau.colwise().minCoeff();
+  std::normal_distribution<double> normal;
+  for (Eigen::Index s = 0; s < data.tau.rows(); ++s) {
+    for (Eigen::Index k = 0; k < 6; ++k) data.tau(s, k) += 0.01 * spread[k] * normal(engine);
+  }
+  IdentificationOptions options;
+  options.layout = layout;
+  const IdentificationResult result = identify(model, data, options);
+  const Eigen::VectorXd true_base = result.base.combination * truth;
+  int outside = 0;
+  double largest_z = 0.0;
+  for (int i = 0; i < result.base.size(); ++i) {
+    const double z = std::abs(result.estimate[i] - true_base[i]) / result.std_errors[i];
+    if (z > 3.0) ++outside;
+    largest_z = std::max(largest_z, z);
+  }
+  EXPECT_LE(outside, 2);
+  EXPECT_GT(largest_z, 0.3);
+}
+
+TEST(RobotIdentification, ValidationOnASecondRunBeatsThePrior) {
+  const Model model = example("ur5_like.urdf");
+  const ParameterLayout layout = with_offset();
+  std::mt19937_64 engine(13);
+  const Eigen::VectorXd truth = perturbed_truth(model, layout, engine);
+  const Trajectory first = measure(model, layout, truth, Fourier::random(6, 5, engine), uniform_times(20.0, 1e-3));
+  const Trajectory second = measure(model, layout, truth, Fourier::random(6, 4, engine), uniform_times(15.0, 1e-3));
+  IdentificationOptions options;
+  options.layout = layout;
+  const IdentificationResult result = identify(model, first, options);
+  const ValidationReport report = validate(model, layout, result, second, options.preparation);
+  EXPECT_LT(report.estimate.overall_relative_error, 1e-4);
+  for (Eigen::Index k = 0; k < 6; ++k) EXPECT_LT(report.estimate.relative_error[k], 1e-3) << k;
+  EXPECT_GT(report.prior.overall_relative_error, 100 * report.estimate.overall_relative_error);
+  EXPECT_EQ(report.estimate.measured.rows(), report.estimate.model.rows());
+}
+
+TEST(RobotIdentification, AMotionlessJointLeavesItsParametersAtThePriorWithAWarning) {
+  const Model model = example("ur5_like.urdf");
+  const ParameterLayout layout = with_offset();
+  std::mt19937_64 engine(17);
+  const Eigen::VectorXd truth = perturbed_truth(model, layout, engine);
+  Fourier motion = Fourier::random(6, 5, engine);
+  motion.a.row(5).setZero();  // joint 6 never moves
+  motion.b.row(5).setZero();
+  const Trajectory data = measure(model, layout, truth, motion, uniform_times(20.0, 1e-3));
+  IdentificationOptions options;
+  options.layout = layout;
+  const IdentificationResult result = identify(model, data, options);
+  EXPECT_FALSE(result.unexcited.empty());
+  EXPECT_TRUE(std::isinf(result.condition_number));
+  bool warned = false;
+  for (const std::string& warning : result.warnings) warned = warned || warning.find("do not excite") != std::string::npos;
+  EXPECT_TRUE(warned);
+  for (const std::string& name : result.unexcited) {
+    const auto index = std::find(result.base.names.begin(), result.base.names.end(), name) - result.base.names.begin();
+    EXPECT_TRUE(std::isnan(result.std_errors[index])) << name;
+  }
+}
+
+TEST(RobotIdentification, RefusesDataItCannotUseNamingTheProblem) {
+  const Model model = example("ur5_like.urdf");
+  std::mt19937_64 engine(19);
+  const ParameterLayout layout;
+  const Eigen::VectorXd truth = perturbed_truth(model, layout, engine);
+  const Trajectory data = measure(model, layout, truth, Fourier::random(6, 3, engine), uniform_times(10.0, 1e-3));
+  const auto field_of = [&](const Trajectory& input, const IdentificationOptions& options) -> std::string {
+    try {
+      identify(model, input, options);
+    } catch (const manipid::InputError& error) {
+      return error.field() + ": " + error.what();
+    }
+    return "no error";
+  };
+  Trajectory four_joints = data;
+  four_joints.q = data.q.leftCols(4);
+  four_joints.tau = data.tau.leftCols(4);
+  EXPECT_EQ(field_of(four_joints, {}).rfind("q: the data has 4 joints, the robot (ur5_like) has 6", 0), 0u);
+  Trajectory no_torque = data;
+  no_torque.tau.resize(0, 0);
+  EXPECT_EQ(field_of(no_torque, {}).rfind("tau:", 0), 0u);
+  Trajectory short_run = data;
+  short_run.t = data.t.head(200);
+  short_run.q = data.q.topRows(200);
+  short_run.tau = data.tau.topRows(200);
+  IdentificationOptions given;
+  given.half_length = 60;
+  given.band = 0.3;
+  given.comparison_half_length = 100;
+  given.comparison_band = 0.2;
+  EXPECT_EQ(field_of(short_run, given).rfind("samples: the filters (half-lengths M = 60 and M_c = 100) need at least 323", 0), 0u)
+      << field_of(short_run, given);
+  IdentificationOptions half;
+  half.band = 0.1;
+  EXPECT_EQ(field_of(data, half).rfind("half_length:", 0), 0u);
+}
+
+}  // namespace
+}  // namespace manipid::robot
