@@ -16,16 +16,14 @@
 namespace manipid::robot {
 namespace {
 
-/// q^f, q̇^f, q̈^f from D (n × N1, one column per filtered sample: sample M + s of the data) and L τ
-/// (N_L × n: sample M_c + j of the data).
+/// q^f, q̇^f, q̈^f from D (n × N1, one column per filtered sample: sample M + s of the data).
 struct FirstPass {
   Eigen::MatrixXd q, qd, qdd;
-  Eigen::MatrixXd tau;  // empty without torque
-  int samples = 0;      // N1
+  int samples = 0;  // N1
 };
 
 FirstPass first_pass(const Model& model, const Trajectory& data, const FilterPair& filters,
-                     const DifferentialFilter& differentiation, const DifferentialFilter& comparison) {
+                     const DifferentialFilter& differentiation) {
   const int n = model.joint_count();
   if (data.joint_count() != n) {
     throw InputError("q", "the data has " + std::to_string(data.joint_count()) + " joints, the robot " +
@@ -50,11 +48,20 @@ FirstPass first_pass(const Model& model, const Trajectory& data, const FilterPai
     pass.qd.row(k) = qd.transpose();
     pass.qdd.row(k) = qdd.transpose();
   }
-  if (data.has_torque()) {
-    pass.tau.resize(comparison.output_length(data.samples()), n);
-    for (int k = 0; k < n; ++k) comparison.apply(FilterOrder::lowpass, data.tau.col(k), pass.tau.col(k));
-  }
   return pass;
+}
+
+/// L τ at data samples `centre`, `centre + step`, ... (`count` of them), n columns: only the instants
+/// least squares uses, not the whole filtered signal (M_c = 1,000 taps × 20,000 samples × 7 joints
+/// would be most of an identification's time).
+Eigen::MatrixXd lowpass_at(const Trajectory& data, const DifferentialFilter& comparison, int centre, int step, int count) {
+  const int Mc = comparison.settings().half_length;
+  const Eigen::VectorXd& taps = comparison.coefficients(FilterOrder::lowpass);
+  Eigen::MatrixXd result(count, data.joint_count());
+  for (int k = 0; k < data.joint_count(); ++k) {
+    for (int r = 0; r < count; ++r) result(r, k) = taps.dot(data.tau.col(k).segment(centre + r * step - Mc, 2 * Mc + 1));
+  }
+  return result;
 }
 
 }  // namespace
@@ -65,7 +72,7 @@ FilteredRegressor filtered_regressor(const Model& model, const ParameterLayout& 
   filters.comparison.validate();
   const auto differentiation = cached_filter(filters.differentiation);
   const auto comparison = cached_filter(filters.comparison);
-  const FirstPass pass = first_pass(model, data, filters, *differentiation, *comparison);
+  const FirstPass pass = first_pass(model, data, filters, *differentiation);
   const int n = model.joint_count();
   const int p = layout.size(n);
   const int M = filters.differentiation.half_length;
@@ -84,15 +91,18 @@ FilteredRegressor filtered_regressor(const Model& model, const ParameterLayout& 
   // Instant r is data sample M + M_c + r·D: the centre of L's window r·D .. r·D + 2M_c over the first pass.
   for (int r = 0; r < R; ++r) result.t[r] = data.t[M + Mc + r * D];
   if (data.has_torque()) {
+    const Eigen::MatrixXd tau = lowpass_at(data, *comparison, M + Mc, D, R);
     result.tau.resize(static_cast<Eigen::Index>(R) * n);
-    for (int r = 0; r < R; ++r) result.tau.segment(static_cast<Eigen::Index>(r) * n, n) = pass.tau.row(M + r * D).transpose();
+    for (int r = 0; r < R; ++r) result.tau.segment(static_cast<Eigen::Index>(r) * n, n) = tau.row(r).transpose();
   }
 
-  // Row-major, so that adding one joint's row of Y is a contiguous update.
-  Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor> W =
-      Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor>::Zero(static_cast<Eigen::Index>(R) * n, p);
+  // Row-major W and a row-major copy of each Y, so that adding one joint's row of Y is a contiguous,
+  // vectorised update.
+  using RowMajor = Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor>;
+  RowMajor W = RowMajor::Zero(static_cast<Eigen::Index>(R) * n, p);
   Data workspace(model);
   Eigen::MatrixXd Y(n, p);
+  RowMajor Y_rows(n, p);
   std::vector<int> friction_columns;
   for (int begin : {layout.viscous_begin(n), layout.coulomb_begin(n), layout.offset_begin(n), layout.armature_begin(n)}) {
     if (begin >= 0) friction_columns.push_back(begin);
@@ -101,6 +111,7 @@ FilteredRegressor filtered_regressor(const Model& model, const ParameterLayout& 
   for (int s = 0; s <= last_sample; ++s) {
     if (cancel && (s & 1023) == 0 && cancel->load(std::memory_order_relaxed)) return FilteredRegressor{};
     regressor(model, workspace, layout, pass.q.col(s), pass.qd.col(s), pass.qdd.col(s), Y);
+    Y_rows = Y;
     // Outputs r whose window [r·D, r·D + 2M_c] covers s; tap index s − r·D.
     const int first = std::max(0, (s - 2 * Mc + D - 1) / D);
     const int last = std::min(R - 1, s / D);
@@ -112,8 +123,8 @@ FilteredRegressor filtered_regressor(const Model& model, const ParameterLayout& 
         const int from = kInertialParametersPerBody * k;
         const int width = kInertialParametersPerBody * (n - k);
         auto row = W.row(static_cast<Eigen::Index>(r) * n + k);
-        row.segment(from, width) += weight * Y.row(k).segment(from, width);
-        for (int begin : friction_columns) row[begin + k] += weight * Y(k, begin + k);
+        row.segment(from, width) += weight * Y_rows.row(k).segment(from, width);
+        for (int begin : friction_columns) row[begin + k] += weight * Y_rows(k, begin + k);
       }
     }
   }
@@ -133,7 +144,7 @@ TorquePrediction predict_torque(const Model& model, const ParameterLayout& layou
   }
   const auto differentiation = cached_filter(filters.differentiation);
   const auto comparison = cached_filter(filters.comparison);
-  const FirstPass pass = first_pass(model, data, filters, *differentiation, *comparison);
+  const FirstPass pass = first_pass(model, data, filters, *differentiation);
   const int M = filters.differentiation.half_length;
   const int Mc = filters.comparison.half_length;
 
@@ -148,7 +159,9 @@ TorquePrediction predict_torque(const Model& model, const ParameterLayout& layou
   const int second = comparison->output_length(pass.samples);
   prediction.t = data.t.segment(M + Mc, second);
   prediction.model.resize(second, n);
-  prediction.measured = pass.tau.middleRows(M, second);
+  Eigen::MatrixXd measured(comparison->output_length(data.samples()), n);  // sample M_c + j of the data
+  for (int k = 0; k < n; ++k) comparison->apply(FilterOrder::lowpass, data.tau.col(k), measured.col(k));
+  prediction.measured = measured.middleRows(M, second);
   for (int k = 0; k < n; ++k) comparison->apply(FilterOrder::lowpass, modelled.col(k), prediction.model.col(k));
   const Eigen::MatrixXd error = prediction.model - prediction.measured;
   prediction.rms_error = (error.colwise().squaredNorm() / static_cast<double>(second)).cwiseSqrt().transpose();

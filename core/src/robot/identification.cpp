@@ -157,13 +157,15 @@ FilterPair choose_filters(const Trajectory& data) {
   filters.differentiation.dt = filters.comparison.dt = dt;
   filters.differentiation.band = std::min(nyquist_band / 2, 100.0 * motion);
   filters.differentiation.half_length = half_length(filters.differentiation.band);
+  // The comparison filter's passband need not be flat (τ and the regressor go through the same one), only
+  // its band matter: a shorter window, M_c = ⌈4π/Ω_c⌉, keeps more data and costs less.
   filters.comparison.band = std::min(filters.differentiation.band, 5.0 * motion);
-  filters.comparison.half_length = half_length(filters.comparison.band);
+  filters.comparison.half_length = std::max(2, static_cast<int>(std::ceil(4.0 * std::numbers::pi / filters.comparison.band)));
   // The filters consume M + M_c samples at each end; keep at least two thirds of the data.
   const int budget = std::max(2, (data.samples() / 3 - 3) / 2 - filters.differentiation.half_length);
   if (filters.comparison.half_length > budget) {
     filters.comparison.half_length = budget;
-    filters.comparison.band = std::min(nyquist_band, 6.4 * std::numbers::pi / budget);
+    filters.comparison.band = std::min(nyquist_band, 4.0 * std::numbers::pi / budget);
   }
   return filters;
 }

@@ -8,10 +8,10 @@
 //      both sides through the same low-pass (robot/filtered_regressor.h). Chosen from the data unless
 //      given: the motion's band f_m — the frequency below which all but 1e-6 of the power of the
 //      detrended angles lies — then differentiation band Ωg = 100·Ω_m (the differentiators exact to
-//      ~1e-5 on the motion; at most π/2) and comparison band Ω_c = 5·Ω_m (the torque the motion makes,
-//      its nonlinear harmonics included; not the noise), each with M = ⌈6.4π/Ω⌉ (the paper's
-//      M = 100, Ωg = 0.2 proportion), M_c shortened if the filters would consume more than a third of
-//      the data;
+//      ~1e-5 on the motion; at most π/2) with M = ⌈6.4π/Ωg⌉ (the paper's M = 100, Ωg = 0.2 proportion),
+//      and comparison band Ω_c = 5·Ω_m (the torque the motion makes, its nonlinear harmonics included;
+//      not the noise) with M_c = ⌈4π/Ω_c⌉ (its passband need not be flat: both sides go through it),
+//      shortened — the band widened — if the filters would consume more than a third of the data;
 //   3. solve (L Y_b) β = L τ for the base parameters β (robot/base_parameters.h) by QR on column-scaled
 //      rows, optionally weighting each joint by its residual variance; directions the data do not excite
 //      (relative singular value < 1e-10) stay at the prior's value and a warning names them;
