@@ -124,7 +124,7 @@ Setup validate(const RobotModel& model, const Trajectory& data, const Identifica
 }
 
 detail::MinimizeSettings minimize_settings(const IdentificationOptions& options, const Setup& setup,
-                                           detail::HistoryRecorder& history) {
+                                           detail::EvaluationLog& log) {
   detail::MinimizeSettings settings;
   settings.algorithm = options.algorithm;
   settings.free = setup.free;
@@ -135,8 +135,7 @@ detail::MinimizeSettings minimize_settings(const IdentificationOptions& options,
   settings.max_evaluations = options.max_evaluations;
   settings.max_seconds = options.max_seconds;
   settings.cancel = options.cancel;
-  settings.on_evaluation = options.on_evaluation;
-  settings.history = &history;
+  settings.log = &log;
   return settings;
 }
 
@@ -146,7 +145,6 @@ void apply_outcome(IdentificationResult& result, const detail::MinimizeOutcome& 
   result.estimate = outcome.theta;
   result.initial_cost = outcome.initial_cost;
   result.final_cost = outcome.cost;
-  result.evaluations = outcome.evaluations;
   result.stop_reason = outcome.stop_reason;
   result.cancelled = outcome.cancelled;
 }
@@ -183,7 +181,7 @@ void require_finite_costs(const IdentificationResult& result) {
 // unidentifiable directions truncated, so a derivative-free optimiser that stalled in the
 // paper robot's flat m1/l1 valley or its narrow m3/m4/l4 one still ends at the minimum.
 int refine_input_error(const InputErrorCost& cost, Eigen::VectorXd& theta, double& value, const Setup& setup,
-                       const IdentificationOptions& options, detail::HistoryRecorder& history, long& index) {
+                       const IdentificationOptions& options, detail::EvaluationLog& log) {
   std::vector<int> free_index;
   for (int i = 0; i < theta.size(); ++i) {
     if (setup.free[i]) free_index.push_back(i);
@@ -221,9 +219,7 @@ int refine_input_error(const InputErrorCost& cost, Eigen::VectorXd& theta, doubl
       for (int a = 0; a < p; ++a) candidate[free_index[a]] += fraction * step[a] * scale[a];
       candidate = candidate.cwiseMax(setup.lower).cwiseMin(setup.upper);
       const double candidate_value = cost.evaluate(Parameters::from_vector(candidate));
-      const long evaluation = index++;
-      history.add(evaluation, candidate_value, candidate);
-      if (options.on_evaluation) options.on_evaluation(evaluation, candidate_value, candidate);
+      log.record(candidate_value, candidate);
       if (candidate_value < value) {
         const double change = (value - candidate_value) / std::max(value, 1e-300);
         theta = candidate;
@@ -238,6 +234,148 @@ int refine_input_error(const InputErrorCost& cost, Eigen::VectorXd& theta, doubl
   return steps;
 }
 
+/// What every method works on: the model, the prepared data, the options, the validated setup, the log.
+struct Problem {
+  const RobotModel& model;
+  const Trajectory& data;
+  const IdentificationOptions& options;
+  const Setup& setup;
+  detail::EvaluationLog& log;
+};
+
+/// The input-error stage (the paper's method; two-stage's first half): filter, minimise the Gram-form
+/// cost, polish with Gauss–Newton. Leaves the cost for the uncertainty and the second stage.
+struct InputErrorStage {
+  detail::FilterChoice choice;
+  FilteredData filtered;
+  std::optional<InputErrorCost> cost;
+};
+
+InputErrorStage run_input_error(const Problem& problem, IdentificationResult& result) {
+  const Setup& setup = problem.setup;
+  const IdentificationOptions& options = problem.options;
+  InputErrorStage stage;
+  stage.choice = detail::choose_filter(problem.model, problem.data, options, setup.use_reference);
+  result.filter = stage.choice.settings;
+  result.filter_chosen_automatically = stage.choice.automatic;
+  result.torque_source = setup.use_reference ? TorqueSource::reference : TorqueSource::measured;
+  stage.filtered = filter_for_input_error(problem.data, stage.choice.settings, setup.use_reference, options.controller);
+  Eigen::VectorXd weights;
+  if (options.weighting == JointWeighting::inverse_variance) {
+    weights.resize(setup.n);
+    for (int j = 0; j < setup.n; ++j) {
+      const double mean = stage.filtered.tau.col(j).mean();
+      const double variance = (stage.filtered.tau.col(j).array() - mean).square().mean();
+      weights[j] = variance > 0 ? 1.0 / variance : 1.0;
+    }
+  }
+  stage.cost.emplace(problem.model, stage.filtered, weights);
+  const InputErrorCost& cost = *stage.cost;
+  const detail::CostFunction function = [&cost](const Eigen::VectorXd& theta, Eigen::VectorXd* gradient) {
+    return cost.evaluate(Parameters::from_vector(theta), gradient);
+  };
+  apply_outcome(result, detail::minimize(function, setup.initial, minimize_settings(options, setup, problem.log)));
+  require_finite_costs(result);
+  if (options.refine && !result.cancelled) {
+    result.refinement_steps = refine_input_error(cost, result.estimate, result.final_cost, setup, options, problem.log);
+  }
+  return stage;
+}
+
+/// The output-error methods see the identifiable directions through the exact input-error structure.
+Eigen::MatrixXd identifiable_directions(const Problem& problem, const InputErrorCost& structure, const Eigen::VectorXd& at) {
+  return detail::identifiable_basis(structure.gauss_newton_matrix(Parameters::from_vector(at)), at, problem.setup.free);
+}
+
+void assess_output_error(const Problem& problem, const OutputErrorCost& output_error, const InputErrorCost& structure,
+                         const Eigen::VectorXd& residual, const Eigen::MatrixXd& jacobian, IdentificationResult& result) {
+  result.simulations = output_error.simulations();
+  const double dof =
+      std::max(1.0, static_cast<double>(output_error.residual_count() - count_free(problem.setup.free)));
+  const detail::UncertaintyInput uncertainty{
+      .names = problem.setup.names,
+      .theta = result.estimate,
+      .free = problem.setup.free,
+      .information = jacobian.transpose() * jacobian,
+      .structure = structure.gauss_newton_matrix(Parameters::from_vector(result.estimate)),
+      .residual_variance = residual.squaredNorm() / dof,
+      .products = &structure.products()};
+  apply_uncertainty(result, detail::assess_uncertainty(uncertainty));
+}
+
+void assess_input_error(const Problem& problem, const InputErrorStage& stage, IdentificationResult& result) {
+  const Setup& setup = problem.setup;
+  // σ² per residual, inflated by 1/Σc0² because low-passed residuals are correlated over
+  // about π/Ωg samples (white noise through the filter keeps Σc0² of its variance).
+  const double residual_sum = result.final_cost * stage.filtered.samples();
+  const double dof = std::max(1.0, static_cast<double>(stage.cost->residual_count() - count_free(setup.free)));
+  const double correlation_factor = 1.0 / cached_filter(stage.choice.settings)->coefficients(FilterOrder::lowpass).squaredNorm();
+  const detail::UncertaintyInput uncertainty{
+      .names = setup.names,
+      .theta = result.estimate,
+      .free = setup.free,
+      .information = stage.cost->gauss_newton_matrix(Parameters::from_vector(result.estimate)),
+      .structure = {},
+      .residual_variance = residual_sum / dof * correlation_factor,
+      .products = &stage.cost->products()};
+  apply_uncertainty(result, detail::assess_uncertainty(uncertainty));
+}
+
+void identify_input_error(const Problem& problem, IdentificationResult& result) {
+  const InputErrorStage stage = run_input_error(problem, result);
+  assess_input_error(problem, stage, result);
+  if (stage.choice.q_noise > 1e-7) {
+    std::ostringstream text;
+    text << "q carries measurement noise (about " << stage.choice.q_noise
+         << " rad): input-error standard errors count torque noise but not the noise the filtered derivatives of "
+            "q carry into the regressor (errors-in-variables), so they are optimistic and the estimates slightly "
+            "biased; the two-stage method (--method two-stage) removes that bias";
+    result.warnings.push_back(text.str());
+  }
+}
+
+void identify_output_error(const Problem& problem, IdentificationResult& result) {
+  const Setup& setup = problem.setup;
+  const IdentificationOptions& options = problem.options;
+  // The exact structure (which directions no data can see) comes from the Gram form.
+  const FilterSettings structure_filter{100, 0.2, problem.data.dt()};
+  const InputErrorCost structure(problem.model,
+                                 filter_for_input_error(problem.data, structure_filter, true, options.controller));
+  const Eigen::MatrixXd basis = identifiable_directions(problem, structure, setup.initial);
+  const OutputErrorCost output_error(problem.model, problem.data, *options.controller, options.simulation_relative_tolerance);
+  const detail::CostFunction function = [&output_error](const Eigen::VectorXd& theta, Eigen::VectorXd*) {
+    return output_error.evaluate(Parameters::from_vector(theta));
+  };
+  apply_outcome(result, detail::minimize(function, setup.initial, minimize_settings(options, setup, problem.log)));
+  require_finite_costs(result);
+  if (result.cancelled) return;
+  Eigen::VectorXd residual;
+  output_error.evaluate(Parameters::from_vector(result.estimate), &residual);
+  const Eigen::MatrixXd jacobian = detail::output_error_jacobian(output_error, result.estimate, residual, setup.free, basis);
+  assess_output_error(problem, output_error, structure, residual, jacobian, result);
+}
+
+void identify_two_stage(const Problem& problem, IdentificationResult& result) {
+  const Setup& setup = problem.setup;
+  const IdentificationOptions& options = problem.options;
+  const InputErrorStage stage = run_input_error(problem, result);
+  if (result.cancelled) {  // stopped in the first stage: its figures are what there is
+    assess_input_error(problem, stage, result);
+    return;
+  }
+  const Eigen::MatrixXd basis = identifiable_directions(problem, *stage.cost, result.estimate);
+  const OutputErrorCost output_error(problem.model, problem.data, *options.controller, options.simulation_relative_tolerance);
+  const detail::FitBounds bounds{setup.n, setup.free, setup.lower, setup.upper};
+  const detail::GaussNewtonOutcome outcome =
+      detail::gauss_newton_output_error(output_error, result.estimate, basis, bounds, options, problem.log);
+  result.estimate = outcome.theta;
+  result.final_cost = outcome.cost;  // now the output-error cost, rad²
+  result.stop_reason = outcome.stop_reason;
+  result.cancelled = outcome.cancelled;
+  require_finite_costs(result);
+  assess_output_error(problem, output_error, *stage.cost, outcome.residual, outcome.jacobian, result);
+}
+
 }  // namespace
 
 IdentificationResult identify(const RobotModel& model, const Trajectory& measured, const IdentificationOptions& options) {
@@ -250,114 +388,22 @@ IdentificationResult identify(const RobotModel& model, const Trajectory& measure
   result.names = setup.names;
   result.free = setup.free;
   result.initial = setup.initial;
-  detail::HistoryRecorder history(options.history_limit);
-  const int free_count = count_free(setup.free);
-
-  std::optional<InputErrorCost> input_error;
-  if (options.method != IdentificationMethod::output_error) {
-    const detail::FilterChoice choice = detail::choose_filter(model, data, options, setup.use_reference);
-    result.filter = choice.settings;
-    result.filter_chosen_automatically = choice.automatic;
-    result.torque_source = setup.use_reference ? TorqueSource::reference : TorqueSource::measured;
-    const FilteredData filtered = filter_for_input_error(data, choice.settings, setup.use_reference, options.controller);
-    Eigen::VectorXd weights;
-    if (options.weighting == JointWeighting::inverse_variance) {
-      weights.resize(setup.n);
-      for (int j = 0; j < setup.n; ++j) {
-        const double mean = filtered.tau.col(j).mean();
-        const double variance = (filtered.tau.col(j).array() - mean).square().mean();
-        weights[j] = variance > 0 ? 1.0 / variance : 1.0;
-      }
-    }
-    input_error.emplace(model, filtered, weights);
-    const detail::CostFunction cost = [&](const Eigen::VectorXd& theta, Eigen::VectorXd* gradient) {
-      return input_error->evaluate(Parameters::from_vector(theta), gradient);
-    };
-    const detail::MinimizeOutcome outcome = detail::minimize(cost, setup.initial, minimize_settings(options, setup, history));
-    apply_outcome(result, outcome);
-    require_finite_costs(result);
-    if (options.refine && !result.cancelled) {
-      long index = result.evaluations;
-      result.refinement_steps =
-          refine_input_error(*input_error, result.estimate, result.final_cost, setup, options, history, index);
-      result.evaluations = index;
-    }
-
-    // σ² per residual, inflated by 1/Σc0² because low-passed residuals are correlated over
-    // about π/Ωg samples (white noise through the filter keeps Σc0² of its variance).
-    const double residual_sum = result.final_cost * filtered.samples();
-    const double dof = std::max(1.0, static_cast<double>(input_error->residual_count() - free_count));
-    const double correlation_factor = 1.0 / cached_filter(choice.settings)->coefficients(FilterOrder::lowpass).squaredNorm();
-    const detail::UncertaintyInput uncertainty{
-        .names = setup.names,
-        .theta = result.estimate,
-        .free = setup.free,
-        .information = input_error->gauss_newton_matrix(Parameters::from_vector(result.estimate)),
-        .structure = {},
-        .residual_variance = residual_sum / dof * correlation_factor,
-        .products = &input_error->products()};
-    apply_uncertainty(result, detail::assess_uncertainty(uncertainty));
-    if (choice.q_noise > 1e-7 && options.method == IdentificationMethod::input_error) {
-      std::ostringstream text;
-      text << "q carries measurement noise (about " << choice.q_noise
-           << " rad): input-error standard errors count torque noise but not the noise the filtered derivatives of "
-              "q carry into the regressor (errors-in-variables), so they are optimistic and the estimates slightly "
-              "biased; the two-stage method (--method two-stage) removes that bias";
-      result.warnings.push_back(text.str());
-    }
+  detail::EvaluationLog log(options.history_limit, options.on_evaluation);
+  const Problem problem{model, data, options, setup, log};
+  // One function per method, as Ceres dispatches its minimisers.
+  switch (options.method) {
+    case IdentificationMethod::input_error: identify_input_error(problem, result); break;
+    case IdentificationMethod::output_error: identify_output_error(problem, result); break;
+    case IdentificationMethod::two_stage: identify_two_stage(problem, result); break;
   }
-
-  if (options.method != IdentificationMethod::input_error && !result.cancelled) {
-    // The exact structure (which directions no data can see) comes from the Gram form.
-    if (!input_error) {
-      const FilterSettings structure_filter{100, 0.2, data.dt()};
-      input_error.emplace(model, filter_for_input_error(data, structure_filter, true, options.controller));
-    }
-    const Eigen::VectorXd start = options.method == IdentificationMethod::two_stage ? result.estimate : setup.initial;
-    const Eigen::MatrixXd structure = input_error->gauss_newton_matrix(Parameters::from_vector(start));
-    const Eigen::MatrixXd basis = detail::identifiable_basis(structure, start, setup.free);
-    const OutputErrorCost output_error(model, data, *options.controller, options.simulation_relative_tolerance);
-    Eigen::VectorXd residual;
-    Eigen::MatrixXd jacobian;
-    if (options.method == IdentificationMethod::output_error) {
-      const detail::CostFunction cost = [&](const Eigen::VectorXd& theta, Eigen::VectorXd*) {
-        return output_error.evaluate(Parameters::from_vector(theta));
-      };
-      const detail::MinimizeOutcome outcome =
-          detail::minimize(cost, setup.initial, minimize_settings(options, setup, history));
-      apply_outcome(result, outcome);
-      require_finite_costs(result);
-      output_error.evaluate(Parameters::from_vector(result.estimate), &residual);
-      jacobian = detail::output_error_jacobian(output_error, result.estimate, residual, setup.free, basis);
-    } else {
-      long index = result.evaluations;
-      const detail::FitBounds bounds{setup.n, setup.free, setup.lower, setup.upper};
-      const detail::GaussNewtonOutcome outcome =
-          detail::gauss_newton_output_error(output_error, result.estimate, basis, bounds, options, history, index);
-      result.estimate = outcome.theta;
-      result.final_cost = outcome.cost;  // now the output-error cost, rad²
-      result.evaluations = index;
-      result.stop_reason = outcome.stop_reason;
-      result.cancelled = outcome.cancelled;
-      residual = outcome.residual;
-      jacobian = outcome.jacobian;
-      require_finite_costs(result);
-    }
-    result.simulations = output_error.simulations();
-    const double dof = std::max(1.0, static_cast<double>(output_error.residual_count() - free_count));
-    const detail::UncertaintyInput uncertainty{
-        .names = setup.names,
-        .theta = result.estimate,
-        .free = setup.free,
-        .information = jacobian.transpose() * jacobian,
-        .structure = input_error->gauss_newton_matrix(Parameters::from_vector(result.estimate)),
-        .residual_variance = residual.squaredNorm() / dof,
-        .products = &input_error->products()};
-    apply_uncertainty(result, detail::assess_uncertainty(uncertainty));
-  }
-
   require_finite_costs(result);
-  result.history = history.records();
+  if (result.std_errors.size() != result.estimate.size()) {  // cancelled before the uncertainty was assessed
+    const int free_count = count_free(setup.free);
+    result.std_errors = Eigen::VectorXd::Constant(result.estimate.size(), std::numeric_limits<double>::quiet_NaN());
+    result.correlation = Eigen::MatrixXd::Constant(free_count, free_count, std::numeric_limits<double>::quiet_NaN());
+  }
+  result.evaluations = log.count();
+  result.history = log.records();
   result.wall_seconds = std::chrono::duration<double>(Clock::now() - started).count();
   return result;
 }

@@ -99,14 +99,12 @@ double objective(unsigned dimension, const double* x, double* gradient_out, void
   if (gradient_out) {
     for (unsigned i = 0; i < dimension; ++i) gradient_out[i] = context.gradient[context.free_index[i]] * context.scale[i];
   }
-  const long index = settings.first_index + context.evaluations++;
-  if (context.evaluations == 1) context.first_cost = cost;
+  if (++context.evaluations == 1) context.first_cost = cost;
   if (cost < context.best_cost) {
     context.best_cost = cost;
     context.best_theta = context.theta;
   }
-  if (settings.history) settings.history->add(index, cost, context.theta);
-  if (settings.on_evaluation) settings.on_evaluation(index, cost, context.theta);
+  if (settings.log) settings.log->record(cost, context.theta);
   if (!std::isfinite(cost)) {
     // Nothing can be learnt from a start without a cost: stop at once, the caller says why.
     if (context.evaluations == 1) throw nlopt::forced_stop();

@@ -33,6 +33,29 @@ class HistoryRecorder {
   bool any_ = false;
 };
 
+/// The one owner of "an evaluation happened": it numbers each evaluation (across every stage of an
+/// identification: optimiser, polish, output-error fit), keeps it in the bounded history, and tells the
+/// caller's callback (the service streams it to the store).
+class EvaluationLog {
+ public:
+  using Callback = std::function<void(long index, double cost, const Eigen::VectorXd& theta)>;
+  EvaluationLog(int history_limit, Callback callback) : history_(history_limit), callback_(std::move(callback)) {}
+  /// Records one evaluation; returns its index.
+  long record(double cost, const Eigen::VectorXd& theta) {
+    const long index = count_++;
+    history_.add(index, cost, theta);
+    if (callback_) callback_(index, cost, theta);
+    return index;
+  }
+  long count() const { return count_; }
+  std::vector<HistoryRecord> records() const { return history_.records(); }
+
+ private:
+  HistoryRecorder history_;
+  Callback callback_;
+  long count_ = 0;
+};
+
 /// θ (all parameters) → cost, and ∂cost/∂θ when `gradient` is not null.
 using CostFunction = std::function<double(const Eigen::VectorXd& theta, Eigen::VectorXd* gradient)>;
 
@@ -45,16 +68,14 @@ struct MinimizeSettings {
   int max_evaluations = 20000;
   double max_seconds = 120.0;
   const std::atomic<bool>* cancel = nullptr;
-  std::function<void(long, double, const Eigen::VectorXd&)> on_evaluation;
-  HistoryRecorder* history = nullptr;
-  long first_index = 0;  // evaluation numbers continue across stages
+  EvaluationLog* log = nullptr;  // every evaluation is recorded here (numbers continue across stages)
 };
 
 struct MinimizeOutcome {
   Eigen::VectorXd theta;
   double cost = 0.0;
   double initial_cost = 0.0;
-  long evaluations = 0;
+  long evaluations = 0;  // this stage's
   std::string stop_reason;
   bool cancelled = false;
 };

@@ -36,8 +36,7 @@ Eigen::MatrixXd output_error_jacobian(const OutputErrorCost& cost, const Eigen::
 
 GaussNewtonOutcome gauss_newton_output_error(const OutputErrorCost& cost, const Eigen::VectorXd& theta_start,
                                              const Eigen::MatrixXd& basis, const FitBounds& bounds,
-                                             const IdentificationOptions& options, HistoryRecorder& history,
-                                             long& evaluation_index) {
+                                             const IdentificationOptions& options, EvaluationLog& log) {
   const int n = bounds.n;
   std::vector<int> free_index;
   for (int i = 0; i < theta_start.size(); ++i) {
@@ -48,11 +47,7 @@ GaussNewtonOutcome gauss_newton_output_error(const OutputErrorCost& cost, const 
   GaussNewtonOutcome outcome;
   outcome.theta = theta_start;
   outcome.start = cost.measured_start();
-  auto record = [&](double value, const Eigen::VectorXd& theta) {
-    const long index = evaluation_index++;
-    history.add(index, value, theta);
-    if (options.on_evaluation) options.on_evaluation(index, value, theta);
-  };
+  auto record = [&](double value, const Eigen::VectorXd& theta) { log.record(value, theta); };
   auto evaluate = [&](const Eigen::VectorXd& theta, const Eigen::VectorXd& start, Eigen::VectorXd* residual) {
     return cost.evaluate(Parameters::from_vector(theta), residual, &start);
   };

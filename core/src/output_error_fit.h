@@ -41,10 +41,9 @@ struct GaussNewtonOutcome {
 /// identifiable directions (`basis`, from the exact input-error structure) so the flat m1/l1
 /// valley of the paper's robot cannot swallow a step, and it estimates the initial angles
 /// alongside: starting from one noisy first sample would bias θ through the start transient.
-/// Evaluations are numbered from `evaluation_index` (advanced) and recorded in `history`.
+/// Every evaluation is recorded in `log`.
 GaussNewtonOutcome gauss_newton_output_error(const OutputErrorCost& cost, const Eigen::VectorXd& theta_start,
                                              const Eigen::MatrixXd& basis, const FitBounds& bounds,
-                                             const IdentificationOptions& options, HistoryRecorder& history,
-                                             long& evaluation_index);
+                                             const IdentificationOptions& options, EvaluationLog& log);
 
 }  // namespace manipid::detail
