@@ -8,6 +8,7 @@
 #include "manipid/core/dynamics.h"
 #include "manipid/core/robot/data.h"
 #include "manipid/core/robot/rnea.h"
+#include "manipid/core/simulation.h"
 
 #include <nlohmann/json.hpp>
 
@@ -51,6 +52,26 @@ CLI::App* add_torque_command(CLI::App& app, TorqueOptions& options) {
                       "With --robot: the parameters, as an 'identify --json' result (its point) or a JSON object "
                       "{\"m1\": ..., \"fv1\": ...}; parameters not given keep the URDF's values")
       ->needs(robot);
+  CLI::Option* with_states =
+      command
+          ->add_flag("--with-states", options.with_states,
+                     "With --robot: write the input's columns (t, q, qd, qdd) before tau1..taun: a dataset that "
+                     "'manipid identify' reads")
+          ->needs(robot);
+  command->add_option("--noise-q", options.noise_q, "With --with-states: Gaussian noise on q, rad")
+      ->check(non_negative_number())
+      ->needs(with_states);
+  command->add_option("--quantize-q", options.quantize_bits, "With --with-states: encoder resolution 2*pi/2^BITS on q")
+      ->check(integer_between(1, 62))
+      ->needs(with_states);
+  command->add_option("--noise-tau", options.noise_tau, "With --with-states: Gaussian noise on tau, N*m")
+      ->check(non_negative_number())
+      ->needs(with_states);
+  command->add_option("--noise-tau-relative", options.noise_tau_relative,
+                      "With --with-states: Gaussian noise on tau as a fraction of each joint's torque standard deviation")
+      ->check(non_negative_number())
+      ->needs(with_states);
+  command->add_option("--seed", options.seed, "Seed of the measurement noise")->needs(with_states)->capture_default_str();
   command->add_option("--in", options.input, "Input CSV file of states, '-' for stdin")->required();
   command->add_option("--out", options.output, "Output CSV file, '-' for stdout")->capture_default_str();
   return command;
@@ -104,9 +125,36 @@ int run_urdf_torque(const TorqueOptions& options) {
     if (time_column >= 0) torques.data(row, 0) = states.data(row, time_column);
     torques.data.row(row).segment(first_torque, joint_count) = tau.transpose();
   }
-  write_table(options.output, torques);
-  std::fprintf(stderr, "manipid torque: %s (%s): %d rows -> %s\n", model.name.c_str(), input_name(options.urdf.urdf).c_str(),
-               states.rows(), output_name(options.output).c_str());
+  MeasurementNoise noise;
+  noise.q_sigma = options.noise_q;
+  noise.tau_sigma = options.noise_tau;
+  noise.tau_relative_sigma = options.noise_tau_relative;
+  noise.quantize_bits = options.quantize_bits;
+  noise.seed = options.seed;
+  if (options.with_states) {
+    // The input's columns, then the torques; noise (if asked) on q and tau only.
+    api::CsvTable dataset;
+    dataset.columns = states.columns;
+    for (int joint = 1; joint <= joint_count; ++joint) dataset.columns.push_back("tau" + std::to_string(joint));
+    dataset.data.resize(states.rows(), static_cast<Eigen::Index>(dataset.columns.size()));
+    dataset.data.leftCols(states.data.cols()) = states.data;
+    dataset.data.rightCols(joint_count) = torques.data.rightCols(joint_count);
+    if (noise.any()) {
+      Trajectory measured;
+      measured.t = Eigen::VectorXd::LinSpaced(states.rows(), 0.0, 1.0);  // not used by the noise
+      measured.q.resize(states.rows(), joint_count);
+      for (int joint = 0; joint < joint_count; ++joint) measured.q.col(joint) = states.data.col(q_columns[static_cast<std::size_t>(joint)]);
+      measured.tau = torques.data.rightCols(joint_count);
+      apply_measurement_noise(measured, noise);
+      for (int joint = 0; joint < joint_count; ++joint) dataset.data.col(q_columns[static_cast<std::size_t>(joint)]) = measured.q.col(joint);
+      dataset.data.rightCols(joint_count) = measured.tau;
+    }
+    write_table(options.output, dataset);
+  } else {
+    write_table(options.output, torques);
+  }
+  std::fprintf(stderr, "manipid torque: %s (%s): %d rows%s -> %s\n", model.name.c_str(), input_name(options.urdf.urdf).c_str(),
+               states.rows(), noise.any() ? ", measurement noise added" : "", output_name(options.output).c_str());
   return exit_success;
 }
 

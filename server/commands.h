@@ -135,6 +135,12 @@ struct TorqueOptions {
   RobotOptions robot;
   UrdfRobotOptions urdf;       ///< with --robot: a URDF robot instead of a preset
   std::string parameters;      ///< --params FILE: an identify --json result or {"name": value}
+  bool with_states = false;    ///< write the input's columns before tau1..taun (a dataset)
+  double noise_q = 0.0;        ///< with --with-states: measurement noise, as `simulate`'s options
+  double noise_tau = 0.0;
+  double noise_tau_relative = 0.0;
+  int quantize_bits = 0;
+  std::uint64_t seed = 1;
   std::string input;
   std::string output = "-";
 };
