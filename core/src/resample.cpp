@@ -43,8 +43,7 @@ std::string milliseconds(double value) {
 
 /// Piecewise-cubic Hermite interpolation of the columns of `values` (rows at times `t`) at the
 /// uniform times t0 + k·dt. Slopes at the knots are the derivative of the parabola through the
-/// knot and its neighbours (exact for quadratics on any spacing; one-sided at the ends), limited so
-/// that the interpolant never overshoots the data.
+/// knot and its neighbours (exact for quadratics on any spacing); one-sided at the ends.
 Eigen::MatrixXd interpolate(const Eigen::VectorXd& t, const Eigen::MatrixXd& values, double t0, double dt, Eigen::Index count) {
   const Eigen::Index n = t.size();
   Eigen::MatrixXd slopes(n, values.cols());
@@ -60,28 +59,6 @@ Eigen::MatrixXd interpolate(const Eigen::VectorXd& t, const Eigen::MatrixXd& val
     const double wb = -(2 * x + ha - hc) / (ha * hc);
     const double wc = (2 * x + ha) / (hc * (ha + hc));
     slopes.row(i) = wa * values.row(a) + wb * values.row(b) + wc * values.row(c);
-  }
-  // No overshoot (Fritsch & Carlson's limiter): where the data turn (the secants either side of a knot
-  // differ in sign) the slope is 0, elsewhere at most 3× the smaller secant. A smooth signal keeps its
-  // three-point slopes (the limit binds only at turning points, where the slope is small anyway); a jump —
-  // a torque's Coulomb friction reversing between two logged samples — is bridged monotonically instead
-  // of ringing into its neighbours, which biased Coulomb friction by 0.3 % in a test.
-  for (Eigen::Index i = 0; i < n; ++i) {
-    for (Eigen::Index c = 0; c < values.cols(); ++c) {
-      const double left = i > 0 ? (values(i, c) - values(i - 1, c)) / (t[i] - t[i - 1]) : NAN;
-      const double right = i + 1 < n ? (values(i + 1, c) - values(i, c)) / (t[i + 1] - t[i]) : NAN;
-      double& slope = slopes(i, c);
-      if (i > 0 && i + 1 < n && left * right <= 0.0) {
-        slope = 0.0;
-        continue;
-      }
-      double limit = std::numeric_limits<double>::infinity();
-      if (i > 0) limit = std::min(limit, 3.0 * std::abs(left));
-      if (i + 1 < n) limit = std::min(limit, 3.0 * std::abs(right));
-      const double reference = i > 0 ? left : right;
-      if (slope * reference < 0.0) slope = 0.0;  // at an end, never against the data's direction
-      slope = std::clamp(slope, -limit, limit);
-    }
   }
   Eigen::MatrixXd out(count, values.cols());
   Eigen::Index segment = 0;
