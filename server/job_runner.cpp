@@ -4,6 +4,9 @@
 #include "manipid/api/problem.h"
 #include "manipid/api/requests.h"
 #include "manipid/api/result_json.h"
+#include "manipid/api/robot_json.h"
+#include "manipid/api/robot_requests.h"
+#include "manipid/core/robot/identification.h"
 #include "manipid/core/identification.h"
 
 #include <nlohmann/json.hpp>
@@ -143,11 +146,67 @@ JobOutcome run_identification_job(const api::JobInfo& job, Store& store, LiveJob
   return outcome;
 }
 
+/// A URDF robot's identification: one least-squares solve on its dataset, validated on a second one if
+/// asked. No evaluations to stream: the job's progress is its state.
+JobOutcome run_robot_identification_job(const api::JobInfo& job, Store& store, LiveJob& live) {
+  api::RobotIdentificationSpec spec = api::robot_identification_from_json(nlohmann::json::parse(job.request));
+  const auto fail_missing = [&](const std::string& what, const std::string& field) {
+    JobOutcome outcome = failed(api::problem_to_json({api::ProblemKind::not_found, what + " was deleted before the job ran", field}).dump());
+    outcome.dataset_id = spec.dataset_id;
+    return outcome;
+  };
+  const auto robot = store.find_robot(spec.robot_id);
+  const auto urdf = store.load_robot_urdf(spec.robot_id);
+  if (!robot || !urdf) return fail_missing("robot " + spec.robot_id, "robot_id");
+  const api::ParsedRobot parsed = api::parse_robot({robot->name, *urdf, robot->base, robot->tip});
+  const auto data = store.load_dataset(spec.dataset_id);
+  if (!data) return fail_missing("dataset " + spec.dataset_id, "dataset_id");
+  api::check_robot_data(parsed.model.joint_count(), parsed.model.name, data->joint_count(), data->has_torque(), "dataset_id");
+  std::optional<Trajectory> second;
+  if (!spec.validation_dataset_id.empty()) {
+    second = store.load_dataset(spec.validation_dataset_id);
+    if (!second) return fail_missing("dataset " + spec.validation_dataset_id, "validation_dataset_id");
+    api::check_robot_data(parsed.model.joint_count(), parsed.model.name, second->joint_count(), second->has_torque(),
+                          "validation_dataset_id");
+  }
+
+  spec.options.cancel = &live.cancel;
+  const robot::IdentificationResult result = robot::identify(parsed.model, *data, spec.options);
+  JobOutcome outcome;
+  outcome.dataset_id = spec.dataset_id;
+  if (result.cancelled) {
+    if (live.shutdown.load()) {
+      outcome.requeue = true;
+      return outcome;
+    }
+    outcome.state = api::JobState::cancelled;
+    outcome.result = nlohmann::ordered_json{{"cancelled", true}, {"dataset_id", spec.dataset_id}}.dump();
+    return outcome;
+  }
+  const Trajectory prepared = prepare_data(*data, spec.options.preparation);
+  const robot::TorquePrediction fit = robot::predict_torque(parsed.model, spec.options.layout, result.point, prepared, result.filters);
+  std::optional<robot::ValidationReport> validation;
+  if (second) validation = robot::validate(parsed.model, spec.options.layout, result, *second, spec.options.preparation);
+  nlohmann::ordered_json json = api::robot_result_to_json(parsed.model, spec.options.layout, result, fit, validation);
+  json["robot_id"] = spec.robot_id;
+  json["dataset_id"] = spec.dataset_id;
+  if (!spec.validation_dataset_id.empty()) json["validation_dataset_id"] = spec.validation_dataset_id;
+  outcome.state = api::JobState::succeeded;
+  outcome.result = json.dump();
+  for (int i = 0; i < result.base.size(); ++i) {
+    const double error = result.std_errors[i];
+    outcome.estimates.push_back({result.base.names[static_cast<std::size_t>(i)], result.estimate[i],
+                                 std::isfinite(error) ? std::optional<double>(error) : std::nullopt});
+  }
+  return outcome;
+}
+
 }  // namespace
 
 JobOutcome run_job(const api::JobInfo& job, Store& store, LiveJob& live, const RunnerOptions& options) {
   try {
     if (job.kind == api::JobKind::simulation) return run_simulation_job(job, store);
+    if (!job.robot_id.empty()) return run_robot_identification_job(job, store, live);
     return run_identification_job(job, store, live, options);
   } catch (const InputError& error) {
     // Submission validated the request against the data it knew; this catches what only the

@@ -20,6 +20,14 @@ namespace {
                       "Idempotency-Key");
 }
 
+api::DeleteOutcome outcome_of(DeleteResult result) {
+  switch (result) {
+    case DeleteResult::deleted: return api::DeleteOutcome::deleted;
+    case DeleteResult::in_use: return api::DeleteOutcome::conflict;
+    default: return api::DeleteOutcome::not_found;
+  }
+}
+
 }  // namespace
 
 api::DatasetCreated JobService::create_dataset(const api::DatasetUpload& upload,
@@ -34,16 +42,27 @@ std::optional<api::DatasetInfo> JobService::dataset(const std::string& id) { ret
 std::optional<Trajectory> JobService::dataset_data(const std::string& id) { return store_.load_dataset(id); }
 api::Page<api::DatasetInfo> JobService::datasets(const api::PageRequest& page) { return store_.list_datasets(page); }
 
-api::DeleteOutcome JobService::delete_dataset(const std::string& id) {
-  bool in_use = false;
-  if (store_.delete_dataset(id, &in_use)) return api::DeleteOutcome::deleted;
-  return in_use ? api::DeleteOutcome::conflict : api::DeleteOutcome::not_found;
+api::DeleteOutcome JobService::delete_dataset(const std::string& id) { return outcome_of(store_.delete_dataset(id)); }
+
+api::RobotCreated JobService::create_robot(const api::RobotUpload& upload, int joints, const std::string& description,
+                                           const std::optional<api::IdempotencyKey>& key) {
+  if (!accepting()) throw api::ApiError(api::ProblemKind::shutting_down, "the server is shutting down");
+  const RobotOutcome outcome = store_.insert_robot({upload.name, upload.urdf, upload.base, upload.tip, joints, description}, key);
+  if (outcome.status == SubmitStatus::key_reused) key_reused();
+  return {outcome.robot, outcome.status == SubmitStatus::replayed};
 }
 
-api::SubmitResult JobService::submit(api::JobKind kind, const std::string& request_json, const std::string& dataset_id,
-                                     const std::optional<api::IdempotencyKey>& key) {
+std::optional<api::RobotInfo> JobService::robot(const std::string& id) { return store_.find_robot(id); }
+std::optional<std::string> JobService::robot_urdf(const std::string& id) { return store_.load_robot_urdf(id); }
+api::Page<api::RobotInfo> JobService::robots(const api::PageRequest& page) { return store_.list_robots(page); }
+api::DeleteOutcome JobService::delete_robot(const std::string& id) { return outcome_of(store_.delete_robot(id)); }
+
+api::SubmitResult JobService::submit(const api::JobSubmission& submission, const std::optional<api::IdempotencyKey>& key) {
   if (!accepting()) throw api::ApiError(api::ProblemKind::shutting_down, "the server is shutting down");
-  const SubmitOutcome outcome = store_.submit_job({kind, request_json, dataset_id}, key, options_.queue_limit);
+  const api::JobKind kind = submission.kind;
+  const SubmitOutcome outcome = store_.submit_job(
+      {kind, submission.request_json, submission.dataset_id, submission.robot_id, submission.validation_dataset_id}, key,
+      options_.queue_limit);
   switch (outcome.status) {
     case SubmitStatus::key_reused: key_reused();
     case SubmitStatus::queue_full:
@@ -116,11 +135,7 @@ std::optional<api::JobInfo> JobService::cancel(const std::string& id) {
   return job(id);
 }
 
-api::DeleteOutcome JobService::delete_job(const std::string& id) {
-  bool active = false;
-  if (store_.delete_job(id, &active)) return api::DeleteOutcome::deleted;
-  return active ? api::DeleteOutcome::conflict : api::DeleteOutcome::not_found;
-}
+api::DeleteOutcome JobService::delete_job(const std::string& id) { return outcome_of(store_.delete_job(id)); }
 
 std::string JobService::metrics() {
   std::ostringstream out;

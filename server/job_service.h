@@ -30,8 +30,14 @@ class JobService : public api::Service {
   api::Page<api::DatasetInfo> datasets(const api::PageRequest& page) override;
   api::DeleteOutcome delete_dataset(const std::string& id) override;
 
-  api::SubmitResult submit(api::JobKind kind, const std::string& request_json, const std::string& dataset_id,
-                           const std::optional<api::IdempotencyKey>& key) override;
+  api::RobotCreated create_robot(const api::RobotUpload& upload, int joints, const std::string& description,
+                                 const std::optional<api::IdempotencyKey>& key) override;
+  std::optional<api::RobotInfo> robot(const std::string& id) override;
+  std::optional<std::string> robot_urdf(const std::string& id) override;
+  api::Page<api::RobotInfo> robots(const api::PageRequest& page) override;
+  api::DeleteOutcome delete_robot(const std::string& id) override;
+
+  api::SubmitResult submit(const api::JobSubmission& submission, const std::optional<api::IdempotencyKey>& key) override;
   std::optional<api::JobInfo> job(const std::string& id) override;
   std::optional<api::JobInfo> wait(const std::string& id, double seconds) override;
   api::Page<api::JobInfo> jobs(const api::JobFilter& filter, const api::PageRequest& page) override;

@@ -53,7 +53,7 @@ std::uint32_t token_check(std::string_view tag, std::string_view position, std::
 }
 
 constexpr std::array<const char*, 5> kStateTexts = {"queued", "running", "succeeded", "failed", "cancelled"};
-constexpr std::array<const char*, 2> kKindTexts = {"simulation", "identification"};
+constexpr std::array<const char*, 3> kKindTexts = {"simulation", "identification", "excitation"};
 
 }  // namespace
 

@@ -7,9 +7,10 @@ namespace manipid::server::sqlite {
 
 const std::string kJobColumns =
     "id, kind, state, created_at, started_at, finished_at, request, dataset_id, evaluations, best_cost, "
-    "cancel_requested, attempts, result, error, seq";
+    "cancel_requested, attempts, result, error, robot_id, validation_dataset_id, seq";
 const std::string kDatasetColumns =
-    "id, name, created_at, source_job, joints, samples, dt, has_torque, has_reference, seq";
+    "id, name, created_at, source_job, joints, samples, dt, has_torque, has_reference, uniform, has_rates, seq";
+const std::string kRobotColumns = "id, name, created_at, base, tip, joints, summary, seq";
 
 api::JobInfo read_job(const Statement& row) {
   api::JobInfo job;
@@ -30,6 +31,8 @@ api::JobInfo read_job(const Statement& row) {
   job.attempts = static_cast<int>(row.integer(11));
   job.result = row.text(12);
   job.error = row.text(13);
+  job.robot_id = row.text(14);
+  job.validation_dataset_id = row.text(15);
   return job;
 }
 
@@ -44,7 +47,28 @@ api::DatasetInfo read_dataset(const Statement& row) {
   dataset.dt = row.real(6);
   dataset.has_torque = row.integer(7) != 0;
   dataset.has_reference = row.integer(8) != 0;
+  dataset.uniform = row.integer(9) != 0;
+  dataset.has_rates = row.integer(10) != 0;
   return dataset;
+}
+
+api::RobotInfo read_robot(const Statement& row) {
+  api::RobotInfo robot;
+  robot.id = row.text(0);
+  robot.name = row.text(1);
+  robot.created_at = row.text(2);
+  robot.base = row.text(3);
+  robot.tip = row.text(4);
+  robot.joints = static_cast<int>(row.integer(5));
+  robot.summary = row.text(6);
+  return robot;
+}
+
+std::optional<api::RobotInfo> select_robot(Connection& connection, const std::string& id) {
+  auto statement = connection.prepare("SELECT " + kRobotColumns + " FROM robots WHERE id = ?1");
+  statement.bind_text(1, id);
+  if (!statement.step()) return std::nullopt;
+  return read_robot(statement);
 }
 
 std::optional<api::JobInfo> select_job(Connection& connection, const std::string& id) {

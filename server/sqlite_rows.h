@@ -14,13 +14,18 @@ namespace manipid::server::sqlite {
 
 /// Column lists for whole records, in the order read_job / read_dataset expect; seq last.
 extern const std::string kJobColumns;
-inline constexpr int kJobSeqColumn = 14;
+inline constexpr int kJobSeqColumn = 16;
 /// Only the description: the sample blobs stay on disk.
 extern const std::string kDatasetColumns;
-inline constexpr int kDatasetSeqColumn = 9;
+inline constexpr int kDatasetSeqColumn = 11;
+/// Only the description: the URDF document stays on disk.
+extern const std::string kRobotColumns;
+inline constexpr int kRobotSeqColumn = 7;
 
 api::JobInfo read_job(const Statement& row);
 api::DatasetInfo read_dataset(const Statement& row);
+api::RobotInfo read_robot(const Statement& row);
+std::optional<api::RobotInfo> select_robot(Connection& connection, const std::string& id);
 std::optional<api::JobInfo> select_job(Connection& connection, const std::string& id);
 std::optional<api::DatasetInfo> select_dataset(Connection& connection, const std::string& id);
 std::optional<api::JobState> select_state(Connection& connection, const std::string& id);
@@ -29,7 +34,7 @@ struct KeyRecord {
   std::string fingerprint;
   std::string resource_id;
 };
-/// scope: "job" or "dataset".
+/// scope: "job", "dataset" or "robot".
 std::optional<KeyRecord> select_key(Connection& connection, const char* scope, const std::string& key);
 /// INSERT OR REPLACE: a key whose resource has gone is taken over by the new one.
 void store_key(Connection& connection, const char* scope, const api::IdempotencyKey& key, const std::string& id,

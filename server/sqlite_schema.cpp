@@ -10,7 +10,7 @@ namespace manipid::server::sqlite {
 namespace {
 
 // kMigrations[i] takes user_version i to i + 1, and sets it.
-constexpr std::array<const char*, 2> kMigrations = {
+constexpr std::array<const char*, 3> kMigrations = {
     // 0 → 1: the first schema.
     R"sql(
     -- seq orders datasets newest first for keyset paging; AUTOINCREMENT never hands out a
@@ -90,6 +90,99 @@ constexpr std::array<const char*, 2> kMigrations = {
     ALTER TABLE jobs ADD COLUMN worker_losses INTEGER NOT NULL DEFAULT 0;
     PRAGMA user_version = 2;
     )sql",
+
+    // 2 → 3: robots (URDF documents), excitation jobs, jobs that name a robot and a validation
+    // dataset, datasets as measured (jittery time stamps, joint rates). SQLite cannot change a CHECK
+    // or insert a column before the blobs, so jobs, datasets and idempotency_keys are rebuilt: create
+    // the new table, copy, drop the old, rename (the procedure of sqlite.org/lang_altertable.html §7;
+    // prepare_database turns foreign keys off around it, or dropping jobs would delete every
+    // history through ON DELETE CASCADE). Rows from before stay as they were: every dataset then
+    // was uniform and had no rates.
+    R"sql(
+    CREATE TABLE robots (
+      seq        INTEGER PRIMARY KEY AUTOINCREMENT,
+      id         TEXT    NOT NULL UNIQUE,
+      name       TEXT    NOT NULL,
+      created_at TEXT    NOT NULL,
+      base       TEXT,
+      tip        TEXT,
+      joints     INTEGER NOT NULL,
+      summary    TEXT    NOT NULL,  -- the robot resource's description, JSON
+      urdf       TEXT    NOT NULL   -- the document as uploaded, byte for byte; last, so lists never read it
+    );
+
+    CREATE TABLE jobs_v3 (
+      seq                   INTEGER PRIMARY KEY AUTOINCREMENT,
+      id                    TEXT    NOT NULL UNIQUE,
+      kind                  TEXT    NOT NULL CHECK (kind IN ('simulation', 'identification', 'excitation')),
+      state                 TEXT    NOT NULL
+                            CHECK (state IN ('queued', 'running', 'succeeded', 'failed', 'cancelled')),
+      request               TEXT    NOT NULL,
+      dataset_id            TEXT,
+      robot_id              TEXT,
+      validation_dataset_id TEXT,
+      created_at            TEXT    NOT NULL,
+      started_at            TEXT,
+      finished_at           TEXT,
+      evaluations           INTEGER NOT NULL DEFAULT 0,
+      best_cost             REAL,
+      cancel_requested      INTEGER NOT NULL DEFAULT 0,
+      attempts              INTEGER NOT NULL DEFAULT 0,
+      worker_losses         INTEGER NOT NULL DEFAULT 0,
+      result                TEXT,
+      error                 TEXT
+    );
+    INSERT INTO jobs_v3 (seq, id, kind, state, request, dataset_id, created_at, started_at, finished_at, evaluations,
+                         best_cost, cancel_requested, attempts, worker_losses, result, error)
+      SELECT seq, id, kind, state, request, dataset_id, created_at, started_at, finished_at, evaluations,
+             best_cost, cancel_requested, attempts, worker_losses, result, error FROM jobs;
+    DROP TABLE jobs;
+    ALTER TABLE jobs_v3 RENAME TO jobs;
+    CREATE INDEX jobs_by_state ON jobs (state, seq);
+    CREATE INDEX jobs_by_kind ON jobs (kind, seq);
+    CREATE INDEX jobs_by_robot ON jobs (robot_id) WHERE robot_id IS NOT NULL;
+
+    CREATE TABLE datasets_v3 (
+      seq           INTEGER PRIMARY KEY AUTOINCREMENT,
+      id            TEXT    NOT NULL UNIQUE,
+      name          TEXT    NOT NULL,
+      created_at    TEXT    NOT NULL,
+      source_job    TEXT,
+      joints        INTEGER NOT NULL,
+      samples       INTEGER NOT NULL,
+      dt            REAL    NOT NULL,  -- the period (uniform) or the median step (jittery)
+      uniform       INTEGER NOT NULL,
+      has_torque    INTEGER NOT NULL,
+      has_reference INTEGER NOT NULL,
+      has_rates     INTEGER NOT NULL,
+      t   BLOB,   -- samples doubles, little-endian
+      q   BLOB,   -- samples x joints, column-major
+      tau BLOB,   -- NULL when has_torque = 0
+      ref BLOB,   -- NULL when has_reference = 0
+      qd  BLOB    -- NULL when has_rates = 0
+    );
+    INSERT INTO datasets_v3 (seq, id, name, created_at, source_job, joints, samples, dt, uniform, has_torque,
+                             has_reference, has_rates, t, q, tau, ref, qd)
+      SELECT seq, id, name, created_at, source_job, joints, samples, dt, 1, has_torque, has_reference, 0, t, q, tau,
+             ref, NULL FROM datasets;
+    DROP TABLE datasets;
+    ALTER TABLE datasets_v3 RENAME TO datasets;
+
+    CREATE TABLE idempotency_keys_v3 (
+      scope       TEXT NOT NULL CHECK (scope IN ('job', 'dataset', 'robot')),
+      key         TEXT NOT NULL,
+      fingerprint TEXT NOT NULL,
+      resource_id TEXT NOT NULL,
+      created_at  TEXT NOT NULL,
+      PRIMARY KEY (scope, key)
+    ) WITHOUT ROWID;
+    INSERT INTO idempotency_keys_v3 SELECT scope, key, fingerprint, resource_id, created_at FROM idempotency_keys;
+    DROP TABLE idempotency_keys;
+    ALTER TABLE idempotency_keys_v3 RENAME TO idempotency_keys;
+    CREATE INDEX idempotency_keys_by_resource ON idempotency_keys (resource_id);
+
+    PRAGMA user_version = 3;
+    )sql",
 };
 
 int read_user_version(Connection& connection) {
@@ -120,14 +213,25 @@ void prepare_database(Connection& connection) {
   }
 
   const int newest = current_schema_version();
-  run_transaction(connection, TransactionKind::write, [&] {
-    const int version = read_user_version(connection);
-    if (version > newest) {
-      throw StoreError("the database has schema version " + std::to_string(version) + ", newer than version " +
-                       std::to_string(newest) + " this manipid understands; use a newer manipid");
-    }
-    for (int step = version; step < newest; ++step) connection.execute(kMigrations[static_cast<std::size_t>(step)]);
-  });
+  // Migrations rebuild tables that others reference (lang_altertable.html §7): foreign keys off for
+  // the transaction (the pragma is a no-op inside one), checked before the commit, on again after.
+  connection.execute("PRAGMA foreign_keys = OFF");
+  try {
+    run_transaction(connection, TransactionKind::write, [&] {
+      const int version = read_user_version(connection);
+      if (version > newest) {
+        throw StoreError("the database has schema version " + std::to_string(version) + ", newer than version " +
+                         std::to_string(newest) + " this manipid understands; use a newer manipid");
+      }
+      for (int step = version; step < newest; ++step) connection.execute(kMigrations[static_cast<std::size_t>(step)]);
+      auto violations = connection.prepare("PRAGMA foreign_key_check");
+      if (violations.step()) throw StoreError("the database's rows do not match after the schema migration");
+    });
+  } catch (...) {
+    connection.execute("PRAGMA foreign_keys = ON");
+    throw;
+  }
+  connection.execute("PRAGMA foreign_keys = ON");
 }
 
 }  // namespace manipid::server::sqlite

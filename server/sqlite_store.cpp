@@ -68,11 +68,14 @@ class SqliteStore final : public Store {
     if (data.q.rows() != samples) throw std::invalid_argument("Trajectory.q must have one row per sample");
     check_shape(data.tau, samples, joints, "tau");
     check_shape(data.ref, samples, joints, "ref");
+    check_shape(data.qd, samples, joints, "qd");
     // Encoded before the transaction: the write lock is held only for the insert itself.
     const auto t = sqlite::encode_doubles(data.t.data(), static_cast<std::size_t>(data.t.size()));
     const auto q = sqlite::encode_doubles(data.q.data(), static_cast<std::size_t>(data.q.size()));
     const auto tau = sqlite::encode_doubles(data.tau.data(), static_cast<std::size_t>(data.tau.size()));
     const auto ref = sqlite::encode_doubles(data.ref.data(), static_cast<std::size_t>(data.ref.size()));
+    const auto qd = sqlite::encode_doubles(data.qd.data(), static_cast<std::size_t>(data.qd.size()));
+    const bool uniform = data.is_uniform();
 
     auto connection = pool_.checkout();
     return sqlite::run_transaction(*connection, TransactionKind::write, [&]() -> DatasetOutcome {
@@ -92,12 +95,15 @@ class SqliteStore final : public Store {
       dataset.joints = joints;
       dataset.samples = samples;
       dataset.dt = data.sample_period();  // uniform: t[1] − t[0]; jittery: the median step
+      dataset.uniform = uniform;
       dataset.has_torque = data.has_torque();
       dataset.has_reference = data.has_reference();
+      dataset.has_rates = data.has_rates();
 
       auto insert = connection->prepare(
           "INSERT INTO datasets (id, name, created_at, source_job, joints, samples, dt, has_torque, "
-          "has_reference, t, q, tau, ref) VALUES (?1, ?2, ?3, ?4, ?5, ?6, ?7, ?8, ?9, ?10, ?11, ?12, ?13)");
+          "has_reference, t, q, tau, ref, uniform, has_rates, qd) "
+          "VALUES (?1, ?2, ?3, ?4, ?5, ?6, ?7, ?8, ?9, ?10, ?11, ?12, ?13, ?14, ?15, ?16)");
       insert.bind_text(1, dataset.id)
           .bind_text(2, dataset.name)
           .bind_text(3, dataset.created_at)
@@ -110,7 +116,10 @@ class SqliteStore final : public Store {
           .bind_blob_or_null(10, t)
           .bind_blob_or_null(11, q)
           .bind_blob_or_null(12, tau)
-          .bind_blob_or_null(13, ref);
+          .bind_blob_or_null(13, ref)
+          .bind_integer(14, uniform ? 1 : 0)
+          .bind_integer(15, dataset.has_rates ? 1 : 0)
+          .bind_blob_or_null(16, qd);
       insert.run();
       if (key) store_key(*connection, "dataset", *key, dataset.id, dataset.created_at);
       return {SubmitStatus::created, dataset};
@@ -126,7 +135,7 @@ class SqliteStore final : public Store {
     auto connection = pool_.checkout();
     return sqlite::run_transaction(*connection, TransactionKind::read, [&]() -> std::optional<Trajectory> {
       auto row = connection->prepare(
-          "SELECT samples, joints, has_torque, has_reference, t, q, tau, ref FROM datasets WHERE id = ?1");
+          "SELECT samples, joints, has_torque, has_reference, t, q, tau, ref, has_rates, qd FROM datasets WHERE id = ?1");
       row.bind_text(1, id);
       if (!row.step()) return std::nullopt;
       const auto samples = static_cast<Eigen::Index>(row.integer(0));
@@ -136,10 +145,12 @@ class SqliteStore final : public Store {
       data.q.resize(samples, joints);
       data.tau.resize(samples, row.integer(2) != 0 ? joints : 0);
       data.ref.resize(samples, row.integer(3) != 0 ? joints : 0);
+      data.qd.resize(samples, row.integer(8) != 0 ? joints : 0);
       const bool intact = sqlite::decode_doubles(row.blob(4), data.t.data(), static_cast<std::size_t>(data.t.size())) &&
                           sqlite::decode_doubles(row.blob(5), data.q.data(), static_cast<std::size_t>(data.q.size())) &&
                           sqlite::decode_doubles(row.blob(6), data.tau.data(), static_cast<std::size_t>(data.tau.size())) &&
-                          sqlite::decode_doubles(row.blob(7), data.ref.data(), static_cast<std::size_t>(data.ref.size()));
+                          sqlite::decode_doubles(row.blob(7), data.ref.data(), static_cast<std::size_t>(data.ref.size())) &&
+                          sqlite::decode_doubles(row.blob(9), data.qd.data(), static_cast<std::size_t>(data.qd.size()));
       if (!intact) throw StoreError("dataset " + id + " has samples of the wrong size in the database");
       return data;
     });
@@ -168,23 +179,112 @@ class SqliteStore final : public Store {
     });
   }
 
-  bool delete_dataset(const std::string& id, bool* in_use) override {
+  DeleteResult delete_dataset(const std::string& id) override {
     auto connection = pool_.checkout();
     return sqlite::run_transaction(*connection, TransactionKind::write, [&] {
-      if (in_use) *in_use = false;
       auto readers = connection->prepare(
-          "SELECT 1 FROM jobs WHERE dataset_id = ?1 AND state IN ('queued', 'running') LIMIT 1");
+          "SELECT 1 FROM jobs WHERE (dataset_id = ?1 OR validation_dataset_id = ?1) AND state IN ('queued', 'running') "
+          "LIMIT 1");
       readers.bind_text(1, id);
-      if (readers.step()) {
-        if (in_use) *in_use = true;
-        return false;
-      }
+      if (readers.step()) return DeleteResult::in_use;
       auto remove = connection->prepare("DELETE FROM datasets WHERE id = ?1");
       remove.bind_text(1, id);
       remove.run();
-      if (connection->changes() == 0) return false;
+      if (connection->changes() == 0) return DeleteResult::not_found;
       forget_keys_of(*connection, "dataset", id);
-      return true;
+      return DeleteResult::deleted;
+    });
+  }
+
+  // ---- robots ----
+
+  RobotOutcome insert_robot(const NewRobot& robot, const std::optional<api::IdempotencyKey>& key) override {
+    auto connection = pool_.checkout();
+    return sqlite::run_transaction(*connection, TransactionKind::write, [&]() -> RobotOutcome {
+      if (key) {
+        if (auto earlier = select_key(*connection, "robot", key->key)) {
+          if (earlier->fingerprint != key->fingerprint) return {SubmitStatus::key_reused, {}};
+          if (auto existing = sqlite::select_robot(*connection, earlier->resource_id)) {
+            return {SubmitStatus::replayed, *existing};
+          }
+        }
+      }
+      api::RobotInfo created;
+      created.id = unused_id(*connection, "rb_", "SELECT 1 FROM robots WHERE id = ?1");
+      created.name = robot.name;
+      created.created_at = sqlite::now_rfc3339();
+      created.base = robot.base;
+      created.tip = robot.tip;
+      created.joints = robot.joints;
+      created.summary = robot.summary;
+      auto insert = connection->prepare(
+          "INSERT INTO robots (id, name, created_at, base, tip, joints, summary, urdf) "
+          "VALUES (?1, ?2, ?3, ?4, ?5, ?6, ?7, ?8)");
+      insert.bind_text(1, created.id)
+          .bind_text(2, created.name)
+          .bind_text(3, created.created_at)
+          .bind_text_or_null(4, created.base)
+          .bind_text_or_null(5, created.tip)
+          .bind_integer(6, created.joints)
+          .bind_text(7, created.summary)
+          .bind_text(8, robot.urdf);
+      insert.run();
+      if (key) store_key(*connection, "robot", *key, created.id, created.created_at);
+      return {SubmitStatus::created, created};
+    });
+  }
+
+  std::optional<api::RobotInfo> find_robot(const std::string& id) override {
+    auto connection = pool_.checkout();
+    return sqlite::run_transaction(*connection, TransactionKind::read, [&] { return sqlite::select_robot(*connection, id); });
+  }
+
+  std::optional<std::string> load_robot_urdf(const std::string& id) override {
+    auto connection = pool_.checkout();
+    return sqlite::run_transaction(*connection, TransactionKind::read, [&]() -> std::optional<std::string> {
+      auto row = connection->prepare("SELECT urdf FROM robots WHERE id = ?1");
+      row.bind_text(1, id);
+      if (!row.step()) return std::nullopt;
+      return row.text(0);
+    });
+  }
+
+  api::Page<api::RobotInfo> list_robots(const api::PageRequest& page) override {
+    const int size = sqlite::effective_page_size(page.page_size);
+    const std::int64_t before =
+        page.page_token.empty() ? INT64_MAX : sqlite::decode_page_token(page.page_token, "r1", "");
+    auto connection = pool_.checkout();
+    return sqlite::run_transaction(*connection, TransactionKind::read, [&] {
+      auto rows = connection->prepare("SELECT " + sqlite::kRobotColumns +
+                                      " FROM robots WHERE seq < ?1 ORDER BY seq DESC LIMIT ?2");
+      rows.bind_integer(1, before).bind_integer(2, size + 1);
+      api::Page<api::RobotInfo> result;
+      std::int64_t last_seq = 0;
+      while (rows.step()) {
+        if (static_cast<int>(result.items.size()) == size) {
+          result.next_page_token = sqlite::encode_page_token("r1", last_seq, "");
+          break;
+        }
+        result.items.push_back(sqlite::read_robot(rows));
+        last_seq = rows.integer(sqlite::kRobotSeqColumn);
+      }
+      return result;
+    });
+  }
+
+  DeleteResult delete_robot(const std::string& id) override {
+    auto connection = pool_.checkout();
+    return sqlite::run_transaction(*connection, TransactionKind::write, [&] {
+      auto users = connection->prepare(
+          "SELECT 1 FROM jobs WHERE robot_id = ?1 AND state IN ('queued', 'running') LIMIT 1");
+      users.bind_text(1, id);
+      if (users.step()) return DeleteResult::in_use;
+      auto remove = connection->prepare("DELETE FROM robots WHERE id = ?1");
+      remove.bind_text(1, id);
+      remove.run();
+      if (connection->changes() == 0) return DeleteResult::not_found;
+      forget_keys_of(*connection, "robot", id);
+      return DeleteResult::deleted;
     });
   }
 
@@ -211,14 +311,19 @@ class SqliteStore final : public Store {
       created.created_at = sqlite::now_rfc3339();
       created.request = job.request;
       created.dataset_id = job.dataset_id;
+      created.robot_id = job.robot_id;
+      created.validation_dataset_id = job.validation_dataset_id;
 
       auto insert = connection->prepare(
-          "INSERT INTO jobs (id, kind, state, request, dataset_id, created_at) VALUES (?1, ?2, 'queued', ?3, ?4, ?5)");
+          "INSERT INTO jobs (id, kind, state, request, dataset_id, created_at, robot_id, validation_dataset_id) "
+          "VALUES (?1, ?2, 'queued', ?3, ?4, ?5, ?6, ?7)");
       insert.bind_text(1, created.id)
           .bind_text(2, sqlite::kind_text(job.kind))
           .bind_text(3, job.request)
           .bind_text_or_null(4, job.dataset_id)
-          .bind_text(5, created.created_at);
+          .bind_text(5, created.created_at)
+          .bind_text_or_null(6, job.robot_id)
+          .bind_text_or_null(7, job.validation_dataset_id);
       insert.run();
       if (key) store_key(*connection, "job", *key, created.id, created.created_at);
       return {SubmitStatus::created, created};
@@ -379,26 +484,19 @@ class SqliteStore final : public Store {
     });
   }
 
-  bool delete_job(const std::string& id, bool* was_active) override {
+  DeleteResult delete_job(const std::string& id) override {
     auto connection = pool_.checkout();
-    bool active = false;
-    const bool deleted = sqlite::run_transaction(*connection, TransactionKind::write, [&] {
-      active = false;
+    return sqlite::run_transaction(*connection, TransactionKind::write, [&] {
       const auto state = select_state(*connection, id);
-      if (!state) return false;
-      if (!api::is_terminal(*state)) {
-        active = true;
-        return false;
-      }
+      if (!state) return DeleteResult::not_found;
+      if (!api::is_terminal(*state)) return DeleteResult::in_use;
       clear_progress(*connection, id);
       forget_keys_of(*connection, "job", id);
       auto remove = connection->prepare("DELETE FROM jobs WHERE id = ?1");
       remove.bind_text(1, id);
       remove.run();
-      return true;
+      return DeleteResult::deleted;
     });
-    if (was_active != nullptr) *was_active = active;
-    return deleted;
   }
 
   std::optional<api::Page<api::HistoryEntry>> history(const std::string& id, const api::PageRequest& page) override {

@@ -33,8 +33,10 @@ class StoreError : public std::runtime_error {
 
 struct NewJob {
   api::JobKind kind = api::JobKind::identification;
-  std::string request;     ///< JSON text
-  std::string dataset_id;  ///< input dataset, may be empty
+  std::string request;                ///< JSON text
+  std::string dataset_id;             ///< input dataset, may be empty
+  std::string robot_id;               ///< the URDF robot it works on, may be empty
+  std::string validation_dataset_id;  ///< a second dataset it reads, may be empty
 };
 
 enum class SubmitStatus {
@@ -53,6 +55,22 @@ struct DatasetOutcome {
   SubmitStatus status = SubmitStatus::created;  ///< never queue_full
   api::DatasetInfo dataset;
 };
+
+struct NewRobot {
+  std::string name;
+  std::string urdf;     ///< the document, kept byte for byte
+  std::string base, tip;
+  int joints = 0;
+  std::string summary;  ///< the robot resource's description, JSON text
+};
+
+struct RobotOutcome {
+  SubmitStatus status = SubmitStatus::created;  ///< never queue_full
+  api::RobotInfo robot;
+};
+
+/// What a delete did. `in_use`: a queued or running job will read it, nothing deleted.
+enum class DeleteResult { deleted, not_found, in_use };
 
 /// Estimates of a finished identification, one row per parameter (also kept in the result
 /// JSON; this table is for queries across jobs).
@@ -82,8 +100,18 @@ class Store {
   virtual std::optional<api::DatasetInfo> find_dataset(const std::string& id) = 0;
   virtual std::optional<Trajectory> load_dataset(const std::string& id) = 0;
   virtual api::Page<api::DatasetInfo> list_datasets(const api::PageRequest& page) = 0;  ///< newest first
-  /// Not while a queued or running job will read it: then false with *in_use set.
-  virtual bool delete_dataset(const std::string& id, bool* in_use = nullptr) = 0;
+  /// Not while a queued or running job will read it (as its data or its validation data).
+  virtual DeleteResult delete_dataset(const std::string& id) = 0;
+
+  // ---- robots ----
+  /// Stores a URDF robot (document and parsed summary). `key`, when given, makes it idempotent.
+  virtual RobotOutcome insert_robot(const NewRobot& robot, const std::optional<api::IdempotencyKey>& key) = 0;
+  virtual std::optional<api::RobotInfo> find_robot(const std::string& id) = 0;
+  /// The URDF document as uploaded.
+  virtual std::optional<std::string> load_robot_urdf(const std::string& id) = 0;
+  virtual api::Page<api::RobotInfo> list_robots(const api::PageRequest& page) = 0;  ///< newest first
+  /// Not while a queued or running job uses it.
+  virtual DeleteResult delete_robot(const std::string& id) = 0;
 
   // ---- jobs ----
   /// Inserts a queued job unless the key replays or conflicts or the queue is full
@@ -105,8 +133,8 @@ class Store {
   virtual void requeue_job(const std::string& id) = 0;
   /// Queued → cancelled at once; running → cancel_requested set; finished → unchanged.
   virtual CancelOutcome cancel_job(const std::string& id) = 0;
-  /// Finished jobs only; removes its history and estimates too.
-  virtual bool delete_job(const std::string& id, bool* was_active) = 0;
+  /// Finished jobs only (in_use while queued or running); removes its history and estimates too.
+  virtual DeleteResult delete_job(const std::string& id) = 0;
   /// History entries in index order; the page token is opaque (keyset on index).
   virtual std::optional<api::Page<api::HistoryEntry>> history(const std::string& id, const api::PageRequest& page) = 0;
   /// Every stride-th entry with the first, last and best, stride = ceil(total / max_points),

@@ -79,6 +79,7 @@ nlohmann::ordered_json trajectory_to_json(const Trajectory& data) {
   Json json = {{"t", pick(data.t, all)}, {"q", columns(data.q, all)}};
   if (data.has_torque()) json["tau"] = columns(data.tau, all);
   if (data.has_reference()) json["ref"] = columns(data.ref, all);
+  if (data.has_rates()) json["qd"] = columns(data.qd, all);
   return json;
 }
 

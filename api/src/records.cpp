@@ -24,12 +24,17 @@ std::optional<JobState> parse_job_state(std::string_view text) {
 }
 
 const char* to_string(JobKind kind) {
-  return kind == JobKind::simulation ? "simulation" : "identification";
+  switch (kind) {
+    case JobKind::simulation: return "simulation";
+    case JobKind::excitation: return "excitation";
+    default: return "identification";
+  }
 }
 
 std::optional<JobKind> parse_job_kind(std::string_view text) {
   if (text == "simulation") return JobKind::simulation;
   if (text == "identification") return JobKind::identification;
+  if (text == "excitation") return JobKind::excitation;
   return std::nullopt;
 }
 

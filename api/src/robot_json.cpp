@@ -2,6 +2,7 @@
 #include "manipid/api/robot_json.h"
 
 #include "manipid/core/model.h"
+#include "manipid/core/robot/base_parameters.h"
 
 #include <algorithm>
 #include <cmath>
@@ -41,6 +42,39 @@ Json prediction_json(const robot::TorquePrediction& prediction) {
 }
 
 }  // namespace
+
+nlohmann::ordered_json robot_description(const robot::Model& model, const std::vector<std::string>& warnings) {
+  Json joints = Json::array();
+  Json links = Json::array();
+  for (std::size_t k = 0; k < model.joints.size(); ++k) {
+    const robot::Joint& joint = model.joints[k];
+    joints.push_back({{"name", joint.name},
+                      {"link", joint.link},
+                      {"type", robot::to_string(joint.type)},
+                      {"axis", {joint.axis.x(), joint.axis.y(), joint.axis.z()}},
+                      {"limits",
+                       {{"lower", number(joint.limits.lower)},
+                        {"upper", number(joint.limits.upper)},
+                        {"velocity", number(joint.limits.velocity)},
+                        {"effort", number(joint.limits.effort)}}},
+                      {"damping", joint.damping},
+                      {"friction", joint.friction}});
+    links.push_back(model.bodies[k].links);
+  }
+  const robot::ParameterLayout layout;  // viscous and Coulomb: what a URDF's <dynamics> holds
+  const std::vector<std::string> names = robot::standard_parameter_names(model, layout);
+  return {{"robot_name", model.name},
+          {"base_link", model.base_link},
+          {"tip_link", model.tip_link},
+          {"joints", joints},
+          {"links", links},
+          {"gravity", {model.gravity.x(), model.gravity.y(), model.gravity.z()}},
+          {"parameters", {{"names", names}, {"urdf_values", by_name(names, robot::standard_parameters(model, layout))}}},
+          {"options", {{"friction", {"viscous", "coulomb", "offset"}}, {"armature", true}}},
+          {"base_parameters",
+           {{"count", robot::base_parameters(model, layout).size()}, {"friction", friction_names(layout)}}},
+          {"warnings", warnings}};
+}
 
 std::vector<std::string> friction_names(const robot::ParameterLayout& layout) {
   std::vector<std::string> names;

@@ -281,7 +281,7 @@ void submit(RouteState& state, const httplib::Request& request, httplib::Respons
       check_against_data(spec, dataset->joints, dataset->samples, dataset->has_torque, dataset->has_reference);
     }
   }
-  const SubmitResult submitted = state.service.submit(kind, body.dump(), dataset_id, key);
+  const SubmitResult submitted = state.service.submit({kind, body.dump(), dataset_id, "", ""}, key);
   response.set_header("Location", "/v1/jobs/" + submitted.job.id);
   if (submitted.replayed) response.set_header("Idempotent-Replayed", "true");
   send_job(response, 202, submitted.job);

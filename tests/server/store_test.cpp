@@ -197,7 +197,7 @@ TEST_F(StoreTest, DatasetRoundTripWithoutTorqueOrReference) {
 TEST_F(StoreTest, UnknownDatasetIsAbsent) {
   EXPECT_FALSE(store_->find_dataset("ds_0000000000000000"));
   EXPECT_FALSE(store_->load_dataset("ds_0000000000000000"));
-  EXPECT_FALSE(store_->delete_dataset("ds_0000000000000000"));
+  EXPECT_EQ(store_->delete_dataset("ds_0000000000000000"), DeleteResult::not_found);
 }
 
 TEST_F(StoreTest, DatasetOfAQueuedOrRunningJobIsNotDeleted) {
@@ -205,16 +205,110 @@ TEST_F(StoreTest, DatasetOfAQueuedOrRunningJobIsNotDeleted) {
   NewJob job = identification_job();
   job.dataset_id = dataset;
   const std::string id = submit(job);
-  bool in_use = false;
-  EXPECT_FALSE(store_->delete_dataset(dataset, &in_use));
-  EXPECT_TRUE(in_use);
+  EXPECT_EQ(store_->delete_dataset(dataset), DeleteResult::in_use);
   ASSERT_TRUE(store_->claim_next_job());
-  EXPECT_FALSE(store_->delete_dataset(dataset, &in_use));
-  EXPECT_TRUE(in_use);
+  EXPECT_EQ(store_->delete_dataset(dataset), DeleteResult::in_use);
   store_->finish_job(id, api::JobState::succeeded, "{}", "", {}, dataset);
-  EXPECT_TRUE(store_->delete_dataset(dataset, &in_use));
-  EXPECT_FALSE(in_use);
+  EXPECT_EQ(store_->delete_dataset(dataset), DeleteResult::deleted);
   EXPECT_FALSE(store_->find_dataset(dataset));
+  EXPECT_EQ(store_->delete_dataset(dataset), DeleteResult::not_found);
+}
+
+TEST_F(StoreTest, AValidationDatasetIsInUseToo) {
+  const std::string first = store_->insert_dataset("a", make_trajectory(10, 2, true, false), "", std::nullopt).dataset.id;
+  const std::string second = store_->insert_dataset("b", make_trajectory(10, 2, true, false), "", std::nullopt).dataset.id;
+  NewJob job = identification_job();
+  job.dataset_id = first;
+  job.validation_dataset_id = second;
+  const std::string id = submit(job);
+  EXPECT_EQ(store_->find_job(id)->validation_dataset_id, second);
+  EXPECT_EQ(store_->delete_dataset(second), DeleteResult::in_use);
+  ASSERT_TRUE(store_->cancel_job(id) == CancelOutcome::cancelled_now);
+  EXPECT_EQ(store_->delete_dataset(second), DeleteResult::deleted);
+}
+
+TEST_F(StoreTest, JitteryDatasetsWithRatesRoundTripAsMeasured) {
+  auto data = make_trajectory(50, 3, true, false);
+  data.t[10] += 0.3 * (data.t[11] - data.t[10]);  // a logger's jitter
+  data.qd = data.q * 2.0;
+  const auto info = store_->insert_dataset("jittery", data, "", std::nullopt).dataset;
+  EXPECT_FALSE(info.uniform);
+  EXPECT_TRUE(info.has_rates);
+  EXPECT_EQ(info.dt, data.median_step());
+  const auto found = store_->find_dataset(info.id);
+  EXPECT_FALSE(found->uniform);
+  EXPECT_TRUE(found->has_rates);
+  const auto loaded = store_->load_dataset(info.id);
+  ASSERT_TRUE(loaded);
+  EXPECT_TRUE(same_bits(loaded->t, data.t));
+  EXPECT_TRUE(same_bits(loaded->qd, data.qd));
+  EXPECT_TRUE(store_->find_dataset(store_->insert_dataset("uniform", make_trajectory(5, 1, false, false), "", std::nullopt)
+                                       .dataset.id)
+                  ->uniform);
+}
+
+// ---- robots ----
+
+NewRobot some_robot(const std::string& name = "arm") {
+  NewRobot robot;
+  robot.name = name;
+  robot.urdf = "<robot name=\"" + name + "\">\r\n  <!-- kept byte for byte: \xc3\xa9 -->\n</robot>";
+  robot.tip = "tool0";
+  robot.joints = 6;
+  robot.summary = R"({"joints": 6})";
+  return robot;
+}
+
+TEST_F(StoreTest, RobotsRoundTripTheirDocumentByteForByte) {
+  const NewRobot robot = some_robot();
+  const RobotOutcome created = store_->insert_robot(robot, std::nullopt);
+  ASSERT_EQ(created.status, SubmitStatus::created);
+  EXPECT_EQ(created.robot.id.rfind("rb_", 0), 0u);
+  EXPECT_EQ(created.robot.id.size(), 19u);
+  const auto found = store_->find_robot(created.robot.id);
+  ASSERT_TRUE(found);
+  EXPECT_EQ(found->name, "arm");
+  EXPECT_EQ(found->base, "");
+  EXPECT_EQ(found->tip, "tool0");
+  EXPECT_EQ(found->joints, 6);
+  EXPECT_EQ(found->summary, robot.summary);
+  EXPECT_EQ(store_->load_robot_urdf(created.robot.id), robot.urdf);
+  reopen();
+  EXPECT_EQ(store_->load_robot_urdf(created.robot.id), robot.urdf);
+  EXPECT_FALSE(store_->find_robot("rb_0000000000000000"));
+  EXPECT_FALSE(store_->load_robot_urdf("rb_0000000000000000"));
+}
+
+TEST_F(StoreTest, RobotsAreIdempotentPagedAndNotDeletedWhileInUse) {
+  const api::IdempotencyKey key{"upload-1", "f1"};
+  const RobotOutcome first = store_->insert_robot(some_robot("a"), key);
+  EXPECT_EQ(store_->insert_robot(some_robot("a"), key).status, SubmitStatus::replayed);
+  EXPECT_EQ(store_->insert_robot(some_robot("a"), key).robot.id, first.robot.id);
+  EXPECT_EQ(store_->insert_robot(some_robot("b"), api::IdempotencyKey{"upload-1", "f2"}).status, SubmitStatus::key_reused);
+  for (int i = 0; i < 4; ++i) store_->insert_robot(some_robot("r" + std::to_string(i)), std::nullopt);
+  api::PageRequest page;
+  page.page_size = 3;
+  const auto one = store_->list_robots(page);
+  ASSERT_EQ(one.items.size(), 3u);
+  EXPECT_EQ(one.items[0].name, "r3");  // newest first
+  page.page_token = one.next_page_token;
+  const auto two = store_->list_robots(page);
+  ASSERT_EQ(two.items.size(), 2u);
+  EXPECT_EQ(two.items[1].name, "a");
+  EXPECT_EQ(two.next_page_token, "");
+
+  NewJob job = identification_job();
+  job.robot_id = first.robot.id;
+  const std::string id = submit(job);
+  EXPECT_EQ(store_->find_job(id)->robot_id, first.robot.id);
+  EXPECT_EQ(store_->delete_robot(first.robot.id), DeleteResult::in_use);
+  ASSERT_TRUE(store_->claim_next_job());
+  EXPECT_EQ(store_->delete_robot(first.robot.id), DeleteResult::in_use);
+  store_->finish_job(id, api::JobState::succeeded, "{}", "", {}, "");
+  EXPECT_EQ(store_->delete_robot(first.robot.id), DeleteResult::deleted);
+  EXPECT_EQ(store_->delete_robot(first.robot.id), DeleteResult::not_found);
+  // Its key went with it: the same key now makes a new robot.
+  EXPECT_EQ(store_->insert_robot(some_robot("a"), key).status, SubmitStatus::created);
 }
 
 TEST_F(StoreTest, MismatchedTrajectoryShapeIsRefused) {
@@ -241,7 +335,7 @@ TEST_F(StoreTest, DatasetIdempotencyKey) {
   EXPECT_EQ(store_->list_datasets({}).items.size(), 1u);
 
   // Deleting the dataset frees its key.
-  EXPECT_TRUE(store_->delete_dataset(first.dataset.id));
+  EXPECT_EQ(store_->delete_dataset(first.dataset.id), DeleteResult::deleted);
   EXPECT_FALSE(store_->find_dataset(first.dataset.id));
   const auto again = store_->insert_dataset("again", data, "", api::IdempotencyKey{"upload-1", "fingerprint-b"});
   EXPECT_EQ(again.status, SubmitStatus::created);
@@ -503,27 +597,18 @@ TEST_F(StoreTest, CancelRules) {
 TEST_F(StoreTest, DeleteRules) {
   const api::IdempotencyKey key{"delete-me", "f"};
   const auto queued = store_->submit_job(identification_job(), key, 0).job.id;
-  bool was_active = false;
-  EXPECT_FALSE(store_->delete_job(queued, &was_active));
-  EXPECT_TRUE(was_active);
+  EXPECT_EQ(store_->delete_job(queued), DeleteResult::in_use);
 
   ASSERT_TRUE(store_->claim_next_job());
-  was_active = false;
-  EXPECT_FALSE(store_->delete_job(queued, &was_active));
-  EXPECT_TRUE(was_active);
+  EXPECT_EQ(store_->delete_job(queued), DeleteResult::in_use);
 
   store_->record_progress(queued, 3, 1.0, history_batch(0, 3));
   store_->finish_job(queued, JobState::succeeded, "{}", "", {{"m1", 1.0, std::nullopt}}, "");
-  was_active = true;
-  EXPECT_TRUE(store_->delete_job(queued, &was_active));
-  EXPECT_FALSE(was_active);
+  EXPECT_EQ(store_->delete_job(queued), DeleteResult::deleted);
   EXPECT_FALSE(store_->find_job(queued));
   EXPECT_FALSE(store_->history(queued, {}));
 
-  was_active = true;
-  EXPECT_FALSE(store_->delete_job(queued, &was_active));
-  EXPECT_FALSE(was_active);
-  EXPECT_FALSE(store_->delete_job(queued, nullptr));
+  EXPECT_EQ(store_->delete_job(queued), DeleteResult::not_found);
 
   // The deleted job's key no longer replays.
   const auto again = store_->submit_job(identification_job(), key, 0);

@@ -16,7 +16,7 @@ inline bool is_terminal(JobState state) {
   return state == JobState::succeeded || state == JobState::failed || state == JobState::cancelled;
 }
 
-enum class JobKind { simulation, identification };
+enum class JobKind { simulation, identification, excitation };
 const char* to_string(JobKind kind);
 std::optional<JobKind> parse_job_kind(std::string_view text);
 
@@ -27,9 +27,21 @@ struct DatasetInfo {
   std::string source_job;   ///< the simulation job that made it, else empty
   int joints = 0;
   int samples = 0;
-  double dt = 0.0;          ///< s
+  double dt = 0.0;          ///< s: the sample period (uniform data) or the median step (jittery data)
+  bool uniform = true;      ///< every step equals dt (to 1e-6); else stored as measured, resampled when used
   bool has_torque = false;
   bool has_reference = false;
+  bool has_rates = false;   ///< qd1..qdn columns
+};
+
+/// A robot uploaded as a URDF: what the store keeps beside the document itself.
+struct RobotInfo {
+  std::string id;           ///< "rb_" + 16 hex digits
+  std::string name;
+  std::string created_at;   ///< RFC 3339 UTC
+  std::string base, tip;    ///< the links asked for at upload (empty: the URDF's root, its only leaf)
+  int joints = 0;
+  std::string summary;      ///< the robot resource's description as JSON text (joints, links, parameters)
 };
 
 struct JobInfo {
@@ -38,7 +50,9 @@ struct JobInfo {
   JobState state = JobState::queued;
   std::string created_at, started_at, finished_at;  ///< RFC 3339 UTC; empty until it happens
   std::string request;      ///< the request body as accepted (JSON text)
-  std::string dataset_id;   ///< input (identification) or output (simulation); may be empty
+  std::string dataset_id;   ///< input (identification) or output (simulation, excitation); may be empty
+  std::string robot_id;     ///< the URDF robot it works on (robot identifications, excitations); may be empty
+  std::string validation_dataset_id;  ///< a second run the result predicts; may be empty
   long evaluations = 0;     ///< progress: cost evaluations so far
   std::optional<double> best_cost;
   bool cancel_requested = false;

@@ -32,6 +32,18 @@
 
 namespace manipid::api {
 
+/// What the service stores and shows of an uploaded robot (the robot resource without id, name and
+/// times): {"robot_name", "base_link", "tip_link",
+///   "joints": [{"name", "link", "type", "axis": [x, y, z], "limits": {"lower", "upper", "velocity",
+///              "effort"}, "damping", "friction"}],
+///   "links": [[the URDF links of body 1], ...],
+///   "gravity": [gx, gy, gz],
+///   "parameters": {"names": [...], "urdf_values": {...}}   (the default layout: viscous and Coulomb),
+///   "options": {"friction": ["viscous", "coulomb", "offset"], "armature": true},
+///   "base_parameters": {"count", "friction": ["viscous", "coulomb"]}   (for any excitation),
+///   "warnings": [...]}
+nlohmann::ordered_json robot_description(const robot::Model& model, const std::vector<std::string>& warnings);
+
 /// The friction terms a layout has, by name: "viscous", "coulomb", "offset".
 std::vector<std::string> friction_names(const robot::ParameterLayout& layout);
 /// "viscous,coulomb,offset" (any subset, any order; "none" for no friction) → the layout's friction

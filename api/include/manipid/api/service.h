@@ -8,6 +8,7 @@
 
 #include "manipid/api/records.h"
 #include "manipid/api/requests.h"
+#include "manipid/api/robot_requests.h"
 
 #include <optional>
 #include <string>
@@ -26,6 +27,20 @@ struct DatasetCreated {
   bool replayed = false;
 };
 
+struct RobotCreated {
+  RobotInfo robot;
+  bool replayed = false;
+};
+
+/// A job to queue, its request validated already.
+struct JobSubmission {
+  JobKind kind = JobKind::identification;
+  std::string request_json;
+  std::string dataset_id;             ///< the identification's input dataset (empty for simulations)
+  std::string robot_id;               ///< the URDF robot it works on (empty for the preset)
+  std::string validation_dataset_id;  ///< a second dataset it reads
+};
+
 class Service {
  public:
   virtual ~Service() = default;
@@ -36,10 +51,18 @@ class Service {
   virtual Page<DatasetInfo> datasets(const PageRequest& page) = 0;
   virtual DeleteOutcome delete_dataset(const std::string& id) = 0;
 
-  /// Queues a job whose request was validated already. `dataset_id` is the identification's
-  /// input dataset (empty for simulations and simulate+identify requests).
-  virtual SubmitResult submit(JobKind kind, const std::string& request_json, const std::string& dataset_id,
-                              const std::optional<IdempotencyKey>& key) = 0;
+  /// A URDF robot, parsed already (`description`: robot_json.h's robot_description as JSON text).
+  virtual RobotCreated create_robot(const RobotUpload& upload, int joints, const std::string& description,
+                                    const std::optional<IdempotencyKey>& key) = 0;
+  virtual std::optional<RobotInfo> robot(const std::string& id) = 0;
+  /// The URDF document as uploaded.
+  virtual std::optional<std::string> robot_urdf(const std::string& id) = 0;
+  virtual Page<RobotInfo> robots(const PageRequest& page) = 0;
+  /// Conflict while a queued or running job uses it.
+  virtual DeleteOutcome delete_robot(const std::string& id) = 0;
+
+  /// Queues a job whose request was validated already.
+  virtual SubmitResult submit(const JobSubmission& submission, const std::optional<IdempotencyKey>& key) = 0;
   /// The job with its live progress.
   virtual std::optional<JobInfo> job(const std::string& id) = 0;
   /// As job(), but first waits up to `seconds` for it to reach a terminal state.

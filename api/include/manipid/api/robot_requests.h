@@ -1,0 +1,63 @@
+// robot_requests.h — the service's requests about URDF robots: uploads and identifications, validated up
+// front with fields named as in the body (as requests.h does for the paper's preset).
+#pragma once
+
+#include "manipid/core/resample.h"
+#include "manipid/core/robot/identification.h"
+#include "manipid/core/robot/model.h"
+
+#include <nlohmann/json.hpp>
+
+#include <string>
+#include <vector>
+
+namespace manipid::api {
+
+// ---- Robots ----------------------------------------------------------------------------
+
+/// A URDF upload: the document and how to read it.
+struct RobotUpload {
+  std::string name;  ///< default: the URDF's robot name
+  std::string urdf;  ///< the document, kept byte for byte
+  std::string base;  ///< default: the URDF's root link
+  std::string tip;   ///< default: the only leaf below the base
+};
+
+/// JSON body: {"urdf": "<robot …>", "name"?, "base"?, "tip"?}.
+RobotUpload robot_from_json(const nlohmann::json& body);
+
+/// The upload parsed (robot/urdf.h): throws InputError with field "urdf" naming the element in its
+/// message ("joint j3: ..."), or "base"/"tip" for those options.
+struct ParsedRobot {
+  robot::Model model;
+  std::vector<std::string> warnings;
+};
+ParsedRobot parse_robot(const RobotUpload& upload);
+
+// ---- Identifications of a URDF robot -----------------------------------------------------
+
+struct RobotIdentificationSpec {
+  std::string robot_id;
+  std::string dataset_id;
+  std::string validation_dataset_id;   ///< empty: no validation
+  robot::IdentificationOptions options;  ///< cancel left empty
+  bool physical = false;
+};
+
+/// True when the identification request names a robot_id (the URDF robot path) rather than a preset.
+bool names_a_robot(const nlohmann::json& body);
+
+/// {"robot_id": "rb_…", "dataset_id": "ds_…", "validation_dataset_id"?: "ds_…",
+///  "friction"?: ["viscous", "coulomb", "offset"] (default viscous and Coulomb; [] for none),
+///  "armature"?: false, "physical"?: false, "trim"?: [start_s, end_s], "dt"?: s,
+///  "half_length"?: int | "auto", "band"?: number | "auto", "comparison_half_length"?,
+///  "comparison_band"?, "weights"?: "unit" | "per-joint"}. The paper preset's options (method,
+///  algorithm, free, initial, kp, ...) are refused with the reason; so is a "preset" beside robot_id.
+RobotIdentificationSpec robot_identification_from_json(const nlohmann::json& body);
+
+/// Checks what needs the robot and the data: joint counts equal (naming both), torque present.
+/// `field` names the dataset in messages ("dataset_id" or "validation_dataset_id").
+void check_robot_data(int robot_joints, const std::string& robot_name, int data_joints, bool has_torque,
+                      const std::string& field);
+
+}  // namespace manipid::api

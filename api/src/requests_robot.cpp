@@ -1,0 +1,170 @@
+// requests_robot.cpp — URDF robot uploads and their identification requests (robot_requests.h).
+#include "json_fields.h"
+#include "manipid/api/robot_json.h"
+#include "manipid/api/robot_requests.h"
+#include "manipid/core/robot/urdf.h"
+
+#include <numbers>
+
+namespace manipid::api {
+namespace {
+
+using fields::Json;
+
+constexpr std::size_t max_id_length = 64;
+/// The largest URDF a robot may have: real arms' files are tens of kilobytes (with meshes referenced,
+/// not inlined); 4 MiB leaves room for generated documents without letting one request fill the store.
+constexpr std::size_t max_urdf_bytes = 4u << 20;
+
+std::string read_id(const Json& value, const std::string& field) {
+  const std::string id = fields::read_string(value, field);
+  if (id.empty()) throw InputError(field, field + " is empty");
+  if (id.size() > max_id_length) throw InputError(field, field + " is longer than " + std::to_string(max_id_length) + " characters");
+  return id;
+}
+
+int half_length_field(const Json& value, const std::string& field) {
+  if (value.is_string() && value.get_ref<const std::string&>() == "auto") return 0;
+  if (value.is_number()) return static_cast<int>(fields::read_integer(value, field, 2, 1'000'000));
+  throw InputError(field, field + " must be \"auto\" or an integer in 2..1000000, got " + fields::describe(value));
+}
+
+double band_field(const Json& value, const std::string& field) {
+  if (value.is_string() && value.get_ref<const std::string&>() == "auto") return 0.0;
+  if (value.is_number()) return fields::read_positive(value, field, std::numbers::pi, " rad/sample");
+  throw InputError(field, field + " must be \"auto\" or a number in (0, pi] rad/sample, got " + fields::describe(value));
+}
+
+}  // namespace
+
+RobotUpload robot_from_json(const nlohmann::json& body) {
+  const fields::ObjectFields object(body, "", {"name", "urdf", "base", "tip"});
+  RobotUpload upload;
+  const Json* urdf = object.find("urdf");
+  if (!urdf) throw InputError("urdf", "missing urdf: the robot's URDF document as a string");
+  if (!urdf->is_string()) throw InputError("urdf", "urdf must be the URDF document as a string, got " + fields::describe(*urdf));
+  upload.urdf = urdf->get<std::string>();
+  if (const Json* name = object.find("name")) upload.name = fields::read_label(*name, "name");
+  if (const Json* base = object.find("base")) upload.base = fields::read_string(*base, "base");
+  if (const Json* tip = object.find("tip")) upload.tip = fields::read_string(*tip, "tip");
+  return upload;
+}
+
+ParsedRobot parse_robot(const RobotUpload& upload) {
+  if (upload.urdf.empty()) throw InputError("urdf", "the URDF document is empty");
+  if (upload.urdf.size() > max_urdf_bytes) {
+    throw InputError("urdf", "the URDF document has " + std::to_string(upload.urdf.size()) + " bytes, at most " +
+                                 std::to_string(max_urdf_bytes) + " are accepted");
+  }
+  robot::UrdfOptions options;
+  options.base = upload.base;
+  options.tip = upload.tip;
+  try {
+    robot::ParsedUrdf parsed = robot::parse_urdf(upload.urdf, options);
+    return {std::move(parsed.model), std::move(parsed.warnings)};
+  } catch (const InputError& error) {
+    // The core names the element ("joint j3", "link l4"): the request's field is the document, and the
+    // element goes into the message.
+    if (error.field() == "base" || error.field() == "tip") throw;
+    const std::string element = error.field() == "urdf" ? "" : error.field() + ": ";
+    const std::string message = error.what();
+    throw InputError("urdf", message.rfind(element, 0) == 0 ? message : element + message);
+  }
+}
+
+bool names_a_robot(const nlohmann::json& body) { return body.is_object() && body.contains("robot_id"); }
+
+RobotIdentificationSpec robot_identification_from_json(const nlohmann::json& body) {
+  // The preset's options, named so the refusal can say why rather than "unknown key".
+  static const std::vector<std::string> preset_only = {
+      "simulation", "preset", "kinetic_energy", "method", "algorithm", "free", "initial", "lower", "upper", "kp", "kd",
+      "torque_source", "max_evaluations", "max_seconds", "relative_x_tolerance", "relative_f_tolerance",
+      "output_error_iterations"};
+  if (body.is_object()) {
+    for (const std::string& key : preset_only) {
+      if (body.contains(key)) {
+        throw InputError(key, key + " belongs to the paper's preset model; a URDF robot (robot_id) is identified by "
+                                    "linear input-error: its options are friction, armature, physical, trim, dt, the "
+                                    "filters and weights");
+      }
+    }
+  }
+  const fields::ObjectFields object(body, "",
+                                    {"robot_id", "dataset_id", "validation_dataset_id", "friction", "armature", "physical",
+                                     "trim", "dt", "half_length", "band", "comparison_half_length", "comparison_band",
+                                     "weights"});
+  RobotIdentificationSpec spec;
+  const Json* robot_id = object.find("robot_id");
+  spec.robot_id = read_id(*robot_id, "robot_id");
+  const Json* dataset_id = object.find("dataset_id");
+  if (!dataset_id) throw InputError("dataset_id", "missing dataset_id: the measured run to identify from");
+  spec.dataset_id = read_id(*dataset_id, "dataset_id");
+  if (const Json* validation = object.find("validation_dataset_id")) {
+    spec.validation_dataset_id = read_id(*validation, "validation_dataset_id");
+  }
+  robot::IdentificationOptions& options = spec.options;
+  if (const Json* friction = object.find("friction")) {
+    if (!friction->is_array()) {
+      throw InputError("friction", "friction must be an array of viscous, coulomb, offset (or [] for none), got " +
+                                       fields::describe(*friction));
+    }
+    std::vector<std::string> terms;
+    for (std::size_t i = 0; i < friction->size(); ++i) {
+      terms.push_back(fields::read_string((*friction)[i], fields::element_path("friction", i)));
+    }
+    if (terms.empty()) terms.emplace_back("none");
+    parse_friction(terms, options.layout, "friction");
+  }
+  if (const Json* armature = object.find("armature")) {
+    if (!armature->is_boolean()) throw InputError("armature", "armature must be true or false, got " + fields::describe(*armature));
+    options.layout.armature = armature->get<bool>();
+  }
+  if (const Json* physical = object.find("physical")) {
+    if (!physical->is_boolean()) throw InputError("physical", "physical must be true or false, got " + fields::describe(*physical));
+    spec.physical = physical->get<bool>();
+  }
+  if (const Json* trim = object.find("trim")) {
+    if (!trim->is_array() || trim->size() != 2) {
+      throw InputError("trim", "trim must be [start, end]: the seconds dropped at each end, got " + fields::describe(*trim));
+    }
+    options.preparation.trim_start = fields::read_non_negative((*trim)[0], "trim[0]");
+    options.preparation.trim_end = fields::read_non_negative((*trim)[1], "trim[1]");
+  }
+  if (const Json* dt = object.find("dt")) {
+    options.preparation.uniform.dt = fields::read_positive(*dt, "dt", kLongestSamplePeriod, " s");
+    if (options.preparation.uniform.dt < kShortestSamplePeriod) {
+      throw InputError("dt", "dt must be at least " + fields::format_number(kShortestSamplePeriod) + " s");
+    }
+  }
+  if (const Json* value = object.find("half_length")) options.half_length = half_length_field(*value, "half_length");
+  if (const Json* value = object.find("band")) options.band = band_field(*value, "band");
+  if (const Json* value = object.find("comparison_half_length")) {
+    options.comparison_half_length = half_length_field(*value, "comparison_half_length");
+  }
+  if (const Json* value = object.find("comparison_band")) options.comparison_band = band_field(*value, "comparison_band");
+  if ((options.half_length > 0) != (options.band > 0.0)) {
+    throw InputError(options.band > 0.0 ? "half_length" : "band", "give half_length and band together, or neither");
+  }
+  if ((options.comparison_half_length > 0) != (options.comparison_band > 0.0)) {
+    throw InputError(options.comparison_band > 0.0 ? "comparison_half_length" : "comparison_band",
+                     "give comparison_half_length and comparison_band together, or neither");
+  }
+  if (const Json* weights = object.find("weights")) {
+    options.weighting = fields::read_choice(*weights, "weights", {"unit", "per-joint"}) == "per-joint"
+                            ? robot::JointWeighting::per_joint
+                            : robot::JointWeighting::unit;
+  }
+  return spec;
+}
+
+void check_robot_data(int robot_joints, const std::string& robot_name, int data_joints, bool has_torque,
+                      const std::string& field) {
+  const std::string noun = field == "validation_dataset_id" ? "the validation dataset" : "the dataset";
+  if (data_joints != robot_joints) {
+    throw InputError(field, noun + " has " + std::to_string(data_joints) + " joints, the robot " + robot_name + " has " +
+                                std::to_string(robot_joints));
+  }
+  if (!has_torque) throw InputError(field, noun + " has no tau columns: identifying a robot needs measured torques");
+}
+
+}  // namespace manipid::api

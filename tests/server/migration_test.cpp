@@ -1,0 +1,124 @@
+// migration_test.cpp — a database written by the last release (manipid 0.1.0, schema version 1) opens
+// with today's schema and keeps every job, dataset, history, estimate and idempotency key.
+//
+// tests/server/data/manipid-0.1.0.db was made by that release's own binary
+// (tests/server/data/make_release_0.1.0_db.sh); this test reads the file's rows with plain SQL first, opens a
+// copy with today's store (which migrates it), and compares.
+#include "sqlite_schema.h"
+#include "store.h"
+
+#include <gtest/gtest.h>
+#include <sqlite3.h>
+
+#include <cstdlib>
+#include <filesystem>
+#include <map>
+#include <string>
+#include <vector>
+
+namespace manipid::server {
+namespace {
+
+namespace fs = std::filesystem;
+
+/// Rows of a query on a database file, each row's columns as text ("" for NULL).
+std::vector<std::vector<std::string>> query(const std::string& path, const std::string& sql) {
+  sqlite3* database = nullptr;
+  EXPECT_EQ(sqlite3_open_v2(path.c_str(), &database, SQLITE_OPEN_READONLY, nullptr), SQLITE_OK);
+  sqlite3_stmt* statement = nullptr;
+  EXPECT_EQ(sqlite3_prepare_v2(database, sql.c_str(), -1, &statement, nullptr), SQLITE_OK) << sql;
+  std::vector<std::vector<std::string>> rows;
+  while (sqlite3_step(statement) == SQLITE_ROW) {
+    std::vector<std::string> row;
+    for (int c = 0; c < sqlite3_column_count(statement); ++c) {
+      const auto* text = sqlite3_column_text(statement, c);
+      row.emplace_back(text ? reinterpret_cast<const char*>(text) : "");
+    }
+    rows.push_back(row);
+  }
+  sqlite3_finalize(statement);
+  sqlite3_close(database);
+  return rows;
+}
+
+class ReleaseDatabase : public ::testing::Test {
+ protected:
+  void SetUp() override {
+    std::string pattern = (fs::temp_directory_path() / "manipid-migration-XXXXXX").string();
+    ASSERT_NE(mkdtemp(pattern.data()), nullptr);
+    directory_ = pattern;
+    path_ = (directory_ / "manipid.db").string();
+    fs::copy_file(fs::path(MANIPID_SOURCE_DIR) / "tests/server/data/manipid-0.1.0.db", path_);
+  }
+  void TearDown() override { fs::remove_all(directory_); }
+
+  fs::path directory_;
+  std::string path_;
+};
+
+TEST_F(ReleaseDatabase, OpensMigratedWithEveryRowKept) {
+  ASSERT_EQ(query(path_, "PRAGMA user_version")[0][0], "1");
+  const auto jobs_before = query(path_, "SELECT id, kind, state, request, dataset_id, result, evaluations, attempts FROM jobs ORDER BY seq");
+  const auto history_before = query(path_, "SELECT job_id, idx, cost, hex(theta) FROM job_history ORDER BY job_id, idx");
+  const auto estimates_before = query(path_, "SELECT job_id, name, value, std_error FROM estimates ORDER BY job_id, name");
+  const auto datasets_before = query(path_, "SELECT id, name, samples, joints, dt, hex(t), hex(q), hex(tau) FROM datasets ORDER BY seq");
+  ASSERT_EQ(jobs_before.size(), 4u);
+  ASSERT_EQ(datasets_before.size(), 2u);
+  ASSERT_GT(history_before.size(), 200u);
+
+  {
+    const auto store = open_sqlite_store(path_);
+    for (const auto& row : jobs_before) {
+      const auto job = store->find_job(row[0]);
+      ASSERT_TRUE(job) << row[0];
+      EXPECT_EQ(api::to_string(job->kind), row[1]);
+      EXPECT_EQ(api::to_string(job->state), row[2]);
+      EXPECT_EQ(job->request, row[3]);
+      EXPECT_EQ(job->dataset_id, row[4]);
+      EXPECT_EQ(job->result, row[5]);
+      EXPECT_EQ(job->evaluations, std::stol(row[6]));
+      EXPECT_EQ(job->attempts, std::stoi(row[7]));
+      EXPECT_EQ(job->robot_id, "");
+    }
+    for (const auto& row : datasets_before) {
+      const auto dataset = store->find_dataset(row[0]);
+      ASSERT_TRUE(dataset) << row[0];
+      EXPECT_EQ(dataset->name, row[1]);
+      EXPECT_EQ(dataset->samples, std::stoi(row[2]));
+      EXPECT_TRUE(dataset->uniform);
+      EXPECT_FALSE(dataset->has_rates);
+      const auto data = store->load_dataset(row[0]);
+      ASSERT_TRUE(data);
+      EXPECT_EQ(data->joint_count(), std::stoi(row[3]));
+      EXPECT_EQ(data->qd.cols(), 0);
+    }
+    // The succeeded identification's history is whole, in order, as stored.
+    const std::string identified = jobs_before[0][0];
+    const auto page = store->history(identified, {1000, ""});
+    ASSERT_TRUE(page);
+    EXPECT_EQ(static_cast<long>(page->items.size()), store->find_job(identified)->evaluations);
+    // The release's idempotency key still replays its job.
+    const auto key_rows = query(path_, "SELECT key, fingerprint, resource_id FROM idempotency_keys WHERE scope = 'job'");
+    ASSERT_EQ(key_rows.size(), 1u);
+    const SubmitOutcome replay = store->submit_job({api::JobKind::identification, "{}", "", "", ""},
+                                                  api::IdempotencyKey{key_rows[0][0], key_rows[0][1]}, 0);
+    EXPECT_EQ(replay.status, SubmitStatus::replayed);
+    EXPECT_EQ(replay.job.id, key_rows[0][2]);
+    // And today's rows go in beside them.
+    const RobotOutcome robot = store->insert_robot({"arm", "<robot name=\"arm\"/>", "", "", 2, "{}"}, std::nullopt);
+    EXPECT_EQ(robot.status, SubmitStatus::created);
+    NewJob job{api::JobKind::excitation, "{}", "", robot.robot.id, ""};
+    EXPECT_EQ(store->submit_job(job, std::nullopt, 0).job.kind, api::JobKind::excitation);
+  }
+
+  EXPECT_EQ(query(path_, "PRAGMA user_version")[0][0], std::to_string(sqlite::current_schema_version()));
+  EXPECT_EQ(query(path_, "PRAGMA integrity_check")[0][0], "ok");
+  EXPECT_TRUE(query(path_, "PRAGMA foreign_key_check").empty());
+  EXPECT_EQ(query(path_, "SELECT job_id, idx, cost, hex(theta) FROM job_history ORDER BY job_id, idx"), history_before);
+  EXPECT_EQ(query(path_, "SELECT job_id, name, value, std_error FROM estimates ORDER BY job_id, name"), estimates_before);
+  EXPECT_EQ(query(path_, "SELECT id, name, samples, joints, dt, hex(t), hex(q), hex(tau) FROM datasets ORDER BY seq LIMIT 2"),
+            datasets_before);
+}
+
+}  // namespace
+}  // namespace manipid::server
