@@ -465,6 +465,7 @@ TEST(ExcitationOptions, BadOptionsNameTheirField) {
   check("samples", with([](ExcitationOptions& o) { o.samples = 39; }));
   check("samples", with([](ExcitationOptions& o) { o.samples = -1; }));
   check("random_starts", with([](ExcitationOptions& o) { o.random_starts = 0; }));
+  check("local_starts", with([](ExcitationOptions& o) { o.local_starts = 0; }));
   check("max_seconds", with([](ExcitationOptions& o) { o.max_seconds = 0.0; }));
   check("max_evaluations", with([](ExcitationOptions& o) { o.max_evaluations = 0; }));
   EXPECT_NO_THROW(ExcitationOptions{}.validate(model));
