@@ -66,6 +66,8 @@ constexpr long kMaxSampledInstants = 10'000'000;
 /// figure comes from an SVD). Eigenvalues are floored at λ_max / kConditionCap² so that the log stays
 /// finite when rounding makes one zero or negative.
 constexpr double kConditionCap = 1e16;
+/// log det for a trajectory that leaves some base parameter unseen: below any real one (those are O(100)).
+constexpr double kUnseenLogDet = -1e6;
 /// A limit within 1 % of being reached is reported as active.
 constexpr double kActiveUsage = 0.99;
 
@@ -104,12 +106,12 @@ struct HarmonicTable {
   HarmonicTable(double period, int harmonics, int instants, Instants where) {
     const int L = harmonics;
     const double omega = kTwoPi / period;
-    const long steps = 2L * instants;
+    const long steps = 2 * static_cast<long>(instants);
     position.resize(2 * L, instants);
     velocity.resize(2 * L, instants);
     acceleration.resize(2 * L, instants);
     for (int j = 0; j < instants; ++j) {
-      const long m = 2L * j + (where == Instants::midpoints ? 1 : 0);
+      const long m = 2 * static_cast<long>(j) + (where == Instants::midpoints ? 1 : 0);
       for (int l = 1; l <= L; ++l) {
         const long turns = (static_cast<long>(l) * m) % steps;
         const double phase = kTwoPi * static_cast<double>(turns) / static_cast<double>(steps);
@@ -252,11 +254,11 @@ class CriterionWorkspace {
     gram_.selfadjointView<Eigen::Lower>().rankUpdate(Yb_.transpose());
     const Eigen::Index b = gram_.rows();
     for (Eigen::Index i = 0; i < b; ++i) norms_[i] = std::sqrt(gram_(i, i));
-    const double largest_norm = b > 0 ? norms_.maxCoeff() : 0.0;
-    if (b == 0 || !(largest_norm > 0.0) || !std::isfinite(largest_norm) || !(norms_.minCoeff() > 0.0)) {
-      // A base column that is zero over the whole trajectory: a parameter it cannot see.
+    // A base column that is zero over the whole trajectory (a joint frozen at its limit: a parameter it
+    // cannot see), or anything not finite: the worst value, never a NaN into the eigensolver.
+    if (b == 0 || !gram_.allFinite() || !(norms_.minCoeff() > 0.0)) {
       log_condition = std::log(kConditionCap);
-      log_det = -std::log(kConditionCap) * 2.0 * static_cast<double>(b) - 1e3;
+      log_det = kUnseenLogDet;
       return;
     }
     for (Eigen::Index j = 0; j < b; ++j) {
@@ -450,7 +452,7 @@ class DesignProblem {
   /// Directions start at unit length per joint; ±4 leaves them room to grow without letting a model-based
   /// optimiser wander along the length (which changes nothing).
   static constexpr double kDirectionBound = 4.0;
-  /// First steps: a tenth of q0's range; a direction turned by about 0.25 rad.
+  /// First steps: a tenth of q0's range; a quarter of a unit direction's length per coordinate.
   static constexpr double kPositionStep = 0.1;
   static constexpr double kDirectionStep = 0.25;
 
