@@ -212,4 +212,30 @@ struct ServeOptions {
 CLI::App* add_serve_command(CLI::App& app, ServeOptions& options);
 int run_serve(const ServeOptions& options);
 
+// ---- excitation ----------------------------------------------------------------------------
+
+/// `manipid excitation`: an optimal excitation trajectory for a URDF robot (core/robot/excitation.h).
+/// Not robot::ExcitationOptions (the core's design options), which run_excitation builds from these;
+/// add_excitation_command sets the design's defaults from the core's, so they are stated once.
+struct ExcitationOptions {
+  std::string robot;                ///< URDF file, '-' for stdin
+  std::string base, tip;            ///< the chain's ends; empty = the URDF's root and only leaf
+  double period = 0.0;
+  int harmonics = 0;
+  std::string criterion;
+  std::string max_acceleration;     ///< "A" or "A1,...,An" (rad/s^2)
+  double position_margin = 0.0;
+  std::string friction;             ///< comma list of viscous, coulomb, offset; or "none"
+  bool armature = false;
+  double dt = 0.001;
+  std::optional<double> duration;   ///< a whole number of periods; default one period
+  std::uint64_t seed = 0;
+  double max_seconds = 0.0;
+  int max_evaluations = 0;
+  std::string output = "-";
+  std::string coefficients;         ///< JSON path, empty = none
+};
+CLI::App* add_excitation_command(CLI::App& app, ExcitationOptions& options);
+int run_excitation(const ExcitationOptions& options);
+
 }  // namespace manipid::server

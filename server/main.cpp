@@ -37,12 +37,15 @@ int run(int argc, char** argv) {
   FilterOptions filter;
   IdentifyOptions identify;
   ServeOptions serve;
+  ExcitationOptions excitation;
   CLI::App* simulate_command = add_simulate_command(app, simulate);
   CLI::App* torque_command = add_torque_command(app, torque);
   CLI::App* filter_command = add_filter_command(app, filter);
   CLI::App* identify_command = add_identify_command(app, identify);
   CLI::App* serve_command = add_serve_command(app, serve);
-  const CLI::App* commands[] = {simulate_command, torque_command, filter_command, identify_command, serve_command};
+  CLI::App* excitation_command = add_excitation_command(app, excitation);
+  const CLI::App* commands[] = {simulate_command, torque_command, filter_command,
+                                identify_command, serve_command, excitation_command};
 
   try {
     app.parse(argc, argv);
@@ -65,7 +68,7 @@ int run(int argc, char** argv) {
     // CLI11 calls a mistyped command an unexpected argument; say what the user meant.
     if (!in_command && argc > 1 && argv[1][0] != '-') {
       return report(std::string("unknown command '") + argv[1] +
-                        "'; expected simulate, torque, filter, identify or serve (see 'manipid --help')",
+                        "'; expected simulate, torque, filter, identify, serve or excitation (see 'manipid --help')",
                     exit_usage);
     }
     return report(std::string(error.what()) + " (see '" + help + "')", exit_usage);
@@ -76,7 +79,8 @@ int run(int argc, char** argv) {
   if (filter_command->parsed()) return run_filter(filter);
   if (identify_command->parsed()) return run_identify(identify);
   if (serve_command->parsed()) return run_serve(serve);
-  return report("no command given; expected simulate, torque, filter, identify or serve (see 'manipid --help')", exit_usage);
+  if (excitation_command->parsed()) return run_excitation(excitation);
+  return report("no command given; expected simulate, torque, filter, identify, serve or excitation (see 'manipid --help')", exit_usage);
 }
 
 }  // namespace

@@ -8,6 +8,7 @@ set -u
 manipid=${1:?usage: bash cli_test.sh /path/to/manipid}
 [[ -x $manipid ]] || { echo "cli_test.sh: $manipid is not an executable"; exit 2; }
 manipid=$(realpath "$manipid")  # the tests run inside a temporary directory
+robots=$(realpath "$(dirname "${BASH_SOURCE[0]}")/../../examples/robots")  # before the cd below
 work=$(mktemp -d)
 trap 'rm -rf "$work"' EXIT
 cd "$work" || exit 2
@@ -282,6 +283,98 @@ expect_error "identify: too few samples for the filter" 2 "the data has" \
   "$manipid" identify <(head -100 paper.csv) --half-length 100 --band 0.2
 expect_error "identify: output-error without ref" 2 "no ref columns" \
   "$manipid" identify <(cut -d, -f1-9 paper.csv) --method output-error
+
+# ---- excitation: optimal excitation trajectories for URDF robots -------------------------------
+
+# limits URDF: "lower upper velocity" per moving joint, in file order (the chain's order in the examples).
+limits() {
+  grep -o '<limit [^>]*>' "$1" |
+    sed -E 's/.*lower="([^"]*)".*upper="([^"]*)".*velocity="([^"]*)".*/\1 \2 \3/'
+}
+
+# within_limits STATES URDF N MARGIN ACCELERATION: every row inside [lower + margin, upper − margin],
+# |qd| ≤ velocity, |qdd| ≤ ACCELERATION, with the limits read from the URDF itself.
+within_limits() {
+  awk -F, -v n="$3" -v margin="$4" -v amax="$5" '
+    FNR == NR { lo[FNR] = $1; hi[FNR] = $2; vel[FNR] = $3; next }
+    FNR == 1 { next }
+    { for (k = 1; k <= n; k++) {
+        q = $(1 + k); qd = $(1 + n + k); qdd = $(1 + 2 * n + k)
+        if (q < lo[k] + margin || q > hi[k] - margin) { print "q" k " = " q " at t = " $1; bad++ }
+        if (qd > vel[k] || -qd > vel[k]) { print "qd" k " = " qd " at t = " $1; bad++ }
+        if (qdd > amax || -qdd > amax) { print "qdd" k " = " qdd " at t = " $1; bad++ }
+      } }
+    END { exit bad > 0 }' FS=' ' <(limits "$2") FS=, "$1" >/dev/null
+}
+
+# at_rest STATES N ROW: q̇ and q̈ of that data row are exactly 0.
+at_rest() {
+  awk -F, -v n="$2" -v row="$3" 'NR == row + 1 { for (c = 2 + n; c <= 1 + 3 * n; c++) if ($c != 0) bad++; found = 1 }
+                                  END { exit !(found && bad == 0) }' "$1"
+}
+
+ur5_header="t,q1,q2,q3,q4,q5,q6,qd1,qd2,qd3,qd4,qd5,qd6,qdd1,qdd2,qdd3,qdd4,qdd5,qdd6"
+"$manipid" excitation --robot "$robots/ur5_like.urdf" --period 10 --harmonics 5 --dt 0.01 --max-evaluations 100 \
+  --out ur5_excitation.csv --coefficients ur5_excitation.json 2>ur5_excitation.err
+check "excitation (UR5-like): exit 0" test $? -eq 0
+check "excitation (UR5-like): header t,q1..q6,qd1..qd6,qdd1..qdd6" test "$(head -1 ur5_excitation.csv)" = "$ur5_header"
+check "excitation (UR5-like): one period at 0.01 s is 1001 rows" test "$(($(wc -l <ur5_excitation.csv) - 1))" -eq 1001
+check "excitation (UR5-like): t runs 0..10" bash -c "test \"\$(sed -n 2p ur5_excitation.csv | cut -d, -f1)\" = 0 && test \"\$(tail -1 ur5_excitation.csv | cut -d, -f1)\" = 10"
+check "excitation (UR5-like): starts at rest" at_rest ur5_excitation.csv 6 1
+check "excitation (UR5-like): ends at rest" at_rest ur5_excitation.csv 6 1001
+check "excitation (UR5-like): ends where it started" \
+  bash -c "first=\$(sed -n 2p ur5_excitation.csv | cut -d, -f2-7); test -n \"\$first\" && test \"\$first\" = \"\$(tail -1 ur5_excitation.csv | cut -d, -f2-7)\""
+check "excitation (UR5-like): moves (q1 spans more than 0.5 rad)" bash -c "
+  cut -d, -f2 ur5_excitation.csv | awk 'NR == 2 { lo = hi = \$1 } NR > 2 { if (\$1 < lo) lo = \$1; if (\$1 > hi) hi = \$1 }
+                                        END { exit !(hi - lo > 0.5) }'"
+check "excitation (UR5-like): within the URDF's limits (margin 0.05 rad, 7.5 rad/s^2)" \
+  within_limits ur5_excitation.csv "$robots/ur5_like.urdf" 6 0.05 7.5
+check "excitation (UR5-like): one summary line" bash -c "test \$(grep -c '^manipid excitation: ur5_like, 6 joints, 5 harmonics, period 10 s: condition ' ur5_excitation.err) -eq 1"
+check "excitation (UR5-like): the parser's warning is passed on" grep -q '^manipid: warning: .*ur5_like.urdf: link tool0 has no <inertial>' ur5_excitation.err
+check "excitation (UR5-like): coefficients name the robot and its joints" \
+  bash -c "grep -q '\"robot\": \"ur5_like\"' ur5_excitation.json && grep -q '\"wrist_3_joint\"' ur5_excitation.json"
+check "excitation (UR5-like): coefficients carry period, harmonics, criterion" \
+  bash -c "grep -q '\"period\": 10.0' ur5_excitation.json && grep -q '\"harmonics\": 5' ur5_excitation.json &&
+           grep -q '\"criterion\": \"condition\"' ur5_excitation.json && grep -q '\"criterion_value\": [0-9]' ur5_excitation.json"
+"$manipid" excitation --robot "$robots/ur5_like.urdf" --dt 0.01 --max-evaluations 100 --out ur5_again.csv 2>/dev/null
+check "excitation: same seed, same file" cmp -s ur5_excitation.csv ur5_again.csv
+"$manipid" excitation --robot "$robots/ur5_like.urdf" --dt 0.01 --max-evaluations 100 --seed 2 --out ur5_seed2.csv 2>/dev/null
+check "excitation: another seed, another trajectory" differ ur5_excitation.csv ur5_seed2.csv
+
+panda_limits_ok=1
+"$manipid" excitation --robot "$robots/panda_like.urdf" --period 10 --harmonics 5 --dt 0.01 --duration 20 \
+  --max-evaluations 100 --max-acceleration 5 --criterion logdet --out panda_excitation.csv 2>panda_excitation.err
+check "excitation (Panda-like): exit 0" test $? -eq 0
+check "excitation (Panda-like): 7 joints, columns q7, qd7, qdd7 last of each" \
+  test "$(head -1 panda_excitation.csv)" = "t,q1,q2,q3,q4,q5,q6,q7,qd1,qd2,qd3,qd4,qd5,qd6,qd7,qdd1,qdd2,qdd3,qdd4,qdd5,qdd6,qdd7"
+check "excitation (Panda-like): --duration 20 is two periods, 2001 rows" test "$(($(wc -l <panda_excitation.csv) - 1))" -eq 2001
+check "excitation (Panda-like): at rest at 0, 10 and 20 s" \
+  bash -c "$(declare -f at_rest); at_rest panda_excitation.csv 7 1 && at_rest panda_excitation.csv 7 1001 && at_rest panda_excitation.csv 7 2001"
+check "excitation (Panda-like): the file is there" test -s panda_excitation.csv
+check "excitation (Panda-like): the second period repeats the first" \
+  cmp -s <(sed -n 2,1001p panda_excitation.csv | cut -d, -f2-) <(sed -n 1002,2001p panda_excitation.csv | cut -d, -f2-)
+check "excitation (Panda-like): within the URDF's limits (margin 0.05 rad, 5 rad/s^2)" \
+  within_limits panda_excitation.csv "$robots/panda_like.urdf" 7 0.05 5
+check "excitation (Panda-like): the summary names the criterion" grep -q '^manipid excitation: panda_like, 7 joints, .*: logdet ' panda_excitation.err
+
+printf '<robot name="broken"><link name="a"/><joint name="j" type="revolute"><parent link="a"/></joint></robot>\n' >broken.urdf
+expect_error "excitation without --robot" 2 "--robot is required" "$manipid" excitation --out x.csv
+expect_error "excitation --period 0" 2 "--period: the period must be a positive number" \
+  "$manipid" excitation --robot "$robots/ur5_like.urdf" --period 0
+expect_error "excitation --harmonics 0" 2 "--harmonics: harmonics must lie in 2..20" \
+  "$manipid" excitation --robot "$robots/ur5_like.urdf" --harmonics 0
+expect_error "excitation: a URDF that fails to parse" 2 "broken.urdf" "$manipid" excitation --robot broken.urdf
+expect_error "excitation: an unreadable URDF" 2 "cannot read missing.urdf" "$manipid" excitation --robot missing.urdf
+expect_error "excitation: --dt that does not divide the period" 2 "--dt: dt = 0.003 s does not divide the period" \
+  "$manipid" excitation --robot "$robots/ur5_like.urdf" --dt 0.003
+expect_error "excitation: --duration not a whole number of periods" 2 "--duration: 15 s is not a whole number of periods" \
+  "$manipid" excitation --robot "$robots/ur5_like.urdf" --duration 15
+expect_error "excitation: --max-acceleration count" 2 "one per joint (6), got 2" \
+  "$manipid" excitation --robot "$robots/ur5_like.urdf" --max-acceleration 1,2
+expect_error "excitation: a margin wider than a joint's range" 2 "joint panda_joint2: its range" \
+  "$manipid" excitation --robot "$robots/panda_like.urdf" --position-margin 2
+expect_error "excitation: unknown friction term" 2 "--friction: unknown term 'stiction'" \
+  "$manipid" excitation --robot "$robots/ur5_like.urdf" --friction viscous,stiction
 
 echo "$passed passed, $failed failed"
 [[ $failed -eq 0 ]]
