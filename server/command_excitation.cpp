@@ -4,6 +4,7 @@
 #include "commands.h"
 
 #include "manipid/api/csv.h"
+#include "manipid/api/robot_json.h"
 #include "manipid/core/robot/excitation.h"
 #include "manipid/core/robot/urdf.h"
 
@@ -40,35 +41,6 @@ std::vector<std::string> split_list(const std::string& text) {
     if (!item.empty()) items.push_back(item);
   }
   return items;
-}
-
-robot::ParameterLayout parse_layout(const std::string& friction, bool armature) {
-  robot::ParameterLayout layout{.viscous = false, .coulomb = false, .offset = false, .armature = armature};
-  const std::vector<std::string> items = split_list(friction);
-  if (items.size() == 1 && items.front() == "none") return layout;
-  if (items.empty()) throw InputError("friction", "--friction: expected viscous, coulomb, offset (comma-separated) or none");
-  for (const std::string& item : items) {
-    if (item == "viscous") {
-      layout.viscous = true;
-    } else if (item == "coulomb") {
-      layout.coulomb = true;
-    } else if (item == "offset") {
-      layout.offset = true;
-    } else {
-      throw InputError("friction", "--friction: unknown term '" + item + "' (known: viscous, coulomb, offset, or none)");
-    }
-  }
-  return layout;
-}
-
-/// The inverse of parse_layout's --friction list.
-std::string friction_text(const robot::ParameterLayout& layout) {
-  std::string text;
-  for (const auto& [present, name] : {std::pair{layout.viscous, "viscous"}, std::pair{layout.coulomb, "coulomb"},
-                                      std::pair{layout.offset, "offset"}}) {
-    if (present) text += (text.empty() ? "" : ",") + std::string(name);
-  }
-  return text.empty() ? "none" : text;
 }
 
 Eigen::VectorXd parse_accelerations(const std::string& text) {
@@ -185,7 +157,9 @@ CLI::App* add_excitation_command(CLI::App& app, ExcitationOptions& options) {
   std::snprintf(acceleration, sizeof acceleration, "%g", defaults.max_acceleration[0]);
   options.max_acceleration = acceleration;
   options.position_margin = defaults.position_margin;
-  options.friction = friction_text(defaults.layout);
+  std::string friction;
+  for (const std::string& term : api::friction_names(defaults.layout)) friction += (friction.empty() ? "" : ",") + term;
+  options.friction = friction.empty() ? "none" : friction;
   options.seed = defaults.seed;
   options.max_seconds = defaults.max_seconds;
   options.max_evaluations = defaults.max_evaluations;
@@ -196,9 +170,7 @@ CLI::App* add_excitation_command(CLI::App& app, ExcitationOptions& options) {
       "series of one period, at rest at both ends, within the URDF's position and velocity limits and an "
       "acceleration limit, minimising the condition number of the base regressor (or maximising its log det). "
       "Writes t,q1..qn,qd1..qdn,qdd1..qddn (rad, rad/s, rad/s^2) as CSV.");
-  command->add_option("--robot", options.robot, "URDF file of the robot, '-' for stdin")->required();
-  command->add_option("--base", options.base, "The link fixed to the world (default: the URDF's root)");
-  command->add_option("--tip", options.tip, "The link that ends the chain (default: the only leaf)");
+  add_urdf_options(*command, options.urdf, true);
   command->add_option("--period", options.period, "Period T of the trajectory, s")->check(finite_number())->capture_default_str();
   command->add_option("--harmonics", options.harmonics, "Harmonics L per joint, 2..20")->capture_default_str();
   command->add_option("--criterion", options.criterion, "condition (minimise) or logdet (maximise)")
@@ -241,17 +213,8 @@ int run_excitation(const ExcitationOptions& options) {
   if (options.output == "-" && options.coefficients == "-") {
     throw UsageError("--out and --coefficients cannot both be stdout");
   }
-  const std::string urdf_name = input_name(options.robot);
-  const std::string text = read_text(options.robot);
-  robot::UrdfOptions urdf_options;
-  urdf_options.base = options.base;
-  urdf_options.tip = options.tip;
-  robot::ParsedUrdf parsed;
-  try {
-    parsed = robot::parse_urdf(text, urdf_options);
-  } catch (const InputError& error) {
-    rethrow_with_source(error, error.field() == "base" ? "--base" : error.field() == "tip" ? "--tip" : urdf_name);
-  }
+  const std::string urdf_name = input_name(options.urdf.urdf);
+  const robot::ParsedUrdf parsed = load_urdf_robot(options.urdf);
   const robot::Model& model = parsed.model;
 
   robot::ExcitationOptions design_options;
@@ -262,7 +225,7 @@ int run_excitation(const ExcitationOptions& options) {
   design_options.max_seconds = options.max_seconds;
   design_options.max_evaluations = options.max_evaluations;
   design_options.criterion = robot::parse_excitation_criterion(options.criterion, "criterion");
-  design_options.layout = parse_layout(options.friction, options.armature);
+  design_options.layout = parameter_layout(options.friction, options.armature);
   design_options.max_acceleration = parse_accelerations(options.max_acceleration);
 
   // Everything is checked before the design's seconds are spent, and before the parser's warnings are
@@ -277,9 +240,7 @@ int run_excitation(const ExcitationOptions& options) {
     if (error.field() == "duration") throw;  // already names --duration
     rethrow_with_source(error, option_for_field(error.field(), urdf_name));
   }
-  for (const std::string& warning : parsed.warnings) {
-    std::fprintf(stderr, "manipid: warning: %s: %s\n", urdf_name.c_str(), warning.c_str());
-  }
+  print_urdf_warnings(options.urdf, parsed);
 
   robot::ExcitationDesign design;
   robot::SampledExcitation sampled;

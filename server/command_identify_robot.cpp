@@ -120,7 +120,9 @@ int run_identify_robot(const IdentifyOptions& options) {
   if (options.weights == "inverse-variance") {
     throw UsageError("--weights: a URDF robot takes unit or per-joint (each joint by its residual's variance)");
   }
-  const robot::Model model = load_urdf_robot(options.urdf);
+  const robot::ParsedUrdf parsed_urdf = load_urdf_robot(options.urdf);
+  print_urdf_warnings(options.urdf, parsed_urdf);
+  const robot::Model& model = parsed_urdf.model;
   robot::IdentificationOptions identification;
   identification.layout = parameter_layout(options.friction, options.armature);
   identification.weighting =

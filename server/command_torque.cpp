@@ -81,7 +81,9 @@ namespace {
 
 /// The URDF robot's torque for every row: parameters from --params, else the URDF's own.
 int run_urdf_torque(const TorqueOptions& options) {
-  const robot::Model model = load_urdf_robot(options.urdf);
+  const robot::ParsedUrdf parsed_urdf = load_urdf_robot(options.urdf);
+  print_urdf_warnings(options.urdf, parsed_urdf);
+  const robot::Model& model = parsed_urdf.model;
   api::ParameterValues parameters;
   if (options.parameters.empty()) {
     parameters.values = robot::standard_parameters(model, parameters.layout);  // the URDF's damping and friction

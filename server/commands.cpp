@@ -262,7 +262,7 @@ void add_urdf_options(CLI::App& command, UrdfRobotOptions& options, bool require
       ->needs(robot);
 }
 
-robot::Model load_urdf_robot(const UrdfRobotOptions& options) {
+robot::ParsedUrdf load_urdf_robot(const UrdfRobotOptions& options) {
   const std::string text = read_text(options.urdf);
   robot::UrdfOptions parse;
   parse.base = options.base;
@@ -285,13 +285,17 @@ robot::Model load_urdf_robot(const UrdfRobotOptions& options) {
     for (int i = 0; i < 3; ++i) parse.gravity[i] = parse_number_option(items[static_cast<std::size_t>(i)], "--gravity");
   }
   try {
-    robot::ParsedUrdf parsed = robot::parse_urdf(text, parse);
-    for (const std::string& warning : parsed.warnings) {
-      std::fprintf(stderr, "manipid: warning: %s: %s\n", input_name(options.urdf).c_str(), warning.c_str());
-    }
-    return std::move(parsed.model);
+    return robot::parse_urdf(text, parse);
   } catch (const InputError& error) {
-    rethrow_with_source(error, input_name(options.urdf));
+    const std::string& field = error.field();
+    rethrow_with_source(error, field == "base" ? "--base" : field == "tip" ? "--tip" : field == "gravity" ? "--gravity"
+                                                                                                       : input_name(options.urdf));
+  }
+}
+
+void print_urdf_warnings(const UrdfRobotOptions& options, const robot::ParsedUrdf& parsed) {
+  for (const std::string& warning : parsed.warnings) {
+    std::fprintf(stderr, "manipid: warning: %s: %s\n", input_name(options.urdf).c_str(), warning.c_str());
   }
 }
 

@@ -10,6 +10,7 @@
 #include "manipid/core/model.h"
 #include "manipid/core/presets.h"
 #include "manipid/core/robot/model.h"
+#include "manipid/core/robot/urdf.h"
 #include "manipid/core/robot/parameters.h"
 
 #include <CLI/CLI.hpp>
@@ -106,9 +107,11 @@ struct UrdfRobotOptions {
 };
 /// Declares --robot, --base, --tip, --gravity on `command`; --robot is required when `required`.
 void add_urdf_options(CLI::App& command, UrdfRobotOptions& options, bool required);
-/// Reads and parses the URDF; its warnings go to stderr as "manipid: warning: ..." lines.
-/// Errors name the file: "arm.urdf: joint j3: ...".
-robot::Model load_urdf_robot(const UrdfRobotOptions& options);
+/// Reads and parses the URDF. Errors name the file ("arm.urdf: joint j3: ...") or the option (--base,
+/// --tip, --gravity).
+robot::ParsedUrdf load_urdf_robot(const UrdfRobotOptions& options);
+/// The parser's warnings on stderr, one "manipid: warning: FILE: ..." line each.
+void print_urdf_warnings(const UrdfRobotOptions& options, const robot::ParsedUrdf& parsed);
 /// "viscous,coulomb,offset" (a list, "none" for no friction) and --armature → the parameter layout.
 robot::ParameterLayout parameter_layout(const std::string& friction, bool armature);
 
@@ -218,8 +221,7 @@ int run_serve(const ServeOptions& options);
 /// Not robot::ExcitationOptions (the core's design options), which run_excitation builds from these;
 /// add_excitation_command sets the design's defaults from the core's, so they are stated once.
 struct ExcitationOptions {
-  std::string robot;                ///< URDF file, '-' for stdin
-  std::string base, tip;            ///< the chain's ends; empty = the URDF's root and only leaf
+  UrdfRobotOptions urdf;            ///< --robot (required), --base, --tip, --gravity
   double period = 0.0;
   int harmonics = 0;
   std::string criterion;
