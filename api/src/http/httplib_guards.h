@@ -1,0 +1,35 @@
+// httplib_guards.h — internal to the routes: the hooks that stand between Debian's
+// cpp-httplib 0.11.4 and the handlers. Each exists for a 0.11.4 behaviour (see
+// /work/shared/notes/dependencies-and-conventions.md § B and httplib_guards.cpp): bodies read
+// without bound, Brotli at quality 11, its own error statuses with empty bodies, exception
+// text copied into a response header. The route table (route_table.cpp) installs them.
+#pragma once
+
+#include "http/route_state.h"  // includes httplib.h, after the manipid headers
+
+#include <exception>
+#include <string>
+
+namespace manipid::api::http {
+
+/// Constant time in the token's content, so the comparison leaks nothing but the length.
+bool token_matches(const std::string& given, const std::string& expected);
+
+/// Strikes "br" from the request's Accept-Encoding (gzip stays): 0.11.4's Brotli is quality 11.
+void refuse_brotli(const httplib::Request& request);
+
+/// The pre-routing hook: runs before any byte of the body is read. Brotli strike, bearer
+/// token on /v1, bodiless POST (411, but a bodiless cancel is answered), chunked (411) and
+/// compressed (415) bodies refused.
+httplib::Server::HandlerResponse before_routing(RouteState& state, const httplib::Request& request,
+                                                httplib::Response& response);
+
+/// The error hook: problem+json for the statuses cpp-httplib produces by itself (unknown
+/// route, 413, unreadable request).
+httplib::Server::HandlerResponse on_error(const httplib::Request& request, httplib::Response& response);
+
+/// The exception hook: the net under `guarded`'s net; 500 problem+json, nothing of the
+/// exception in the answer.
+void on_exception(const httplib::Request& request, httplib::Response& response, std::exception_ptr error);
+
+}  // namespace manipid::api::http
