@@ -810,6 +810,16 @@ TEST_F(Routes, BodilessPostIsRefusedWith411) {
   EXPECT_EQ(fake_.calls(), 0);
 }
 
+TEST_F(Routes, LengthlessPutAndPatchAreRefusedWith411) {
+  // 0.11.4 reads them until the peer closes, like a POST, though no route takes them.
+  for (const std::string& method : {"PUT"s, "PATCH"s}) {
+    const RawAnswer answer = raw(method + " /v1/jobs/job_a HTTP/1.1\r\nHost: test\r\n\r\nand a body that never ends");
+    expect_problem(answer, 411, "LENGTH_REQUIRED", "Content-Length");
+    EXPECT_TRUE(answer.has_header("Connection", "close")) << answer.head;
+  }
+  EXPECT_EQ(fake_.calls(), 0);
+}
+
 TEST_F(Routes, ChunkedBodyIsRefusedBeforeItIsRead) {
   const RawAnswer answer = raw(
       "POST /v1/datasets HTTP/1.1\r\nHost: test\r\nContent-Type: text/csv\r\nTransfer-Encoding: chunked\r\n\r\n"

@@ -60,8 +60,12 @@ httplib::Server::HandlerResponse before_routing(RouteState& state, const httplib
   }
   // cpp-httplib 0.11.4 reads a POST without Content-Length until the peer closes (curl -X POST
   // sends none): answer a bodiless cancel here, before any read, and refuse other such POSTs.
-  if (request.method == "POST" && !request.has_header("Content-Length") && !request.has_header("Transfer-Encoding")) {
-    if (const std::string id = cancel_route_id(request.path); !id.empty()) {
+  // It reads PUT, PATCH and PRI the same way (its expect_content), though no route takes them:
+  // refused too, or each such request holds a server thread and grows a body without bound.
+  const bool body_expected = request.method == "POST" || request.method == "PUT" || request.method == "PATCH" ||
+                             request.method == "PRI";
+  if (body_expected && !request.has_header("Content-Length") && !request.has_header("Transfer-Encoding")) {
+    if (const std::string id = request.method == "POST" ? cancel_route_id(request.path) : ""; !id.empty()) {
       guarded(state.self.lock(), [&state, id](const httplib::Request&, httplib::Response& answer) {
         cancel_job_with_id(state, id, answer);
       })(request, response);

@@ -19,8 +19,8 @@ bool token_matches(const std::string& given, const std::string& expected);
 void refuse_brotli(const httplib::Request& request);
 
 /// The pre-routing hook: runs before any byte of the body is read. Brotli strike, bearer
-/// token on /v1, bodiless POST (411, but a bodiless cancel is answered), chunked (411) and
-/// compressed (415) bodies refused.
+/// token on /v1, bodiless POST, PUT or PATCH (411, but a bodiless cancel is answered), chunked
+/// (411) and compressed (415) bodies refused.
 httplib::Server::HandlerResponse before_routing(RouteState& state, const httplib::Request& request,
                                                 httplib::Response& response);
 
