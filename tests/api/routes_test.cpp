@@ -53,51 +53,64 @@ struct RawAnswer {
   }
 };
 
-/// Sends `request` as is and reads one answer: its head, then Content-Length bytes of body.
-/// (Not until the server closes: 0.11.4 keeps a connection open after an answer that says
-/// "Connection: close", until its keep-alive timeout.)
-RawAnswer raw_exchange(int port, const std::string& request) {
-  const int fd = ::socket(AF_INET, SOCK_STREAM, 0);
-  EXPECT_GE(fd, 0);
-  timeval limit{30, 0};  // a net against a hang, not a timing assert
-  ::setsockopt(fd, SOL_SOCKET, SO_RCVTIMEO, &limit, sizeof limit);
-  sockaddr_in address{};
-  address.sin_family = AF_INET;
-  address.sin_port = htons(static_cast<uint16_t>(port));
-  address.sin_addr.s_addr = htonl(INADDR_LOOPBACK);
-  RawAnswer answer;
-  if (::connect(fd, reinterpret_cast<sockaddr*>(&address), sizeof address) != 0) {
-    ADD_FAILURE() << "cannot connect to port " << port;
-    ::close(fd);
-    return answer;
+/// A client connection on a raw socket: each exchange sends a request as is and reads one
+/// answer, its head then Content-Length bytes of body. (Not until the server closes: 0.11.4
+/// keeps a connection open after an answer that says "Connection: close", until its
+/// keep-alive timeout.) Exchanges on one connection are served in order by one server thread.
+class RawConnection {
+ public:
+  explicit RawConnection(int port) : fd_(::socket(AF_INET, SOCK_STREAM, 0)) {
+    EXPECT_GE(fd_, 0);
+    timeval limit{30, 0};  // a net against a hang, not a timing assert
+    ::setsockopt(fd_, SOL_SOCKET, SO_RCVTIMEO, &limit, sizeof limit);
+    sockaddr_in address{};
+    address.sin_family = AF_INET;
+    address.sin_port = htons(static_cast<uint16_t>(port));
+    address.sin_addr.s_addr = htonl(INADDR_LOOPBACK);
+    connected_ = ::connect(fd_, reinterpret_cast<sockaddr*>(&address), sizeof address) == 0;
+    EXPECT_TRUE(connected_) << "cannot connect to port " << port;
   }
-  for (std::size_t sent = 0; sent < request.size();) {
-    const ssize_t n = ::send(fd, request.data() + sent, request.size() - sent, MSG_NOSIGNAL);
-    if (n <= 0) break;
-    sent += static_cast<std::size_t>(n);
-  }
-  std::string text;
-  std::size_t end = std::string::npos;
-  std::size_t length = 0;
-  char buffer[4096];
-  for (ssize_t n; (n = ::recv(fd, buffer, sizeof buffer, 0)) > 0;) {
-    text.append(buffer, static_cast<std::size_t>(n));
-    if (end == std::string::npos && (end = text.find("\r\n\r\n")) != std::string::npos) {
-      answer.head = lower(text.substr(0, end + 2));
-      const auto field = answer.head.find("\r\ncontent-length: ");
-      if (field != std::string::npos) length = std::stoul(answer.head.substr(field + 18));
+  ~RawConnection() { ::close(fd_); }
+  RawConnection(const RawConnection&) = delete;
+  RawConnection& operator=(const RawConnection&) = delete;
+
+  RawAnswer exchange(const std::string& request) {
+    RawAnswer answer;
+    if (!connected_) return answer;
+    for (std::size_t sent = 0; sent < request.size();) {
+      const ssize_t n = ::send(fd_, request.data() + sent, request.size() - sent, MSG_NOSIGNAL);
+      if (n <= 0) break;
+      sent += static_cast<std::size_t>(n);
     }
-    if (end != std::string::npos && text.size() >= end + 4 + length) break;
-  }
-  ::close(fd);
-  if (end == std::string::npos || text.size() < end + 4 + length) {
-    ADD_FAILURE() << "no complete answer: '" << text << "'";
+    std::size_t end = std::string::npos;
+    std::size_t length = 0;
+    char buffer[4096];
+    for (;;) {
+      if (end == std::string::npos && (end = pending_.find("\r\n\r\n")) != std::string::npos) {
+        answer.head = lower(pending_.substr(0, end + 2));
+        const auto field = answer.head.find("\r\ncontent-length: ");
+        if (field != std::string::npos) length = std::stoul(answer.head.substr(field + 18));
+      }
+      if (end != std::string::npos && pending_.size() >= end + 4 + length) break;
+      const ssize_t n = ::recv(fd_, buffer, sizeof buffer, 0);
+      if (n <= 0) break;
+      pending_.append(buffer, static_cast<std::size_t>(n));
+    }
+    if (end == std::string::npos || pending_.size() < end + 4 + length) {
+      ADD_FAILURE() << "no complete answer: '" << pending_ << "'";
+      return answer;
+    }
+    answer.body = pending_.substr(end + 4, length);
+    pending_.erase(0, end + 4 + length);
+    if (answer.head.rfind("http/1.1 ", 0) == 0) answer.status = std::stoi(answer.head.substr(9, 3));
     return answer;
   }
-  answer.body = text.substr(end + 4, length);
-  if (answer.head.rfind("http/1.1 ", 0) == 0) answer.status = std::stoi(answer.head.substr(9, 3));
-  return answer;
-}
+
+ private:
+  int fd_;
+  bool connected_ = false;
+  std::string pending_;  ///< received, not yet returned
+};
 
 /// Checks a problem+json answer: status in the line and the body, code, field (empty: none),
 /// type, title and detail present. Returns the body for further checks.
@@ -236,7 +249,8 @@ class RouteServer : public ::testing::Test {
     return client().Post(path, headers, body, content_type.c_str());
   }
 
-  RawAnswer raw(const std::string& request) const { return raw_exchange(port_, request); }
+  /// One request on a fresh raw connection.
+  RawAnswer raw(const std::string& request) const { return RawConnection(port_).exchange(request); }
 
   std::string log() const {
     std::lock_guard lock(log_mutex_);
@@ -950,6 +964,18 @@ TEST_F(Routes, MetricsCountRequestsByMethodAndStatus) {
   EXPECT_NE(text.find("manipid_http_requests_total{method=\"POST\",status=\"422\"} 1\n"), std::string::npos) << text;
   // One log line per request: address, method, target, status, bytes, time.
   EXPECT_NE(log().find("127.0.0.1 GET /v1/nothing 404 "), std::string::npos) << log();
+}
+
+TEST_F(Routes, MetricsNeverEchoAMethodHttplibRefused) {
+  // 0.11.4 logs a request whose method it refused (400), with that method as sent.
+  RawConnection connection(port_);
+  const RawAnswer refused = connection.exchange("A\"}x /v1/jobs HTTP/1.1\r\nHost: test\r\n\r\n");
+  expect_problem(refused, 400, "MALFORMED_BODY", "");
+  const RawAnswer answer = connection.exchange("GET /metrics HTTP/1.1\r\nHost: test\r\n\r\n");
+  EXPECT_EQ(answer.status, 200);
+  EXPECT_EQ(answer.body.find("A\"}x"), std::string::npos) << answer.body;
+  EXPECT_NE(answer.body.find("manipid_http_requests_total{method=\"other\",status=\"400\"} 1\n"), std::string::npos)
+      << answer.body;
 }
 
 TEST_F(Routes, DashboardIsServed) {

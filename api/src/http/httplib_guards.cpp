@@ -8,6 +8,7 @@
 
 #include <algorithm>
 #include <cctype>
+#include <iterator>
 #include <sstream>
 
 namespace manipid::api::http {
@@ -91,6 +92,15 @@ httplib::Server::HandlerResponse before_routing(RouteState& state, const httplib
     return httplib::Server::HandlerResponse::Handled;
   }
   return httplib::Server::HandlerResponse::Unhandled;
+}
+
+/// cpp-httplib 0.11.4 calls the logger for a request it refused at the request line (400),
+/// with the method as sent: any token, quotes and braces included. As a label it would break
+/// the Prometheus text of /metrics and add a counter per token a client cares to invent.
+std::string method_label(const std::string& method) {
+  static const char* const known[] = {"GET", "HEAD", "POST", "PUT", "DELETE", "OPTIONS", "PATCH", "CONNECT", "TRACE", "PRI"};
+  const bool listed = std::any_of(std::begin(known), std::end(known), [&method](const char* name) { return method == name; });
+  return listed ? method : "other";
 }
 
 /// Answers for the statuses cpp-httplib produces by itself (unknown route, 413, unreadable

@@ -24,6 +24,9 @@ void refuse_brotli(const httplib::Request& request);
 httplib::Server::HandlerResponse before_routing(RouteState& state, const httplib::Request& request,
                                                 httplib::Response& response);
 
+/// The request's method as a /metrics label: one of the methods httplib parses, else "other".
+std::string method_label(const std::string& method);
+
 /// The error hook: problem+json for the statuses cpp-httplib produces by itself (unknown
 /// route, 413, unreadable request).
 httplib::Server::HandlerResponse on_error(const httplib::Request& request, httplib::Response& response);

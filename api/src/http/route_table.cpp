@@ -45,7 +45,7 @@ void register_routes(httplib::Server& server, Service& service, RouteOptions opt
   server.set_logger([state](const httplib::Request& request, const httplib::Response& response) {
     {
       std::lock_guard lock(state->mutex);
-      ++state->requests[request.method + "," + std::to_string(response.status)];
+      ++state->requests[method_label(request.method) + "," + std::to_string(response.status)];
     }
     if (!state->options.log) return;
     char line[96];
