@@ -871,6 +871,36 @@ TEST_F(Routes, UnknownRouteIsAProblem) {
   EXPECT_EQ(fake_.calls(), 0);
 }
 
+TEST_F(Routes, AMethodAKnownPathDoesNotTakeIs405WithAllow) {
+  fake_.add_job(job_info("job_a", JobKind::identification, JobState::running));
+  const struct {
+    httplib::Result result;
+    const char* method;
+    const char* path;
+    const char* allow;
+  } cases[] = {
+      {client().Put("/v1/jobs/job_a", "{}", "application/json"), "PUT", "/v1/jobs/job_a", "DELETE, GET, HEAD"},
+      {client().Delete("/v1/jobs"), "DELETE", "/v1/jobs", "GET, HEAD"},
+      {post("/v1/jobs", "{}"), "POST", "/v1/jobs", "GET, HEAD"},
+      {get("/v1/simulations"), "GET", "/v1/simulations", "POST"},
+      {get("/v1/jobs/job_a/cancel"), "GET", "/v1/jobs/job_a/cancel", "POST"},
+      {client().Patch("/v1/datasets", "{}", "application/json"), "PATCH", "/v1/datasets", "GET, HEAD, POST"},
+      {client().Options("/healthz"), "OPTIONS", "/healthz", "GET, HEAD"},
+  };
+  for (const auto& c : cases) {
+    const Json problem = expect_problem(c.result, 405, "METHOD_NOT_ALLOWED", "");
+    ASSERT_TRUE(c.result) << c.method << " " << c.path;
+    EXPECT_EQ(c.result->get_header_value("Allow"), c.allow) << c.method << " " << c.path;
+    EXPECT_EQ(problem["detail"], std::string("method ") + c.method + " not allowed on " + c.path + "; allowed: " + c.allow);
+  }
+  EXPECT_EQ(fake_.calls(), 0);
+  // A path no route takes stays a 404, whatever the method.
+  const auto result = client().Put("/v1/nothing-here", "{}", "application/json");
+  expect_problem(result, 404, "NOT_FOUND", "");
+  ASSERT_TRUE(result);
+  EXPECT_FALSE(result->has_header("Allow"));
+}
+
 TEST_F(Routes, BrotliIsNeverChosen) {
   // 0.11.4's Brotli is quality 11 (seconds of a server thread for a large body): gzip instead.
   fake_.add_job(job_info("job_q", JobKind::identification, JobState::queued));

@@ -9,6 +9,8 @@
 #include <algorithm>
 #include <cctype>
 #include <iterator>
+#include <regex>
+#include <set>
 #include <sstream>
 
 namespace manipid::api::http {
@@ -103,15 +105,45 @@ std::string method_label(const std::string& method) {
   return listed ? method : "other";
 }
 
+namespace {
+
+/// The methods the routes take on `path` ("DELETE, GET, HEAD"; HEAD wherever GET is, as httplib
+/// answers it), or empty when no route matches the path at all.
+std::string allowed_methods(const RouteState& state, const std::string& path) {
+  std::set<std::string> methods;
+  for (const auto& [method, pattern] : state.routes) {
+    if (std::regex_match(path, pattern)) methods.insert(method);  // as httplib matches a route
+  }
+  if (methods.count("GET")) methods.insert("HEAD");
+  std::string allow;
+  for (const std::string& method : methods) allow += (allow.empty() ? "" : ", ") + method;
+  return allow;
+}
+
+}  // namespace
+
 /// Answers for the statuses cpp-httplib produces by itself (unknown route, 413, unreadable
 /// request), so they are problem+json like every other error: 0.11.4 sends them with an
 /// empty body (413 comes from set_payload_max_length, checked against Content-Length only).
-httplib::Server::HandlerResponse on_error(const httplib::Request& request, httplib::Response& response) {
+/// 0.11.4 also says 404 for a path whose routes take other methods only: that is a 405 with
+/// the methods they take in Allow (RFC 9110 § 15.5.6).
+httplib::Server::HandlerResponse on_error(const RouteState& state, const httplib::Request& request,
+                                          httplib::Response& response) {
   if (!response.body.empty()) return httplib::Server::HandlerResponse::Unhandled;  // ours already
   ProblemKind kind = ProblemKind::internal;
   std::string detail = "internal error";
   switch (response.status) {
-    case 404: kind = ProblemKind::not_found; detail = "no route " + request.method + " " + request.path; break;
+    case 404:
+      if (const std::string allow = allowed_methods(state, request.path); !allow.empty()) {
+        kind = ProblemKind::method_not_allowed;
+        detail = "method " + request.method + " not allowed on " + request.path + "; allowed: " + allow;
+        response.status = 405;
+        response.set_header("Allow", allow);
+      } else {
+        kind = ProblemKind::not_found;
+        detail = "no route " + request.method + " " + request.path;
+      }
+      break;
     case 405: kind = ProblemKind::method_not_allowed; detail = "method " + request.method + " not allowed here"; break;
     case 413: kind = ProblemKind::payload_too_large; detail = "the body is larger than this server accepts (--max-body)"; break;
     case 400: kind = ProblemKind::malformed_body; detail = "the request could not be read"; break;

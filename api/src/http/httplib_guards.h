@@ -28,8 +28,9 @@ httplib::Server::HandlerResponse before_routing(RouteState& state, const httplib
 std::string method_label(const std::string& method);
 
 /// The error hook: problem+json for the statuses cpp-httplib produces by itself (unknown
-/// route, 413, unreadable request).
-httplib::Server::HandlerResponse on_error(const httplib::Request& request, httplib::Response& response);
+/// route, 413, unreadable request), and 405 with Allow where it says 404 for a known path.
+httplib::Server::HandlerResponse on_error(const RouteState& state, const httplib::Request& request,
+                                          httplib::Response& response);
 
 /// The exception hook: the net under `guarded`'s net; 500 problem+json, nothing of the
 /// exception in the answer.

@@ -20,8 +20,10 @@
 #include <map>
 #include <memory>
 #include <mutex>
+#include <regex>
 #include <string>
 #include <utility>
+#include <vector>
 
 namespace manipid::api::http {
 
@@ -33,6 +35,8 @@ struct RouteState {
   std::weak_ptr<RouteState> self;  ///< for handlers called from the pre-routing hook
   std::mutex mutex;
   std::map<std::string, long> requests;  ///< "METHOD,status" → count
+  /// (method, path pattern) of every route, noted by the route table: the Allow header of a 405.
+  std::vector<std::pair<std::string, std::regex>> routes;
 };
 
 /// What the route table maps a path to (routes/handlers.h declares them all).

@@ -10,6 +10,9 @@
 #include <chrono>
 #include <cstdio>
 #include <memory>
+#include <regex>
+#include <string>
+#include <utility>
 
 namespace manipid::api {
 namespace {
@@ -21,6 +24,30 @@ constexpr const char* id_pattern = "([A-Za-z0-9_-]{1,64})";
 /// When the request on this thread reached the pre-routing hook; the logger reports the time since.
 thread_local Clock::time_point request_started;
 
+/// The table's pen: registers a handler, guarded, for a method and a path pattern, and notes
+/// the pair for the Allow header of a 405 (httplib_guards.cpp).
+class Table {
+ public:
+  Table(httplib::Server& server, std::shared_ptr<http::RouteState> state) : server_(server), state_(std::move(state)) {}
+
+  void Get(const std::string& pattern, http::RouteHandler handler) { server_.Get(pattern, note("GET", pattern, handler)); }
+  void Post(const std::string& pattern, http::RouteHandler handler) { server_.Post(pattern, note("POST", pattern, handler)); }
+  void Delete(const std::string& pattern, http::RouteHandler handler) {
+    server_.Delete(pattern, note("DELETE", pattern, handler));
+  }
+
+ private:
+  httplib::Server::Handler note(const char* method, const std::string& pattern, http::RouteHandler handler) {
+    state_->routes.emplace_back(method, std::regex(pattern));
+    return http::guarded(state_, [state = state_, handler](const httplib::Request& request, httplib::Response& response) {
+      handler(*state, request, response);
+    });
+  }
+
+  httplib::Server& server_;
+  std::shared_ptr<http::RouteState> state_;
+};
+
 }  // namespace
 
 void register_routes(httplib::Server& server, Service& service, RouteOptions options) {
@@ -28,11 +55,6 @@ void register_routes(httplib::Server& server, Service& service, RouteOptions opt
   auto state = std::make_shared<RouteState>(service, std::move(options));
   state->self = state;
   const std::string id = id_pattern;
-  auto route = [&state](RouteHandler handler) {
-    return guarded(state, [state, handler](const httplib::Request& request, httplib::Response& response) {
-      handler(*state, request, response);
-    });
-  };
 
   // ---- Hooks (http/httplib_guards.h says what each guards against) ----
   server.set_payload_max_length(state->options.max_body);
@@ -40,7 +62,8 @@ void register_routes(httplib::Server& server, Service& service, RouteOptions opt
     request_started = Clock::now();
     return before_routing(*state, request, response);
   });
-  server.set_error_handler(httplib::Server::HandlerWithResponse(on_error));
+  server.set_error_handler(httplib::Server::HandlerWithResponse(
+      [state](const httplib::Request& request, httplib::Response& response) { return on_error(*state, request, response); }));
   server.set_exception_handler(on_exception);
   server.set_logger([state](const httplib::Request& request, const httplib::Response& response) {
     {
@@ -54,34 +77,36 @@ void register_routes(httplib::Server& server, Service& service, RouteOptions opt
     state->options.log(request.remote_addr + " " + request.method + " " + request.target + line);
   });
 
+  Table routes(server, state);
+
   // ---- Static files (routes/static_files.cpp): outside the bearer token's reach ----
-  server.Get("/healthz", route(health));
-  server.Get("/metrics", route(metrics));
-  server.Get("/openapi.json", route(openapi_document));
-  server.Get("/", route(dashboard_page));
-  server.Get("/jobs/" + id, route(dashboard_page));
-  server.Get("/assets/([A-Za-z0-9._-]{1,64})", route(dashboard_asset));
+  routes.Get("/healthz", health);
+  routes.Get("/metrics", metrics);
+  routes.Get("/openapi.json", openapi_document);
+  routes.Get("/", dashboard_page);
+  routes.Get("/jobs/" + id, dashboard_page);
+  routes.Get("/assets/([A-Za-z0-9._-]{1,64})", dashboard_asset);
 
   // ---- Datasets (routes/datasets.cpp) ----
-  server.Post("/v1/datasets", route(create_dataset));
-  server.Get("/v1/datasets", route(list_datasets));
-  server.Get("/v1/datasets/" + id, route(get_dataset));
-  server.Get("/v1/datasets/" + id + "/data", route(get_dataset_data));
-  server.Delete("/v1/datasets/" + id, route(delete_dataset));
+  routes.Post("/v1/datasets", create_dataset);
+  routes.Get("/v1/datasets", list_datasets);
+  routes.Get("/v1/datasets/" + id, get_dataset);
+  routes.Get("/v1/datasets/" + id + "/data", get_dataset_data);
+  routes.Delete("/v1/datasets/" + id, delete_dataset);
 
   // ---- Presets and submissions (routes/submissions.cpp) ----
-  server.Get("/v1/presets", route(list_presets));
-  server.Get("/v1/presets/" + id, route(get_preset));
-  server.Post("/v1/simulations", route(submit_simulation));
-  server.Post("/v1/identifications", route(submit_identification));
+  routes.Get("/v1/presets", list_presets);
+  routes.Get("/v1/presets/" + id, get_preset);
+  routes.Post("/v1/simulations", submit_simulation);
+  routes.Post("/v1/identifications", submit_identification);
 
   // ---- Jobs (routes/jobs.cpp); a bodiless cancel is answered before routing (httplib_guards.cpp) ----
-  server.Get("/v1/jobs", route(list_jobs));
-  server.Get("/v1/jobs/" + id, route(get_job));
-  server.Get("/v1/jobs/" + id + "/history", route(job_history));
-  server.Get("/v1/jobs/" + id + "/fit", route(job_fit));
-  server.Post("/v1/jobs/" + id + "(?:/cancel|:cancel)", route(cancel_job));
-  server.Delete("/v1/jobs/" + id, route(delete_job));
+  routes.Get("/v1/jobs", list_jobs);
+  routes.Get("/v1/jobs/" + id, get_job);
+  routes.Get("/v1/jobs/" + id + "/history", job_history);
+  routes.Get("/v1/jobs/" + id + "/fit", job_fit);
+  routes.Post("/v1/jobs/" + id + "(?:/cancel|:cancel)", cancel_job);
+  routes.Delete("/v1/jobs/" + id, delete_job);
 }
 
 }  // namespace manipid::api
