@@ -81,6 +81,9 @@ httplib::Server::HandlerResponse before_routing(RouteState& state, const httplib
   }
   // cpp-httplib 0.11.4 bounds a body only by its Content-Length, and would inflate gzip or
   // brotli bodies without limit: refuse both kinds before any byte of the body is read.
+  // (0.11.4 does not act on the answer's "Connection: close": it keeps the connection until its
+  // keep-alive timeout, the unread body left in its buffer. A client that honours the header
+  // sends nothing more on it; there is no hook to close it sooner.)
   if (request.has_header("Transfer-Encoding")) {
     send_problem(response, {ProblemKind::length_required, "send the body with a Content-Length, not chunked", "Transfer-Encoding"},
                  request.path);
