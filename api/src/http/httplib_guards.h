@@ -1,8 +1,8 @@
 // httplib_guards.h — internal to the routes: the hooks that stand between Debian's
-// cpp-httplib 0.11.4 and the handlers. Each exists for a 0.11.4 behaviour (see
-// /work/shared/notes/dependencies-and-conventions.md § B and httplib_guards.cpp): bodies read
-// without bound, Brotli at quality 11, its own error statuses with empty bodies, exception
-// text copied into a response header. The route table (route_table.cpp) installs them.
+// cpp-httplib 0.11.4 and the handlers. Each exists for a 0.11.4 behaviour, named beside it in
+// httplib_guards.cpp: bodies read without bound, Brotli at quality 11, its own error statuses
+// with empty bodies (and 404 for a wrong method), invented methods passed to the logger,
+// exception text copied into a response header. The route table (route_table.cpp) installs them.
 #pragma once
 
 #include "http/route_state.h"  // includes httplib.h, after the manipid headers
