@@ -11,7 +11,7 @@
 #include "manipid/api/problem.h"
 #include "manipid/api/routes.h"
 
-#include <httplib.h>  // after the manipid headers: see routes.cpp
+#include <httplib.h>  // after the manipid headers: see api/src/http/route_state.h
 
 #include <pthread.h>
 #include <signal.h>

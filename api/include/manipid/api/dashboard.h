@@ -1,6 +1,6 @@
 // dashboard.h — the web dashboard's files (web/src and its chart library, uPlot), embedded in
-// the binary at build time by web/tools/embed_web.py. routes.cpp serves them: "/" and
-// "/jobs/{id}" get the page, "/assets/NAME" the scripts and styles.
+// the binary at build time by web/tools/embed_web.py. api/src/routes/static_files.cpp serves them:
+// "/" and "/jobs/{id}" get the page, "/assets/NAME" the scripts and styles.
 #pragma once
 
 #include <string_view>

@@ -2,7 +2,8 @@
 // server over a Service (service.h), plus the cross-cutting parts every request passes
 // through: bearer-token check, upload guards (length required, no compressed bodies, size
 // limit), problem+json for every error, one log line per request, request counters for
-// /metrics. The table of routes is in api/openapi.yaml (served at GET /openapi.json).
+// /metrics. The table of routes is in api/openapi.yaml (served at GET /openapi.json); the
+// code is in api/src/http/ (route table, helpers, guards) and api/src/routes/ (one file per resource).
 #pragma once
 
 #include "manipid/api/service.h"

@@ -1,0 +1,171 @@
+// httplib_guards.cpp — the cpp-httplib 0.11.4 guards (httplib_guards.h): each hook below says
+// which behaviour of Debian's 0.11.4 it exists for.
+#include "manipid/api/problem.h"
+
+#include "http/httplib_guards.h"  // includes httplib.h, after the manipid headers
+#include "http/responses.h"
+#include "routes/handlers.h"
+
+#include <algorithm>
+#include <cctype>
+#include <iterator>
+#include <regex>
+#include <set>
+#include <sstream>
+
+namespace manipid::api::http {
+
+bool token_matches(const std::string& given, const std::string& expected) {
+  // Constant time in the token's content, so the comparison leaks nothing but the length.
+  if (given.size() != expected.size()) return false;
+  unsigned char difference = 0;
+  for (std::size_t i = 0; i < given.size(); ++i) difference |= static_cast<unsigned char>(given[i] ^ expected[i]);
+  return difference == 0;
+}
+
+/// Debian's cpp-httplib 0.11.4 answers "Accept-Encoding: br" (every browser sends it) with
+/// Brotli at quality 11: 25 s of one server thread for a 17.7 MB history CSV, 0.6 s for the
+/// dashboard's 0.5 MB history view. gzip does the same in 0.26 s and 60 ms. So the server
+/// offers gzip only: "br" is struck from the request's Accept-Encoding before httplib reads it
+/// to choose. (The Request is httplib's own non-const object, passed on as const.)
+void refuse_brotli(const httplib::Request& request) {
+  auto& headers = const_cast<httplib::Request&>(request).headers;
+  auto [first, last] = headers.equal_range("Accept-Encoding");
+  for (auto header = first; header != last; ++header) {
+    std::string kept;
+    std::stringstream codings(header->second);
+    for (std::string coding; std::getline(codings, coding, ',');) {
+      const auto start = coding.find_first_not_of(" \t");
+      if (start == std::string::npos) continue;
+      std::string name = coding.substr(start, coding.find_first_of(" \t;", start) - start);
+      std::transform(name.begin(), name.end(), name.begin(), [](unsigned char c) { return static_cast<char>(std::tolower(c)); });
+      if (name == "br") continue;
+      kept += (kept.empty() ? "" : ", ") + coding.substr(start);
+    }
+    header->second = kept;
+  }
+}
+
+httplib::Server::HandlerResponse before_routing(RouteState& state, const httplib::Request& request,
+                                                httplib::Response& response) {
+  refuse_brotli(request);
+  // The bearer token guards the API only: the dashboard's static files stay outside its reach
+  // (the page asks for the token and sends it with its own API calls).
+  const bool versioned = request.path.rfind("/v1/", 0) == 0 || request.path == "/v1";
+  if (versioned && !state.options.token.empty()) {
+    const std::string header = request.get_header_value("Authorization");
+    const std::string prefix = "Bearer ";
+    if (header.rfind(prefix, 0) != 0 || !token_matches(header.substr(prefix.size()), state.options.token)) {
+      send_problem(response, {ProblemKind::unauthorized, "this server needs 'Authorization: Bearer <token>'", "Authorization"},
+                   request.path);
+      return httplib::Server::HandlerResponse::Handled;
+    }
+  }
+  // cpp-httplib 0.11.4 reads a POST without Content-Length until the peer closes (curl -X POST
+  // sends none): answer a bodiless cancel here, before any read, and refuse other such POSTs.
+  // It reads PUT, PATCH and PRI the same way (its expect_content), though no route takes them:
+  // refused too, or each such request holds a server thread and grows a body without bound.
+  const bool body_expected = request.method == "POST" || request.method == "PUT" || request.method == "PATCH" ||
+                             request.method == "PRI";
+  if (body_expected && !request.has_header("Content-Length") && !request.has_header("Transfer-Encoding")) {
+    if (const std::string id = request.method == "POST" ? cancel_route_id(request.path) : ""; !id.empty()) {
+      guarded(state.self.lock(), [&state, id](const httplib::Request&, httplib::Response& answer) {
+        cancel_job_with_id(state, id, answer);
+      })(request, response);
+    } else {
+      send_problem(response, {ProblemKind::length_required, "send the body with a Content-Length", "Content-Length"},
+                   request.path);
+      response.set_header("Connection", "close");
+    }
+    return httplib::Server::HandlerResponse::Handled;
+  }
+  // cpp-httplib 0.11.4 bounds a body only by its Content-Length, and would inflate gzip or
+  // brotli bodies without limit: refuse both kinds before any byte of the body is read.
+  // (0.11.4 does not act on the answer's "Connection: close": it keeps the connection until its
+  // keep-alive timeout, the unread body left in its buffer. A client that honours the header
+  // sends nothing more on it; there is no hook to close it sooner.)
+  if (request.has_header("Transfer-Encoding")) {
+    send_problem(response, {ProblemKind::length_required, "send the body with a Content-Length, not chunked", "Transfer-Encoding"},
+                 request.path);
+    response.set_header("Connection", "close");
+    return httplib::Server::HandlerResponse::Handled;
+  }
+  if (request.has_header("Content-Encoding")) {
+    send_problem(response, {ProblemKind::unsupported_media, "compressed request bodies are not accepted", "Content-Encoding"},
+                 request.path);
+    response.set_header("Connection", "close");
+    return httplib::Server::HandlerResponse::Handled;
+  }
+  return httplib::Server::HandlerResponse::Unhandled;
+}
+
+/// cpp-httplib 0.11.4 calls the logger for a request it refused at the request line (400),
+/// with the method as sent: any token, quotes and braces included. As a label it would break
+/// the Prometheus text of /metrics and add a counter per token a client cares to invent.
+std::string method_label(const std::string& method) {
+  static const char* const known[] = {"GET", "HEAD", "POST", "PUT", "DELETE", "OPTIONS", "PATCH", "CONNECT", "TRACE", "PRI"};
+  const bool listed = std::any_of(std::begin(known), std::end(known), [&method](const char* name) { return method == name; });
+  return listed ? method : "other";
+}
+
+namespace {
+
+/// The methods the routes take on `path` ("DELETE, GET, HEAD"; HEAD wherever GET is, as httplib
+/// answers it), or empty when no route matches the path at all.
+std::string allowed_methods(const RouteState& state, const std::string& path) {
+  std::set<std::string> methods;
+  for (const auto& [method, pattern] : state.routes) {
+    if (std::regex_match(path, pattern)) methods.insert(method);  // as httplib matches a route
+  }
+  if (methods.count("GET")) methods.insert("HEAD");
+  std::string allow;
+  for (const std::string& method : methods) allow += (allow.empty() ? "" : ", ") + method;
+  return allow;
+}
+
+}  // namespace
+
+/// Answers for the statuses cpp-httplib produces by itself (unknown route, 413, unreadable
+/// request), so they are problem+json like every other error: 0.11.4 sends them with an
+/// empty body (413 comes from set_payload_max_length, checked against Content-Length only).
+/// 0.11.4 also says 404 for a path whose routes take other methods only: that is a 405 with
+/// the methods they take in Allow (RFC 9110 § 15.5.6).
+httplib::Server::HandlerResponse on_error(const RouteState& state, const httplib::Request& request,
+                                          httplib::Response& response) {
+  if (!response.body.empty()) return httplib::Server::HandlerResponse::Unhandled;  // ours already
+  ProblemKind kind = ProblemKind::internal;
+  std::string detail = "internal error";
+  switch (response.status) {
+    case 404:
+      if (const std::string allow = allowed_methods(state, request.path); !allow.empty()) {
+        kind = ProblemKind::method_not_allowed;
+        detail = "method " + request.method + " not allowed on " + request.path + "; allowed: " + allow;
+        response.status = 405;
+        response.set_header("Allow", allow);
+      } else {
+        kind = ProblemKind::not_found;
+        detail = "no route " + request.method + " " + request.path;
+      }
+      break;
+    case 405: kind = ProblemKind::method_not_allowed; detail = "method " + request.method + " not allowed here"; break;
+    case 413: kind = ProblemKind::payload_too_large; detail = "the body is larger than this server accepts (--max-body)"; break;
+    case 400: kind = ProblemKind::malformed_body; detail = "the request could not be read"; break;
+    default:
+      if (response.status < 500) {
+        kind = ProblemKind::malformed_body;
+        detail = "the request could not be handled";
+      }
+  }
+  const int status = response.status;
+  send_problem(response, {kind, detail, kind == ProblemKind::payload_too_large ? "body" : ""}, request.path);
+  response.status = status;  // keep what cpp-httplib decided (e.g. 414), with our body
+  return httplib::Server::HandlerResponse::Handled;
+}
+
+void on_exception(const httplib::Request& request, httplib::Response& response, std::exception_ptr) {
+  // Handlers are guarded; this is the net under the net (and stops 0.11.4 from copying the
+  // exception's text into a response header, EXCEPTION_WHAT).
+  send_problem(response, {ProblemKind::internal, "internal error; see the server log", ""}, request.path);
+}
+
+}  // namespace manipid::api::http

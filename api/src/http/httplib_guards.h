@@ -1,0 +1,39 @@
+// httplib_guards.h — internal to the routes: the hooks that stand between Debian's
+// cpp-httplib 0.11.4 and the handlers. Each exists for a 0.11.4 behaviour, named beside it in
+// httplib_guards.cpp: bodies read without bound, Brotli at quality 11, its own error statuses
+// with empty bodies (and 404 for a wrong method), invented methods passed to the logger,
+// exception text copied into a response header. The route table (route_table.cpp) installs them.
+#pragma once
+
+#include "http/route_state.h"  // includes httplib.h, after the manipid headers
+
+#include <exception>
+#include <string>
+
+namespace manipid::api::http {
+
+/// Constant time in the token's content, so the comparison leaks nothing but the length.
+bool token_matches(const std::string& given, const std::string& expected);
+
+/// Strikes "br" from the request's Accept-Encoding (gzip stays): 0.11.4's Brotli is quality 11.
+void refuse_brotli(const httplib::Request& request);
+
+/// The pre-routing hook: runs before any byte of the body is read. Brotli strike, bearer
+/// token on /v1, bodiless POST, PUT or PATCH (411, but a bodiless cancel is answered), chunked
+/// (411) and compressed (415) bodies refused.
+httplib::Server::HandlerResponse before_routing(RouteState& state, const httplib::Request& request,
+                                                httplib::Response& response);
+
+/// The request's method as a /metrics label: one of the methods httplib parses, else "other".
+std::string method_label(const std::string& method);
+
+/// The error hook: problem+json for the statuses cpp-httplib produces by itself (unknown
+/// route, 413, unreadable request), and 405 with Allow where it says 404 for a known path.
+httplib::Server::HandlerResponse on_error(const RouteState& state, const httplib::Request& request,
+                                          httplib::Response& response);
+
+/// The exception hook: the net under `guarded`'s net; 500 problem+json, nothing of the
+/// exception in the answer.
+void on_exception(const httplib::Request& request, httplib::Response& response, std::exception_ptr error);
+
+}  // namespace manipid::api::http

@@ -1,0 +1,48 @@
+// request_helpers.h — internal to the routes: reading what a request says beyond its path —
+// media type, JSON body, Idempotency-Key and its fingerprint, integer and paging query
+// parameters, ?format= / Accept: text/csv — and the ETag of an answer. Each throws ApiError
+// naming the header or parameter at fault.
+#pragma once
+
+#include "manipid/api/records.h"
+
+#include "http/route_state.h"  // includes httplib.h, after the manipid headers
+
+#include <nlohmann/json.hpp>
+
+#include <optional>
+#include <string>
+
+namespace manipid::api::http {
+
+/// The Content-Type without parameters, spaces removed, lower case ("" when absent).
+std::string media_type(const httplib::Request& request);
+
+/// True when the body's first non-blank character opens a JSON object or array.
+bool looks_like_json(const std::string& body);
+
+/// The body as a JSON object. Accepts application/json, and — because `curl -d @file` sends
+/// application/x-www-form-urlencoded unless told otherwise — an unlabelled body that is JSON.
+nlohmann::json json_body(const httplib::Request& request);
+
+/// The Idempotency-Key header (printable ASCII, 1..255 characters) with the fingerprint of
+/// the request it came with: the same key with a different body is refused (422).
+std::optional<IdempotencyKey> idempotency_key(const httplib::Request& request);
+
+/// ?name= as an integer in [lowest, highest]; `fallback` when absent.
+long long integer_parameter(const httplib::Request& request, const std::string& name, long long fallback,
+                            long long lowest, long long highest);
+
+/// ?page_size= and ?page_token= (AIP-158).
+PageRequest page_request(const httplib::Request& request, int default_size);
+
+/// ?max_points= for the drawing endpoints: at most this many points (about), 2 to 1,000,000.
+long max_points_parameter(const httplib::Request& request, long fallback);
+
+/// ?format=csv|json decides; without it, an Accept header naming text/csv.
+bool wants_csv(const httplib::Request& request);
+
+/// A strong ETag (quoted) of an answer's body.
+std::string etag_of(const std::string& body);
+
+}  // namespace manipid::api::http

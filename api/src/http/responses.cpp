@@ -1,0 +1,22 @@
+// responses.cpp — writing answers: JSON bodies and problem+json errors (responses.h).
+#include "manipid/api/problem.h"
+
+#include "http/responses.h"  // includes httplib.h, after the manipid headers
+
+namespace manipid::api::http {
+
+void send_json(httplib::Response& response, int status, const nlohmann::ordered_json& body) {
+  response.status = status;
+  response.set_content(body.dump(), "application/json");
+}
+
+void send_problem(httplib::Response& response, const Problem& problem, const std::string& instance) {
+  response.status = status_of(problem.kind);
+  response.set_content(problem_to_json(problem, instance).dump(), "application/problem+json");
+  if (problem.kind == ProblemKind::queue_full || problem.kind == ProblemKind::shutting_down) {
+    response.set_header("Retry-After", "5");
+  }
+  if (problem.kind == ProblemKind::unauthorized) response.set_header("WWW-Authenticate", "Bearer");
+}
+
+}  // namespace manipid::api::http

@@ -1,0 +1,176 @@
+// jobs.cpp — the /v1/jobs routes: list, state (long-poll, ETag), cost history (pages, CSV,
+// thinned for drawing), torque fit, cancel, delete.
+#include "manipid/api/plots.h"
+#include "manipid/api/problem.h"
+#include "manipid/api/resources_json.h"
+
+#include "http/request_helpers.h"  // includes httplib.h, after the manipid headers
+#include "http/responses.h"
+#include "routes/handlers.h"
+
+#include <algorithm>
+#include <cctype>
+#include <charconv>
+#include <cmath>
+#include <vector>
+
+namespace manipid::api::http {
+
+void send_job(httplib::Response& response, int status, const JobInfo& job) {
+  send_json(response, status, job_to_json(job));
+  if (!is_terminal(job.state)) response.set_header("Retry-After", "1");
+}
+
+void get_job(RouteState& state, const httplib::Request& request, httplib::Response& response) {
+  const std::string id = request.matches[1];
+  std::optional<JobInfo> job;
+  if (request.has_param("wait")) {
+    const std::string text = request.get_param_value("wait");
+    double seconds = 0.0;
+    const auto [end, error] = std::from_chars(text.data(), text.data() + text.size(), seconds);
+    if (error != std::errc() || end != text.data() + text.size() || !std::isfinite(seconds) || seconds < 0) {
+      throw ApiError(ProblemKind::invalid_field, "wait must be a number of seconds >= 0, got '" + text + "'", "wait");
+    }
+    job = state.service.wait(id, std::min(seconds, state.options.max_wait_seconds));
+  } else {
+    job = state.service.job(id);
+  }
+  if (!job) throw ApiError(ProblemKind::not_found, "no job " + id, "id");
+  const std::string body = job_to_json(*job).dump();
+  const std::string etag = etag_of(body);
+  response.set_header("ETag", etag);
+  if (!is_terminal(job->state)) response.set_header("Retry-After", "1");
+  if (request.get_header_value("If-None-Match") == etag) {
+    response.status = 304;
+    return;
+  }
+  response.status = 200;
+  response.set_content(body, "application/json");
+}
+
+void list_jobs(RouteState& state, const httplib::Request& request, httplib::Response& response) {
+  JobFilter filter;
+  if (request.has_param("state")) {
+    filter.state = parse_job_state(request.get_param_value("state"));
+    if (!filter.state) {
+      throw ApiError(ProblemKind::invalid_field,
+                     "state must be queued, running, succeeded, failed or cancelled, got '" +
+                         request.get_param_value("state") + "'",
+                     "state");
+    }
+  }
+  if (request.has_param("kind")) {
+    filter.kind = parse_job_kind(request.get_param_value("kind"));
+    if (!filter.kind) {
+      throw ApiError(ProblemKind::invalid_field,
+                     "kind must be simulation or identification, got '" + request.get_param_value("kind") + "'", "kind");
+    }
+  }
+  const Page<JobInfo> page = state.service.jobs(filter, page_request(request, 50));
+  nlohmann::ordered_json items = nlohmann::ordered_json::array();
+  for (const JobInfo& job : page.items) {
+    nlohmann::ordered_json json = job_to_json(job);
+    json.erase("request");  // lists stay light; GET the job for the whole of it
+    items.push_back(std::move(json));
+  }
+  nlohmann::ordered_json body = {{"items", items}};
+  if (!page.next_page_token.empty()) body["next_page_token"] = page.next_page_token;
+  send_json(response, 200, body);
+}
+
+void job_history(RouteState& state, const httplib::Request& request, httplib::Response& response) {
+  const std::string id = request.matches[1];
+  if (request.has_param("max_points")) {
+    // Thinned for drawing; paging does not apply.
+    if (request.has_param("page_size") || request.has_param("page_token")) {
+      throw ApiError(ProblemKind::invalid_field, "max_points cannot be combined with page_size or page_token", "max_points");
+    }
+    const auto overview = state.service.history_overview(id, max_points_parameter(request, 0));
+    if (!overview) throw ApiError(ProblemKind::not_found, "no job " + id, "id");
+    if (wants_csv(request)) {
+      response.status = 200;
+      response.set_content(history_to_csv(overview->items), "text/csv");
+      return;
+    }
+    send_json(response, 200, history_overview_to_json(*overview));
+    return;
+  }
+  if (wants_csv(request) && !request.has_param("page_size") && !request.has_param("page_token")) {
+    // CSV without paging parameters: the whole history, as `manipid identify --history` writes it.
+    std::vector<HistoryEntry> entries;
+    PageRequest page{1000, ""};
+    for (;;) {
+      const auto chunk = state.service.history(id, page);
+      if (!chunk) throw ApiError(ProblemKind::not_found, "no job " + id, "id");
+      entries.insert(entries.end(), chunk->items.begin(), chunk->items.end());
+      if (chunk->next_page_token.empty()) break;
+      page.page_token = chunk->next_page_token;
+    }
+    response.status = 200;
+    response.set_content(history_to_csv(entries), "text/csv");
+    return;
+  }
+  const auto page = state.service.history(id, page_request(request, 1000));
+  if (!page) throw ApiError(ProblemKind::not_found, "no job " + id, "id");
+  if (wants_csv(request)) {
+    if (!page->next_page_token.empty()) response.set_header("X-Next-Page-Token", page->next_page_token);
+    response.status = 200;
+    response.set_content(history_to_csv(page->items), "text/csv");
+    return;
+  }
+  send_json(response, 200, history_page_to_json(*page));
+}
+
+void job_fit(RouteState& state, const httplib::Request& request, httplib::Response& response) {
+  const std::string id = request.matches[1];
+  const long max_points = max_points_parameter(request, 2000);
+  const auto job = state.service.job(id);
+  if (!job) throw ApiError(ProblemKind::not_found, "no job " + id, "id");
+  if (job->kind != JobKind::identification) {
+    throw ApiError(ProblemKind::conflict, "job " + id + " is a simulation; only identifications have a fit", "id");
+  }
+  if (job->result.empty()) {
+    throw ApiError(ProblemKind::conflict,
+                   "job " + id + " is " + to_string(job->state) + " and has no estimate to fit yet", "id");
+  }
+  const auto data = state.service.dataset_data(job->dataset_id);
+  if (!data) throw ApiError(ProblemKind::conflict, "the dataset of job " + id + " was deleted", "dataset_id");
+  try {
+    send_json(response, 200, torque_fit_to_json(job->request, job->result, *data, max_points));
+  } catch (const nlohmann::json::exception&) {
+    throw ApiError(ProblemKind::conflict, "job " + id + " has no usable stored result", "id");
+  }
+}
+
+void cancel_job_with_id(RouteState& state, const std::string& id, httplib::Response& response) {
+  const auto job = state.service.cancel(id);
+  if (!job) throw ApiError(ProblemKind::not_found, "no job " + id, "id");
+  send_job(response, 200, *job);
+}
+
+void cancel_job(RouteState& state, const httplib::Request& request, httplib::Response& response) {
+  cancel_job_with_id(state, request.matches[1], response);
+}
+
+std::string cancel_route_id(const std::string& path) {
+  const std::string prefix = "/v1/jobs/";
+  if (path.rfind(prefix, 0) != 0) return "";
+  std::size_t end = prefix.size();
+  while (end < path.size() && (std::isalnum(static_cast<unsigned char>(path[end])) || path[end] == '_' || path[end] == '-')) ++end;
+  const std::size_t length = end - prefix.size();
+  const std::string rest = path.substr(end);
+  if (length == 0 || length > 64 || (rest != "/cancel" && rest != ":cancel")) return "";
+  return path.substr(prefix.size(), length);
+}
+
+void delete_job(RouteState& state, const httplib::Request& request, httplib::Response& response) {
+  const std::string id = request.matches[1];
+  switch (state.service.delete_job(id)) {
+    case DeleteOutcome::deleted: response.status = 204; return;
+    case DeleteOutcome::not_found: throw ApiError(ProblemKind::not_found, "no job " + id, "id");
+    case DeleteOutcome::conflict:
+      throw ApiError(ProblemKind::conflict, "job " + id + " is queued or running; cancel it first", "id");
+  }
+}
+
+}  // namespace manipid::api::http

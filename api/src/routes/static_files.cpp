@@ -1,0 +1,70 @@
+// static_files.cpp — what is not the API's resources: the dashboard's files (embedded in the
+// binary), /openapi.json, /healthz and /metrics.
+#include "manipid/api/dashboard.h"
+#include "manipid/api/problem.h"
+#include "manipid/api/routes.h"
+
+#include "http/responses.h"  // includes httplib.h, after the manipid headers
+#include "routes/handlers.h"
+
+#include <algorithm>
+#include <sstream>
+
+namespace manipid::api::http {
+namespace {
+
+void send_asset(httplib::Response& response, const std::string& path) {
+  const auto& assets = dashboard_assets();
+  const auto found = std::find_if(assets.begin(), assets.end(), [&path](const DashboardAsset& asset) { return asset.path == path; });
+  if (found == assets.end()) throw ApiError(ProblemKind::not_found, "no file " + path, "path");
+  // Embedded in this binary: revalidate on every load, so a new build is never mixed with an old cache.
+  response.set_header("Cache-Control", "no-cache");
+  response.set_header("X-Content-Type-Options", "nosniff");
+  if (path == "/") {
+    response.set_header("Content-Security-Policy",
+                        "default-src 'self'; img-src 'self' data:; style-src 'self' 'unsafe-inline'; frame-ancestors 'none'");
+  }
+  response.status = 200;
+  response.set_content(std::string(found->body), std::string(found->content_type).c_str());
+}
+
+/// The request counters the logger keeps (route_table.cpp), as Prometheus text.
+std::string request_metrics(RouteState& state) {
+  std::ostringstream out;
+  out << "# HELP manipid_http_requests_total HTTP requests answered, by method and status.\n"
+         "# TYPE manipid_http_requests_total counter\n";
+  std::lock_guard lock(state.mutex);
+  for (const auto& [key, count] : state.requests) {
+    const auto comma = key.find(',');
+    out << "manipid_http_requests_total{method=\"" << key.substr(0, comma) << "\",status=\"" << key.substr(comma + 1)
+        << "\"} " << count << "\n";
+  }
+  return out.str();
+}
+
+}  // namespace
+
+// The dashboard: static files, so outside the token's reach (its API calls are not). One
+// page answers every view's address, so /jobs/{id} can be bookmarked and reloaded.
+void dashboard_page(RouteState&, const httplib::Request&, httplib::Response& response) { send_asset(response, "/"); }
+
+void dashboard_asset(RouteState&, const httplib::Request& request, httplib::Response& response) {
+  send_asset(response, "/assets/" + std::string(request.matches[1]));
+}
+
+void openapi_document(RouteState&, const httplib::Request&, httplib::Response& response) {
+  response.status = 200;
+  response.set_content(openapi_json(), "application/json");
+}
+
+void health(RouteState& state, const httplib::Request&, httplib::Response& response) {
+  const bool up = state.service.accepting();
+  send_json(response, up ? 200 : 503, {{"status", up ? "ok" : "shutting down"}});
+}
+
+void metrics(RouteState& state, const httplib::Request&, httplib::Response& response) {
+  response.status = 200;
+  response.set_content(state.service.metrics() + request_metrics(state), "text/plain; version=0.0.4");
+}
+
+}  // namespace manipid::api::http

@@ -1,0 +1,1076 @@
+// routes_test.cpp — the HTTP routes (register_routes) against an in-memory Service
+// (fake_service.h) behind a real cpp-httplib server on port 0: each route's answer, every
+// problem+json the routes and the cpp-httplib 0.11.4 guards produce, and what reached the
+// service (nothing, for a refused request). No SQLite, no workers, no timing asserts.
+#include "fake_service.h"
+
+#include "manipid/api/dashboard.h"
+#include "manipid/api/routes.h"
+
+#include <httplib.h>  // after the manipid headers: httplib.h breaks Eigen if it comes first
+
+#include <gtest/gtest.h>
+#include <nlohmann/json.hpp>
+
+#include <netinet/in.h>
+#include <sys/socket.h>
+#include <sys/time.h>
+#include <unistd.h>
+
+#include <algorithm>
+#include <atomic>
+#include <cctype>
+#include <chrono>
+#include <cmath>
+#include <mutex>
+#include <string>
+#include <thread>
+#include <vector>
+
+namespace manipid::api {
+namespace {
+
+using testing::FakeService;
+using testing::Script;
+using Json = nlohmann::json;
+using namespace std::string_literals;
+
+// ---- Helpers -----------------------------------------------------------------------------
+
+std::string lower(std::string text) {
+  std::transform(text.begin(), text.end(), text.begin(), [](unsigned char c) { return static_cast<char>(std::tolower(c)); });
+  return text;
+}
+
+/// An answer read off a raw socket (for what httplib::Client will not send: a POST without
+/// Content-Length, a chunked body, a made-up method).
+struct RawAnswer {
+  int status = 0;
+  std::string head;  ///< status line and headers, lower case
+  std::string body;
+  bool has_header(const std::string& name, const std::string& value) const {
+    return head.find("\r\n" + lower(name) + ": " + lower(value) + "\r\n") != std::string::npos;
+  }
+};
+
+/// A client connection on a raw socket: each exchange sends a request as is and reads one
+/// answer, its head then Content-Length bytes of body. (Not until the server closes: 0.11.4
+/// keeps a connection open after an answer that says "Connection: close", until its
+/// keep-alive timeout.) Exchanges on one connection are served in order by one server thread.
+class RawConnection {
+ public:
+  explicit RawConnection(int port) : fd_(::socket(AF_INET, SOCK_STREAM, 0)) {
+    EXPECT_GE(fd_, 0);
+    timeval limit{30, 0};  // a net against a hang, not a timing assert
+    ::setsockopt(fd_, SOL_SOCKET, SO_RCVTIMEO, &limit, sizeof limit);
+    sockaddr_in address{};
+    address.sin_family = AF_INET;
+    address.sin_port = htons(static_cast<uint16_t>(port));
+    address.sin_addr.s_addr = htonl(INADDR_LOOPBACK);
+    connected_ = ::connect(fd_, reinterpret_cast<sockaddr*>(&address), sizeof address) == 0;
+    EXPECT_TRUE(connected_) << "cannot connect to port " << port;
+  }
+  ~RawConnection() { ::close(fd_); }
+  RawConnection(const RawConnection&) = delete;
+  RawConnection& operator=(const RawConnection&) = delete;
+
+  RawAnswer exchange(const std::string& request) {
+    RawAnswer answer;
+    if (!connected_) return answer;
+    for (std::size_t sent = 0; sent < request.size();) {
+      const ssize_t n = ::send(fd_, request.data() + sent, request.size() - sent, MSG_NOSIGNAL);
+      if (n <= 0) break;
+      sent += static_cast<std::size_t>(n);
+    }
+    std::size_t end = std::string::npos;
+    std::size_t length = 0;
+    char buffer[4096];
+    for (;;) {
+      if (end == std::string::npos && (end = pending_.find("\r\n\r\n")) != std::string::npos) {
+        answer.head = lower(pending_.substr(0, end + 2));
+        const auto field = answer.head.find("\r\ncontent-length: ");
+        if (field != std::string::npos) length = std::stoul(answer.head.substr(field + 18));
+      }
+      if (end != std::string::npos && pending_.size() >= end + 4 + length) break;
+      const ssize_t n = ::recv(fd_, buffer, sizeof buffer, 0);
+      if (n <= 0) break;
+      pending_.append(buffer, static_cast<std::size_t>(n));
+    }
+    if (end == std::string::npos || pending_.size() < end + 4 + length) {
+      ADD_FAILURE() << "no complete answer: '" << pending_ << "'";
+      return answer;
+    }
+    answer.body = pending_.substr(end + 4, length);
+    pending_.erase(0, end + 4 + length);
+    if (answer.head.rfind("http/1.1 ", 0) == 0) answer.status = std::stoi(answer.head.substr(9, 3));
+    return answer;
+  }
+
+ private:
+  int fd_;
+  bool connected_ = false;
+  std::string pending_;  ///< received, not yet returned
+};
+
+/// Checks a problem+json answer: status in the line and the body, code, field (empty: none),
+/// type, title and detail present. Returns the body for further checks.
+Json expect_problem(int status, const std::string& content_type, const std::string& body, int expected_status,
+                    const std::string& code, const std::string& field) {
+  EXPECT_EQ(status, expected_status) << body;
+  EXPECT_EQ(content_type, "application/problem+json") << body;
+  const Json problem = Json::parse(body, nullptr, false);
+  if (problem.is_discarded() || !problem.is_object()) {
+    ADD_FAILURE() << "not a JSON object: " << body;
+    return Json::object();
+  }
+  EXPECT_EQ(problem.value("status", 0), expected_status) << body;
+  EXPECT_EQ(problem.value("code", ""), code) << body;
+  EXPECT_EQ(problem.value("field", ""), field) << body;
+  EXPECT_EQ(problem.value("type", "").rfind("/problems/", 0), 0u) << body;
+  EXPECT_FALSE(problem.value("title", "").empty()) << body;
+  EXPECT_FALSE(problem.value("detail", "").empty()) << body;
+  return problem;
+}
+
+Json expect_problem(const httplib::Result& result, int expected_status, const std::string& code, const std::string& field) {
+  if (!result) {
+    ADD_FAILURE() << "no answer: " << httplib::to_string(result.error());
+    return Json::object();
+  }
+  return expect_problem(result->status, result->get_header_value("Content-Type"), result->body, expected_status, code, field);
+}
+
+Json expect_problem(const RawAnswer& answer, int expected_status, const std::string& code, const std::string& field) {
+  const auto start = answer.head.find("\r\ncontent-type: ");
+  const std::string type =
+      start == std::string::npos ? "" : answer.head.substr(start + 16, answer.head.find("\r\n", start + 2) - start - 16);
+  return expect_problem(answer.status, type, answer.body, expected_status, code, field);
+}
+
+Json json_of(const httplib::Result& result) {
+  if (!result) return Json();
+  return Json::parse(result->body, nullptr, false);
+}
+
+/// t = 0, dt, ...; q smooth per joint; tau and ref when asked.
+Trajectory trajectory(int joints, int samples, double dt, bool torque = true, bool reference = false) {
+  Trajectory data;
+  data.t.resize(samples);
+  data.q.resize(samples, joints);
+  if (torque) data.tau.resize(samples, joints);
+  if (reference) data.ref.resize(samples, joints);
+  for (int i = 0; i < samples; ++i) {
+    data.t[i] = i * dt;
+    for (int j = 0; j < joints; ++j) {
+      data.q(i, j) = 0.1 * (j + 1) * std::sin(2.0 * data.t[i] + j);
+      if (torque) data.tau(i, j) = 10.0 * j + std::cos(data.t[i]);
+      if (reference) data.ref(i, j) = 0.1 * (j + 1);
+    }
+  }
+  return data;
+}
+
+DatasetInfo dataset_info(const std::string& id, int joints, int samples, bool torque = true, bool reference = true) {
+  DatasetInfo info;
+  info.id = id;
+  info.name = "fixture " + id;
+  info.created_at = "2026-01-01T00:00:00.000Z";
+  info.joints = joints;
+  info.samples = samples;
+  info.dt = 0.001;
+  info.has_torque = torque;
+  info.has_reference = reference;
+  return info;
+}
+
+JobInfo job_info(const std::string& id, JobKind kind, JobState state) {
+  JobInfo job;
+  job.id = id;
+  job.kind = kind;
+  job.state = state;
+  job.created_at = "2026-01-01T00:00:00.000Z";
+  job.request = R"({"dataset_id":"ds_paper"})";
+  job.dataset_id = kind == JobKind::identification ? "ds_paper" : "";
+  return job;
+}
+
+std::vector<HistoryEntry> history_of(int count) {
+  std::vector<HistoryEntry> entries;
+  for (int i = 0; i < count; ++i) entries.push_back({i, 100.0 / (i + 1), {50.0, 25.0 + i, 0.4, 0.8}});
+  return entries;
+}
+
+// ---- The server under test ---------------------------------------------------------------
+
+/// register_routes over a FakeService on a real httplib::Server bound to 127.0.0.1:0, served
+/// from a thread (0.11.4 has no wait_until_ready: bind_to_any_port + listen_after_bind, then
+/// spin on is_running()).
+class RouteServer : public ::testing::Test {
+ protected:
+  virtual RouteOptions options() const {
+    RouteOptions routes;
+    routes.max_body = 16 * 1024;
+    return routes;
+  }
+
+  void SetUp() override {
+    RouteOptions routes = options();
+    routes.log = [this](const std::string& line) {
+      std::lock_guard lock(log_mutex_);
+      log_ += line + "\n";
+    };
+    register_routes(server_, fake_, routes);
+    server_.set_keep_alive_max_count(100);
+    port_ = server_.bind_to_any_port("127.0.0.1");
+    ASSERT_GT(port_, 0);
+    listener_ = std::thread([this] {
+      server_.listen_after_bind();
+      listen_returned_ = true;
+    });
+    while (!server_.is_running() && !listen_returned_) std::this_thread::sleep_for(std::chrono::milliseconds(1));
+    ASSERT_TRUE(server_.is_running()) << "listen_after_bind returned at once";
+  }
+
+  void TearDown() override {
+    server_.stop();
+    if (listener_.joinable()) listener_.join();
+  }
+
+  httplib::Client client() const {
+    httplib::Client client("127.0.0.1", port_);
+    client.set_read_timeout(30, 0);
+    return client;
+  }
+
+  httplib::Result get(const std::string& path, const httplib::Headers& headers = {}) const { return client().Get(path, headers); }
+
+  httplib::Result post(const std::string& path, const std::string& body, const std::string& content_type = "application/json",
+                       const httplib::Headers& headers = {}) const {
+    return client().Post(path, headers, body, content_type.c_str());
+  }
+
+  /// One request on a fresh raw connection.
+  RawAnswer raw(const std::string& request) const { return RawConnection(port_).exchange(request); }
+
+  std::string log() const {
+    std::lock_guard lock(log_mutex_);
+    return log_;
+  }
+
+  FakeService fake_;
+  httplib::Server server_;
+  int port_ = 0;
+
+ private:
+  std::thread listener_;
+  std::atomic<bool> listen_returned_{false};
+  mutable std::mutex log_mutex_;
+  std::string log_;
+};
+
+using Routes = RouteServer;
+
+class RoutesWithToken : public RouteServer {
+ protected:
+  RouteOptions options() const override {
+    RouteOptions routes = RouteServer::options();
+    routes.token = "s3cret";
+    return routes;
+  }
+};
+
+// ---- Datasets ----------------------------------------------------------------------------
+
+TEST_F(Routes, DatasetUploadAsJsonAnswers201WithLocation) {
+  const auto result = post("/v1/datasets", R"({"name": "two joints", "dt": 0.001, "q": [[0, 1, 2], [0, 1, 2]]})");
+  ASSERT_TRUE(result);
+  EXPECT_EQ(result->status, 201) << result->body;
+  EXPECT_EQ(result->get_header_value("Content-Type"), "application/json");
+  EXPECT_EQ(result->get_header_value("Location"), "/v1/datasets/ds_1");
+  EXPECT_FALSE(result->has_header("Idempotent-Replayed"));
+  const Json body = json_of(result);
+  EXPECT_EQ(body["id"], "ds_1");
+  EXPECT_EQ(body["joints"], 2);
+  EXPECT_EQ(body["samples"], 3);
+  ASSERT_EQ(fake_.uploads().size(), 1u);
+  EXPECT_EQ(fake_.uploads()[0].upload.name, "two joints");
+  EXPECT_FALSE(fake_.uploads()[0].key);
+}
+
+TEST_F(Routes, DatasetUploadAsCsvTakesItsNameFromTheQuery) {
+  const std::string csv = "t,q1,tau1\n0,0,1\n0.001,0.1,1\n0.002,0.2,1\n";
+  auto result = post("/v1/datasets?name=bench%20run", csv, "text/csv");
+  ASSERT_TRUE(result);
+  EXPECT_EQ(result->status, 201) << result->body;
+  // curl --data-binary labels it form-urlencoded: CSV when it does not look like JSON.
+  result = post("/v1/datasets", csv, "application/x-www-form-urlencoded");
+  ASSERT_TRUE(result);
+  EXPECT_EQ(result->status, 201) << result->body;
+  result = post("/v1/datasets", R"({"dt": 0.001, "q": [[0, 1]]})", "application/x-www-form-urlencoded");
+  ASSERT_TRUE(result);
+  EXPECT_EQ(result->status, 201) << result->body;
+  const auto uploads = fake_.uploads();
+  ASSERT_EQ(uploads.size(), 3u);
+  EXPECT_EQ(uploads[0].upload.name, "bench run");
+  EXPECT_EQ(uploads[0].upload.trajectory.samples(), 3);
+  EXPECT_TRUE(uploads[0].upload.trajectory.has_torque());
+  EXPECT_EQ(uploads[1].upload.trajectory.samples(), 3);
+  EXPECT_EQ(uploads[2].upload.trajectory.samples(), 2);
+  expect_problem(post("/v1/datasets?name=" + std::string(201, 'n'), csv, "text/csv"), 422, "INVALID_FIELD", "name");
+}
+
+TEST_F(Routes, DatasetUploadReplayedUnderItsIdempotencyKeySaysSo) {
+  fake_.script([](Script& s) { s.replay = true; });
+  const std::string body = R"({"dt": 0.001, "q": [[0, 1, 2]]})";
+  const auto result = post("/v1/datasets", body, "application/json", {{"Idempotency-Key", "\"upload-1\""}});
+  ASSERT_TRUE(result);
+  EXPECT_EQ(result->status, 201);
+  EXPECT_EQ(result->get_header_value("Idempotent-Replayed"), "true");
+  ASSERT_EQ(fake_.uploads().size(), 1u);
+  const auto key = fake_.uploads()[0].key;
+  ASSERT_TRUE(key);
+  EXPECT_EQ(key->key, "upload-1");  // the sf-string's quotes are not part of the key
+  EXPECT_EQ(key->fingerprint.size(), 64u);
+}
+
+TEST_F(Routes, DatasetUploadErrorsNameTheirField) {
+  expect_problem(post("/v1/datasets", "<xml/>", "application/xml"), 415, "UNSUPPORTED_MEDIA", "Content-Type");
+  const Json malformed = expect_problem(post("/v1/datasets", R"({"dt": 0.001, "q": [[1,2])"), 400, "MALFORMED_BODY", "body");
+  EXPECT_EQ(malformed["instance"], "/v1/datasets");
+  EXPECT_NE(malformed["detail"].get<std::string>().find("not valid JSON"), std::string::npos);
+  expect_problem(post("/v1/datasets", "[1, 2]"), 400, "MALFORMED_BODY", "body");
+  expect_problem(post("/v1/datasets", R"({"dt": 0.001, "q": [[NaN, 1]]})"), 400, "MALFORMED_BODY", "body");
+  EXPECT_EQ(fake_.calls(), 0);  // nothing reached the service
+  const Json ragged = expect_problem(post("/v1/datasets", R"({"dt": 0.001, "q": [[0, 1, 2], [0, 1]]})"), 422,
+                                     "INVALID_FIELD", "q[1]");
+  EXPECT_NE(ragged["detail"].get<std::string>().find("2 samples"), std::string::npos) << ragged;
+  const Json csv = expect_problem(post("/v1/datasets", "t,q1\n0,1,2\n", "text/csv"), 422, "INVALID_FIELD", "csv");
+  EXPECT_EQ(csv["detail"], "line 2: expected 2 fields, got 3");
+  expect_problem(post("/v1/datasets", "{}", "application/json", {{"Idempotency-Key", std::string(300, 'k')}}), 422,
+                 "INVALID_FIELD", "Idempotency-Key");
+  EXPECT_TRUE(fake_.uploads().empty());
+}
+
+TEST_F(Routes, DatasetAsJsonOrCsv) {
+  fake_.add_dataset(dataset_info("ds_a", 2, 4, true, false), trajectory(2, 4, 0.5));
+  auto result = get("/v1/datasets/ds_a");
+  ASSERT_TRUE(result);
+  EXPECT_EQ(result->status, 200);
+  EXPECT_EQ(result->get_header_value("Content-Type"), "application/json");
+  const Json body = json_of(result);
+  EXPECT_EQ(body["id"], "ds_a");
+  EXPECT_EQ(body["samples"], 4);
+  EXPECT_EQ(body["links"]["self"], "/v1/datasets/ds_a");
+  for (const auto& [path, headers] : std::vector<std::pair<std::string, httplib::Headers>>{
+           {"/v1/datasets/ds_a?format=csv", {}}, {"/v1/datasets/ds_a", {{"Accept", "text/csv"}}}}) {
+    result = get(path, headers);
+    ASSERT_TRUE(result);
+    EXPECT_EQ(result->status, 200) << path;
+    EXPECT_EQ(result->get_header_value("Content-Type"), "text/csv") << path;
+    EXPECT_EQ(result->body.substr(0, result->body.find('\n')), "t,q1,q2,tau1,tau2") << path;
+    EXPECT_EQ(std::count(result->body.begin(), result->body.end(), '\n'), 5) << path;
+  }
+  result = get("/v1/datasets/ds_a?format=json", {{"Accept", "text/csv"}});  // ?format= decides
+  ASSERT_TRUE(result);
+  EXPECT_EQ(result->get_header_value("Content-Type"), "application/json");
+  expect_problem(get("/v1/datasets/ds_a?format=xml"), 422, "INVALID_FIELD", "format");
+  const Json missing = expect_problem(get("/v1/datasets/ds_0000000000000000"), 404, "NOT_FOUND", "id");
+  EXPECT_EQ(missing["detail"], "no dataset ds_0000000000000000");
+  expect_problem(get("/v1/datasets/ds_0000000000000000?format=csv"), 404, "NOT_FOUND", "id");
+}
+
+TEST_F(Routes, DatasetDataForDrawing) {
+  fake_.add_dataset(dataset_info("ds_a", 2, 9, true, false), trajectory(2, 9, 0.5));
+  auto result = get("/v1/datasets/ds_a/data");
+  ASSERT_TRUE(result);
+  EXPECT_EQ(result->status, 200);
+  Json body = json_of(result);
+  EXPECT_EQ(body["t"].size(), 9u);
+  EXPECT_EQ(body["q"].size(), 2u);  // one array per joint, as uploads take it
+  EXPECT_EQ(body["tau"].size(), 2u);
+  EXPECT_FALSE(body.contains("ref"));
+  result = get("/v1/datasets/ds_a/data?max_points=3");
+  ASSERT_TRUE(result);
+  body = json_of(result);
+  // ceil(9 / 3) = 3: samples 0, 3, 6, and always the last, 8.
+  EXPECT_EQ(body["t"], Json::parse("[0.0, 1.5, 3.0, 4.0]"));
+  result = get("/v1/datasets/ds_a/data?max_points=3", {{"Accept", "text/csv"}});
+  ASSERT_TRUE(result);
+  EXPECT_EQ(result->get_header_value("Content-Type"), "text/csv");
+  EXPECT_EQ(std::count(result->body.begin(), result->body.end(), '\n'), 5);
+  for (const std::string& bad : {"1"s, "x"s, "1000001"s, "-5"s, "3.5"s}) {
+    const Json problem = expect_problem(get("/v1/datasets/ds_a/data?max_points=" + bad), 422, "INVALID_FIELD", "max_points");
+    EXPECT_EQ(problem["detail"], "max_points must be an integer from 2 to 1000000, got '" + bad + "'");
+  }
+  expect_problem(get("/v1/datasets/ds_0000000000000000/data"), 404, "NOT_FOUND", "id");
+}
+
+TEST_F(Routes, DatasetListPagesAsAsked) {
+  fake_.add_dataset(dataset_info("ds_a", 2, 4));
+  fake_.add_dataset(dataset_info("ds_b", 2, 4));
+  fake_.script([](Script& s) { s.next_page_token = "after-a"; });
+  auto result = get("/v1/datasets?page_size=1&page_token=start");
+  ASSERT_TRUE(result);
+  EXPECT_EQ(result->status, 200);
+  Json body = json_of(result);
+  ASSERT_EQ(body["items"].size(), 1u);
+  EXPECT_EQ(body["items"][0]["id"], "ds_a");
+  EXPECT_EQ(body["next_page_token"], "after-a");
+  fake_.script([](Script&) {});
+  result = get("/v1/datasets?page_size=0");  // AIP-158: 0 means the default
+  ASSERT_TRUE(result);
+  body = json_of(result);
+  EXPECT_EQ(body["items"].size(), 2u);
+  EXPECT_FALSE(body.contains("next_page_token"));  // omitted on the last page, never empty
+  const auto pages = fake_.page_requests();
+  ASSERT_EQ(pages.size(), 2u);
+  EXPECT_EQ(pages[0].page_size, 1);
+  EXPECT_EQ(pages[0].page_token, "start");
+  EXPECT_EQ(pages[1].page_size, 50);
+  expect_problem(get("/v1/datasets?page_size=-1"), 422, "INVALID_FIELD", "page_size");
+  expect_problem(get("/v1/datasets?page_size=1000001"), 422, "INVALID_FIELD", "page_size");
+  expect_problem(get("/v1/datasets?page_size=ten"), 422, "INVALID_FIELD", "page_size");
+  EXPECT_EQ(fake_.page_requests().size(), 2u);
+}
+
+TEST_F(Routes, DatasetDeleteAnswersByOutcome) {
+  fake_.add_dataset(dataset_info("ds_a", 2, 4));
+  auto result = client().Delete("/v1/datasets/ds_a");
+  ASSERT_TRUE(result);
+  EXPECT_EQ(result->status, 204);
+  EXPECT_TRUE(result->body.empty());
+  expect_problem(client().Delete("/v1/datasets/ds_a"), 404, "NOT_FOUND", "id");
+  fake_.script([](Script& s) { s.delete_outcome = DeleteOutcome::conflict; });
+  const Json problem = expect_problem(client().Delete("/v1/datasets/ds_b"), 409, "CONFLICT", "id");
+  EXPECT_EQ(problem["detail"], "dataset ds_b is the input of a queued or running job");
+}
+
+// ---- Submissions and presets -------------------------------------------------------------
+
+TEST_F(Routes, IdentificationOfADatasetIsQueued) {
+  fake_.add_dataset(dataset_info("ds_paper", 4, 9701));
+  const std::string request = R"({"dataset_id": "ds_paper", "free": ["m2", "m3"], "half_length": 100, "band": 0.2})";
+  const auto result = post("/v1/identifications", request);
+  ASSERT_TRUE(result);
+  EXPECT_EQ(result->status, 202) << result->body;
+  EXPECT_EQ(result->get_header_value("Content-Type"), "application/json");
+  EXPECT_EQ(result->get_header_value("Location"), "/v1/jobs/job_1");
+  EXPECT_EQ(result->get_header_value("Retry-After"), "1");  // queued: not terminal
+  EXPECT_FALSE(result->has_header("Idempotent-Replayed"));
+  const Json job = json_of(result);
+  EXPECT_EQ(job["id"], "job_1");
+  EXPECT_EQ(job["kind"], "identification");
+  EXPECT_EQ(job["state"], "queued");
+  const auto submissions = fake_.submissions();
+  ASSERT_EQ(submissions.size(), 1u);
+  EXPECT_EQ(submissions[0].kind, JobKind::identification);
+  EXPECT_EQ(submissions[0].dataset_id, "ds_paper");
+  EXPECT_EQ(Json::parse(submissions[0].request_json), Json::parse(request));  // the body as accepted
+  EXPECT_FALSE(submissions[0].key);
+}
+
+TEST_F(Routes, IdentificationRequestsAreValidatedBeforeAnythingIsQueued) {
+  fake_.add_dataset(dataset_info("ds_small", 4, 50, true, false));
+  expect_problem(post("/v1/identifications", R"({"dataset_id": "ds_0000000000000000"})"), 422, "INVALID_FIELD", "dataset_id");
+  const Json few = expect_problem(post("/v1/identifications", R"({"dataset_id": "ds_small", "half_length": 100, "band": 0.2})"),
+                                  422, "INVALID_FIELD", "half_length");
+  EXPECT_NE(few["detail"].get<std::string>().find("202"), std::string::npos) << few;
+  expect_problem(post("/v1/identifications", R"({"dataset_id": "ds_small", "max_evaluation": 10})"), 422, "INVALID_FIELD",
+                 "max_evaluation");
+  expect_problem(post("/v1/identifications", R"({"dataset_id": "ds_small", "free": ["m9"]})"), 422, "INVALID_FIELD", "free[0]");
+  expect_problem(post("/v1/identifications", R"({"dataset_id": )"), 400, "MALFORMED_BODY", "body");
+  expect_problem(post("/v1/identifications", "dataset_id=ds_small", "text/plain"), 415, "UNSUPPORTED_MEDIA", "Content-Type");
+  const Json empty = expect_problem(post("/v1/identifications", ""), 400, "MALFORMED_BODY", "body");
+  EXPECT_EQ(empty["detail"], "the request body is empty; expected a JSON object");
+  EXPECT_TRUE(fake_.submissions().empty());
+}
+
+TEST_F(Routes, SimulationIsQueuedWithoutADataset) {
+  const auto result = post("/v1/simulations", R"({"preset": "cedro2009", "duration": 0.5})", "application/merge-patch+json");
+  ASSERT_TRUE(result);
+  EXPECT_EQ(result->status, 202) << result->body;  // any +json media type is JSON
+  EXPECT_EQ(result->get_header_value("Location"), "/v1/jobs/job_1");
+  EXPECT_EQ(json_of(result)["kind"], "simulation");
+  const auto submissions = fake_.submissions();
+  ASSERT_EQ(submissions.size(), 1u);
+  EXPECT_EQ(submissions[0].kind, JobKind::simulation);
+  EXPECT_EQ(submissions[0].dataset_id, "");
+  expect_problem(post("/v1/simulations", R"({"preset": "nope"})"), 422, "INVALID_FIELD", "preset");
+  EXPECT_EQ(fake_.submissions().size(), 1u);
+}
+
+TEST_F(Routes, SimulateAndIdentifyInOneRequestNeedsNoDataset) {
+  const auto result = post("/v1/identifications", R"({"simulation": {"duration": 1.0}, "preset": "cedro2009"})");
+  ASSERT_TRUE(result);
+  EXPECT_EQ(result->status, 202) << result->body;
+  ASSERT_EQ(fake_.submissions().size(), 1u);
+  EXPECT_EQ(fake_.submissions()[0].dataset_id, "");
+}
+
+TEST_F(Routes, IdempotencyKeyFingerprintsTheRequest) {
+  const std::string first = R"({"duration": 0.5})";
+  const std::string second = R"({"duration": 0.6})";
+  const httplib::Headers key = {{"Idempotency-Key", "lab-run-42"}};
+  ASSERT_TRUE(post("/v1/simulations", first, "application/json", key));
+  ASSERT_TRUE(post("/v1/simulations", first, "application/json", key));
+  ASSERT_TRUE(post("/v1/simulations", second, "application/json", key));
+  const auto submissions = fake_.submissions();
+  ASSERT_EQ(submissions.size(), 3u);
+  for (const auto& submission : submissions) {
+    ASSERT_TRUE(submission.key);
+    EXPECT_EQ(submission.key->key, "lab-run-42");
+  }
+  EXPECT_EQ(submissions[0].key->fingerprint, submissions[1].key->fingerprint);  // a retry
+  EXPECT_NE(submissions[0].key->fingerprint, submissions[2].key->fingerprint);  // another request
+
+  fake_.script([](Script& s) { s.replay = true; });
+  const auto replayed = post("/v1/simulations", first, "application/json", key);
+  ASSERT_TRUE(replayed);
+  EXPECT_EQ(replayed->status, 202);
+  EXPECT_EQ(replayed->get_header_value("Idempotent-Replayed"), "true");
+
+  fake_.script([](Script& s) { s.submit_error = ProblemKind::idempotency_mismatch; });
+  expect_problem(post("/v1/simulations", second, "application/json", key), 422, "IDEMPOTENCY_MISMATCH", "");
+  for (const std::string& bad : {std::string(256, 'k'), std::string("two words"), std::string("\"\"")}) {
+    expect_problem(post("/v1/simulations", first, "application/json", {{"Idempotency-Key", bad}}), 422, "INVALID_FIELD",
+                   "Idempotency-Key");
+  }
+}
+
+TEST_F(Routes, FullQueueAnswers429WithRetryAfter) {
+  fake_.script([](Script& s) { s.submit_error = ProblemKind::queue_full; });
+  const auto result = post("/v1/simulations", R"({"duration": 0.5})");
+  expect_problem(result, 429, "QUEUE_FULL", "");
+  ASSERT_TRUE(result);
+  EXPECT_EQ(result->get_header_value("Retry-After"), "5");
+}
+
+TEST_F(Routes, ShuttingDownAnswers503WithRetryAfter) {
+  fake_.script([](Script& s) { s.submit_error = ProblemKind::shutting_down; });
+  const auto result = post("/v1/simulations", R"({"duration": 0.5})");
+  expect_problem(result, 503, "SHUTTING_DOWN", "");
+  ASSERT_TRUE(result);
+  EXPECT_EQ(result->get_header_value("Retry-After"), "5");
+  fake_.set_accepting(false);
+  const auto health = get("/healthz");
+  ASSERT_TRUE(health);
+  EXPECT_EQ(health->status, 503);
+  EXPECT_EQ(json_of(health), Json::parse(R"({"status": "shutting down"})"));
+}
+
+TEST_F(Routes, PresetsAndTheirErrors) {
+  auto result = get("/v1/presets");
+  ASSERT_TRUE(result);
+  EXPECT_EQ(result->status, 200);
+  const Json items = json_of(result)["items"];
+  EXPECT_TRUE(std::any_of(items.begin(), items.end(), [](const Json& preset) { return preset["name"] == "cedro2009"; }))
+      << items;
+  result = get("/v1/presets/cedro2009?kinetic_energy=paper");
+  ASSERT_TRUE(result);
+  EXPECT_EQ(result->status, 200);
+  const Json paper = json_of(result);
+  EXPECT_EQ(paper["kinetic_energy"], "paper");
+  EXPECT_EQ(paper["joints"], 4);
+  EXPECT_EQ(paper["kp"], Json::parse("[3800, 40000, 10000, 500]"));
+  const Json unknown = expect_problem(get("/v1/presets/puma560"), 404, "NOT_FOUND", "name");
+  EXPECT_NE(unknown["detail"].get<std::string>().find("cedro2009"), std::string::npos) << unknown;  // lists the known
+  expect_problem(get("/v1/presets/cedro2009?kinetic_energy=full"), 422, "INVALID_FIELD", "kinetic_energy");
+}
+
+// ---- Jobs --------------------------------------------------------------------------------
+
+TEST_F(Routes, JobHasAnETagAndAnswers304WhenUnchanged) {
+  fake_.add_job(job_info("job_q", JobKind::identification, JobState::queued));
+  JobInfo done = job_info("job_done", JobKind::identification, JobState::succeeded);
+  done.result = R"({"final_cost": 1.5})";
+  fake_.add_job(done);
+
+  auto result = get("/v1/jobs/job_q");
+  ASSERT_TRUE(result);
+  EXPECT_EQ(result->status, 200);
+  EXPECT_EQ(result->get_header_value("Content-Type"), "application/json");
+  EXPECT_EQ(result->get_header_value("Retry-After"), "1");
+  const std::string etag = result->get_header_value("ETag");
+  ASSERT_EQ(etag.size(), 34u);  // a quoted 32-digit hash
+  EXPECT_EQ(etag.front(), '"');
+  EXPECT_EQ(etag.back(), '"');
+  Json job = json_of(result);
+  EXPECT_EQ(job["id"], "job_q");
+  EXPECT_EQ(job["state"], "queued");
+  EXPECT_EQ(job["request"], Json::parse(R"({"dataset_id": "ds_paper"})"));
+
+  result = get("/v1/jobs/job_q", {{"If-None-Match", etag}});
+  ASSERT_TRUE(result);
+  EXPECT_EQ(result->status, 304);
+  EXPECT_TRUE(result->body.empty());
+  EXPECT_EQ(result->get_header_value("ETag"), etag);
+  result = get("/v1/jobs/job_q", {{"If-None-Match", "\"something else\""}});
+  ASSERT_TRUE(result);
+  EXPECT_EQ(result->status, 200);
+
+  result = get("/v1/jobs/job_done");
+  ASSERT_TRUE(result);
+  EXPECT_EQ(result->status, 200);
+  EXPECT_FALSE(result->has_header("Retry-After"));  // terminal
+  EXPECT_NE(result->get_header_value("ETag"), etag);
+  EXPECT_EQ(json_of(result)["result"]["final_cost"], 1.5);
+
+  const Json missing = expect_problem(get("/v1/jobs/job_0000000000000000"), 404, "NOT_FOUND", "id");
+  EXPECT_EQ(missing["detail"], "no job job_0000000000000000");
+  EXPECT_EQ(missing["instance"], "/v1/jobs/job_0000000000000000");
+}
+
+TEST_F(Routes, JobLongPollIsCappedAndValidated) {
+  fake_.add_job(job_info("job_q", JobKind::identification, JobState::running));
+  for (const std::string& wait : {"5"s, "0.25"s, "0"s, "3600"s}) {
+    const auto result = get("/v1/jobs/job_q?wait=" + wait);
+    ASSERT_TRUE(result);
+    EXPECT_EQ(result->status, 200) << wait;
+  }
+  EXPECT_EQ(fake_.waits(), (std::vector<double>{5.0, 0.25, 0.0, 30.0}));  // capped at max_wait_seconds
+  for (const std::string& bad : {"soon"s, "-1"s, "inf"s, "nan"s, "1e400"s, "5s"s}) {
+    const Json problem = expect_problem(get("/v1/jobs/job_q?wait=" + bad), 422, "INVALID_FIELD", "wait");
+    EXPECT_EQ(problem["detail"], "wait must be a number of seconds >= 0, got '" + bad + "'");
+  }
+  EXPECT_EQ(fake_.waits().size(), 4u);
+  expect_problem(get("/v1/jobs/job_0000000000000000?wait=1"), 404, "NOT_FOUND", "id");
+}
+
+TEST_F(Routes, JobListFiltersAndLeavesTheRequestOut) {
+  fake_.add_job(job_info("job_a", JobKind::identification, JobState::running));
+  fake_.add_job(job_info("job_b", JobKind::simulation, JobState::succeeded));
+  auto result = get("/v1/jobs?state=succeeded&kind=simulation&page_size=10");
+  ASSERT_TRUE(result);
+  EXPECT_EQ(result->status, 200);
+  Json body = json_of(result);
+  ASSERT_EQ(body["items"].size(), 1u);
+  EXPECT_EQ(body["items"][0]["id"], "job_b");
+  EXPECT_FALSE(body["items"][0].contains("request"));  // lists stay light
+  EXPECT_FALSE(body.contains("next_page_token"));
+  const auto filters = fake_.filters();
+  ASSERT_EQ(filters.size(), 1u);
+  EXPECT_EQ(filters[0].state, JobState::succeeded);
+  EXPECT_EQ(filters[0].kind, JobKind::simulation);
+  EXPECT_EQ(fake_.page_requests().back().page_size, 10);
+
+  fake_.script([](Script& s) { s.next_page_token = "next"; });
+  result = get("/v1/jobs");
+  ASSERT_TRUE(result);
+  body = json_of(result);
+  EXPECT_EQ(body["items"].size(), 2u);
+  EXPECT_EQ(body["next_page_token"], "next");
+  EXPECT_EQ(fake_.page_requests().back().page_size, 50);
+
+  expect_problem(get("/v1/jobs?state=done"), 422, "INVALID_FIELD", "state");
+  expect_problem(get("/v1/jobs?kind=robot"), 422, "INVALID_FIELD", "kind");
+  expect_problem(get("/v1/jobs?page_size=-1"), 422, "INVALID_FIELD", "page_size");
+  EXPECT_EQ(fake_.filters().size(), 2u);
+}
+
+TEST_F(Routes, JobHistoryInPagesAsCsvAndThinned) {
+  fake_.add_job(job_info("job_h", JobKind::identification, JobState::succeeded), history_of(5));
+
+  auto result = get("/v1/jobs/job_h/history?page_size=2");
+  ASSERT_TRUE(result);
+  EXPECT_EQ(result->status, 200);
+  Json page = json_of(result);
+  ASSERT_EQ(page["items"].size(), 2u);
+  EXPECT_EQ(page["items"][1]["index"], 1);
+  EXPECT_EQ(page["items"][1]["cost"], 50.0);
+  EXPECT_EQ(page["items"][1]["parameters"], Json::parse(R"({"m1": 50.0, "m2": 26.0, "l1": 0.4, "l2": 0.8})"));
+  EXPECT_EQ(page["next_page_token"], "2");
+  result = get("/v1/jobs/job_h/history?page_size=2&page_token=4");
+  ASSERT_TRUE(result);
+  page = json_of(result);
+  EXPECT_EQ(page["items"].size(), 1u);
+  EXPECT_FALSE(page.contains("next_page_token"));
+  result = get("/v1/jobs/job_h/history");
+  ASSERT_TRUE(result);
+  EXPECT_EQ(json_of(result)["items"].size(), 5u);
+  EXPECT_EQ(fake_.page_requests().back().page_size, 1000);  // the history's default page
+
+  // CSV without paging: the whole history (read from the service a page at a time).
+  result = get("/v1/jobs/job_h/history", {{"Accept", "text/csv"}});
+  ASSERT_TRUE(result);
+  EXPECT_EQ(result->status, 200);
+  EXPECT_EQ(result->get_header_value("Content-Type"), "text/csv");
+  EXPECT_EQ(result->body.substr(0, result->body.find('\n')), "index,cost,m1,m2,l1,l2");
+  EXPECT_EQ(std::count(result->body.begin(), result->body.end(), '\n'), 6);
+  // CSV with paging: one page, and the next page's token in a header.
+  result = get("/v1/jobs/job_h/history?format=csv&page_size=2");
+  ASSERT_TRUE(result);
+  EXPECT_EQ(std::count(result->body.begin(), result->body.end(), '\n'), 3);
+  EXPECT_EQ(result->get_header_value("X-Next-Page-Token"), "2");
+
+  // Thinned for drawing.
+  result = get("/v1/jobs/job_h/history?max_points=2");
+  ASSERT_TRUE(result);
+  EXPECT_EQ(result->status, 200);
+  const Json overview = json_of(result);
+  EXPECT_EQ(overview["total"], 5);
+  EXPECT_EQ(overview["stride"], 3);
+  EXPECT_EQ(overview["best_index"], 0);
+  EXPECT_EQ(overview["items"].size(), 2u);
+  EXPECT_EQ(fake_.overview_requests(), std::vector<long>{2});
+  result = get("/v1/jobs/job_h/history?max_points=2&format=csv");
+  ASSERT_TRUE(result);
+  EXPECT_EQ(result->get_header_value("Content-Type"), "text/csv");
+  EXPECT_EQ(std::count(result->body.begin(), result->body.end(), '\n'), 3);
+}
+
+TEST_F(Routes, JobHistoryParameterErrors) {
+  fake_.add_job(job_info("job_h", JobKind::identification, JobState::succeeded), history_of(5));
+  expect_problem(get("/v1/jobs/job_h/history?max_points=1"), 422, "INVALID_FIELD", "max_points");
+  expect_problem(get("/v1/jobs/job_h/history?max_points=x"), 422, "INVALID_FIELD", "max_points");
+  const Json both = expect_problem(get("/v1/jobs/job_h/history?max_points=10&page_size=5"), 422, "INVALID_FIELD", "max_points");
+  EXPECT_EQ(both["detail"], "max_points cannot be combined with page_size or page_token");
+  expect_problem(get("/v1/jobs/job_h/history?max_points=10&page_token=2"), 422, "INVALID_FIELD", "max_points");
+  expect_problem(get("/v1/jobs/job_h/history?format=xml"), 422, "INVALID_FIELD", "format");
+  expect_problem(get("/v1/jobs/job_h/history?page_size=many"), 422, "INVALID_FIELD", "page_size");
+  expect_problem(get("/v1/jobs/job_0000000000000000/history"), 404, "NOT_FOUND", "id");
+  expect_problem(get("/v1/jobs/job_0000000000000000/history?format=csv"), 404, "NOT_FOUND", "id");
+  expect_problem(get("/v1/jobs/job_0000000000000000/history?max_points=10"), 404, "NOT_FOUND", "id");
+}
+
+TEST_F(Routes, JobFitAtTheEstimate) {
+  fake_.add_dataset(dataset_info("ds_paper", 4, 301), trajectory(4, 301, 0.001));
+  JobInfo done = job_info("job_fit", JobKind::identification, JobState::succeeded);
+  done.result = R"({"point": {"m1": 50, "m2": 25, "m3": 15, "m4": 5, "l1": 0.4, "l2": 0.8, "l3": 0.6, "l4": 0.2},
+                    "filter": {"half_length": 20, "band": 0.5, "dt": 0.001}, "torque_source": "measured"})";
+  fake_.add_job(done);
+  const auto result = get("/v1/jobs/job_fit/fit?max_points=50");
+  ASSERT_TRUE(result);
+  ASSERT_EQ(result->status, 200) << result->body;
+  const Json fit = json_of(result);
+  EXPECT_EQ(fit["samples"], 301 - 41);
+  EXPECT_EQ(fit["filter"], Json::parse(R"({"half_length": 20, "band": 0.5, "dt": 0.001})"));
+  EXPECT_EQ(fit["torque_source"], "measured");
+  EXPECT_EQ(fit["parameters"]["m2"], 25.0);
+  EXPECT_LE(fit["t"].size(), 51u);
+  ASSERT_EQ(fit["joints"].size(), 4u);
+  EXPECT_EQ(fit["joints"][0]["measured"].size(), fit["t"].size());
+  // The default is 2000 points: all 260 here.
+  const auto everything = get("/v1/jobs/job_fit/fit");
+  ASSERT_TRUE(everything);
+  EXPECT_EQ(json_of(everything)["t"].size(), 260u);
+}
+
+TEST_F(Routes, JobFitConflicts) {
+  fake_.add_job(job_info("job_sim", JobKind::simulation, JobState::succeeded));
+  fake_.add_job(job_info("job_run", JobKind::identification, JobState::running));
+  JobInfo broken = job_info("job_broken", JobKind::identification, JobState::succeeded);
+  broken.result = "not json";
+  fake_.add_job(broken);
+  JobInfo orphan = job_info("job_orphan", JobKind::identification, JobState::succeeded);
+  orphan.result = "{}";
+  orphan.dataset_id = "ds_deleted";
+  fake_.add_job(orphan);
+  fake_.add_dataset(dataset_info("ds_paper", 4, 301), trajectory(4, 301, 0.001));
+
+  Json problem = expect_problem(get("/v1/jobs/job_sim/fit"), 409, "CONFLICT", "id");
+  EXPECT_EQ(problem["detail"], "job job_sim is a simulation; only identifications have a fit");
+  problem = expect_problem(get("/v1/jobs/job_run/fit"), 409, "CONFLICT", "id");
+  EXPECT_EQ(problem["detail"], "job job_run is running and has no estimate to fit yet");
+  problem = expect_problem(get("/v1/jobs/job_broken/fit"), 409, "CONFLICT", "id");
+  EXPECT_EQ(problem["detail"], "job job_broken has no usable stored result");
+  expect_problem(get("/v1/jobs/job_orphan/fit"), 409, "CONFLICT", "dataset_id");
+  expect_problem(get("/v1/jobs/job_0000000000000000/fit"), 404, "NOT_FOUND", "id");
+  expect_problem(get("/v1/jobs/job_sim/fit?max_points=1"), 422, "INVALID_FIELD", "max_points");
+}
+
+TEST_F(Routes, JobCancelAndDelete) {
+  fake_.add_job(job_info("job_a", JobKind::identification, JobState::running));
+  fake_.add_job(job_info("job_b", JobKind::identification, JobState::queued));
+
+  expect_problem(client().Delete("/v1/jobs/job_a"), 409, "CONFLICT", "id");  // running: cancel it first
+  auto result = post("/v1/jobs/job_a/cancel", "");  // httplib::Client sends Content-Length: 0
+  ASSERT_TRUE(result);
+  EXPECT_EQ(result->status, 200) << result->body;
+  EXPECT_EQ(json_of(result)["state"], "cancelled");
+  EXPECT_FALSE(result->has_header("Retry-After"));
+  result = post("/v1/jobs/job_b:cancel", "");
+  ASSERT_TRUE(result);
+  EXPECT_EQ(result->status, 200);
+  EXPECT_EQ(json_of(result)["state"], "cancelled");
+  expect_problem(post("/v1/jobs/job_0000000000000000/cancel", ""), 404, "NOT_FOUND", "id");
+
+  result = client().Delete("/v1/jobs/job_a");
+  ASSERT_TRUE(result);
+  EXPECT_EQ(result->status, 204);
+  expect_problem(client().Delete("/v1/jobs/job_a"), 404, "NOT_FOUND", "id");
+  expect_problem(get("/v1/jobs/job_a"), 404, "NOT_FOUND", "id");
+}
+
+// ---- The cpp-httplib 0.11.4 guards -------------------------------------------------------
+
+TEST_F(Routes, BodilessCancelIsAnsweredBeforeAnyRead) {
+  // curl -X POST sends no Content-Length; 0.11.4 would wait for a body until the peer closes.
+  fake_.add_job(job_info("job_a", JobKind::identification, JobState::running));
+  RawAnswer answer = raw("POST /v1/jobs/job_a/cancel HTTP/1.1\r\nHost: test\r\nConnection: close\r\n\r\n");
+  EXPECT_EQ(answer.status, 200) << answer.head << answer.body;
+  EXPECT_TRUE(answer.has_header("Content-Type", "application/json")) << answer.head;
+  EXPECT_EQ(Json::parse(answer.body)["state"], "cancelled");
+  answer = raw("POST /v1/jobs/job_a:cancel HTTP/1.1\r\nHost: test\r\nConnection: close\r\n\r\n");
+  EXPECT_EQ(answer.status, 200) << answer.head << answer.body;
+  answer = raw("POST /v1/jobs/job_0000000000000000/cancel HTTP/1.1\r\nHost: test\r\nConnection: close\r\n\r\n");
+  expect_problem(answer, 404, "NOT_FOUND", "id");
+}
+
+TEST_F(Routes, BodilessPostIsRefusedWith411) {
+  const RawAnswer answer = raw("POST /v1/datasets HTTP/1.1\r\nHost: test\r\nContent-Type: text/csv\r\n\r\n");
+  const Json problem = expect_problem(answer, 411, "LENGTH_REQUIRED", "Content-Length");
+  EXPECT_EQ(problem["instance"], "/v1/datasets");
+  EXPECT_TRUE(answer.has_header("Connection", "close")) << answer.head;
+  EXPECT_EQ(fake_.calls(), 0);
+}
+
+TEST_F(Routes, LengthlessPutAndPatchAreRefusedWith411) {
+  // 0.11.4 reads them until the peer closes, like a POST, though no route takes them.
+  for (const std::string& method : {"PUT"s, "PATCH"s}) {
+    const RawAnswer answer = raw(method + " /v1/jobs/job_a HTTP/1.1\r\nHost: test\r\n\r\nand a body that never ends");
+    expect_problem(answer, 411, "LENGTH_REQUIRED", "Content-Length");
+    EXPECT_TRUE(answer.has_header("Connection", "close")) << answer.head;
+  }
+  EXPECT_EQ(fake_.calls(), 0);
+}
+
+TEST_F(Routes, ChunkedBodyIsRefusedBeforeItIsRead) {
+  const RawAnswer answer = raw(
+      "POST /v1/datasets HTTP/1.1\r\nHost: test\r\nContent-Type: text/csv\r\nTransfer-Encoding: chunked\r\n\r\n"
+      "5\r\nt,q1\n\r\n0\r\n\r\n");
+  const Json problem = expect_problem(answer, 411, "LENGTH_REQUIRED", "Transfer-Encoding");
+  EXPECT_EQ(problem["detail"], "send the body with a Content-Length, not chunked");
+  EXPECT_TRUE(answer.has_header("Connection", "close")) << answer.head;
+  EXPECT_EQ(fake_.calls(), 0);
+}
+
+TEST_F(Routes, CompressedBodyIsRefusedWith415) {
+  const auto result = post("/v1/datasets", "{}", "application/json", {{"Content-Encoding", "gzip"}});
+  const Json problem = expect_problem(result, 415, "UNSUPPORTED_MEDIA", "Content-Encoding");
+  EXPECT_EQ(problem["detail"], "compressed request bodies are not accepted");
+  ASSERT_TRUE(result);
+  EXPECT_EQ(result->get_header_value("Connection"), "close");
+  EXPECT_EQ(fake_.calls(), 0);
+}
+
+TEST_F(Routes, BodyOverMaxBodyIs413) {
+  const std::string big = "t,q1\n" + std::string(16 * 1024, '0');
+  const auto result = post("/v1/datasets", big, "text/csv");
+  const Json problem = expect_problem(result, 413, "PAYLOAD_TOO_LARGE", "body");
+  EXPECT_EQ(problem["detail"], "the body is larger than this server accepts (--max-body)");
+  EXPECT_EQ(fake_.calls(), 0);
+}
+
+TEST_F(Routes, UnknownRouteIsAProblem) {
+  Json problem = expect_problem(get("/v1/nothing-here"), 404, "NOT_FOUND", "");
+  EXPECT_EQ(problem["detail"], "no route GET /v1/nothing-here");
+  EXPECT_EQ(problem["instance"], "/v1/nothing-here");
+  problem = expect_problem(get("/jobs/not%20an%20id"), 404, "NOT_FOUND", "");
+  expect_problem(post("/v1/nothing-here", "{}"), 404, "NOT_FOUND", "");
+  expect_problem(get("/v1/jobs/" + std::string(65, 'j')), 404, "NOT_FOUND", "");  // ids are at most 64 characters
+  EXPECT_EQ(fake_.calls(), 0);
+}
+
+TEST_F(Routes, AMethodAKnownPathDoesNotTakeIs405WithAllow) {
+  fake_.add_job(job_info("job_a", JobKind::identification, JobState::running));
+  const struct {
+    httplib::Result result;
+    const char* method;
+    const char* path;
+    const char* allow;
+  } cases[] = {
+      {client().Put("/v1/jobs/job_a", "{}", "application/json"), "PUT", "/v1/jobs/job_a", "DELETE, GET, HEAD"},
+      {client().Delete("/v1/jobs"), "DELETE", "/v1/jobs", "GET, HEAD"},
+      {post("/v1/jobs", "{}"), "POST", "/v1/jobs", "GET, HEAD"},
+      {get("/v1/simulations"), "GET", "/v1/simulations", "POST"},
+      {get("/v1/jobs/job_a/cancel"), "GET", "/v1/jobs/job_a/cancel", "POST"},
+      {client().Patch("/v1/datasets", "{}", "application/json"), "PATCH", "/v1/datasets", "GET, HEAD, POST"},
+      {client().Options("/healthz"), "OPTIONS", "/healthz", "GET, HEAD"},
+  };
+  for (const auto& c : cases) {
+    const Json problem = expect_problem(c.result, 405, "METHOD_NOT_ALLOWED", "");
+    ASSERT_TRUE(c.result) << c.method << " " << c.path;
+    EXPECT_EQ(c.result->get_header_value("Allow"), c.allow) << c.method << " " << c.path;
+    EXPECT_EQ(problem["detail"], std::string("method ") + c.method + " not allowed on " + c.path + "; allowed: " + c.allow);
+  }
+  EXPECT_EQ(fake_.calls(), 0);
+  // A path no route takes stays a 404, whatever the method.
+  const auto result = client().Put("/v1/nothing-here", "{}", "application/json");
+  expect_problem(result, 404, "NOT_FOUND", "");
+  ASSERT_TRUE(result);
+  EXPECT_FALSE(result->has_header("Allow"));
+}
+
+TEST_F(Routes, BrotliIsNeverChosen) {
+  // 0.11.4's Brotli is quality 11 (seconds of a server thread for a large body): gzip instead.
+  fake_.add_job(job_info("job_q", JobKind::identification, JobState::queued));
+  auto plain = client();
+  plain.set_decompress(false);
+  const struct {
+    const char* accept;
+    const char* encoding;  ///< expected Content-Encoding, "" for none
+  } cases[] = {{"gzip, deflate, br", "gzip"}, {"br", ""}, {"BR;q=1.0, gzip;q=0.5", "gzip"}, {"identity", ""}, {"br, gzip", "gzip"}};
+  for (const auto& c : cases) {
+    const auto result = plain.Get("/v1/jobs/job_q", {{"Accept-Encoding", c.accept}});
+    ASSERT_TRUE(result) << c.accept;
+    EXPECT_EQ(result->status, 200) << c.accept;
+    EXPECT_EQ(result->get_header_value("Content-Encoding"), c.encoding) << c.accept;
+    if (std::string(c.encoding) == "gzip") {
+      ASSERT_GE(result->body.size(), 2u);
+      EXPECT_EQ(static_cast<unsigned char>(result->body[0]), 0x1f) << c.accept;  // the gzip magic
+      EXPECT_EQ(static_cast<unsigned char>(result->body[1]), 0x8b) << c.accept;
+    } else {
+      EXPECT_EQ(Json::parse(result->body)["id"], "job_q") << c.accept;
+    }
+  }
+}
+
+TEST_F(Routes, ServiceExceptionIs500AndLeaksNothing) {
+  fake_.add_dataset(dataset_info("ds_a", 2, 4));
+  fake_.script([](Script& s) { s.throw_what = "sqlite: database /srv/secret/manipid.db is locked"; });
+  auto result = get("/v1/datasets/ds_a");
+  Json problem = expect_problem(result, 500, "INTERNAL", "");
+  EXPECT_EQ(problem["detail"], "internal error; see the server log");
+  ASSERT_TRUE(result);
+  EXPECT_EQ(result->body.find("secret"), std::string::npos) << result->body;
+  EXPECT_FALSE(result->has_header("EXCEPTION_WHAT"));
+  EXPECT_NE(log().find("internal error on /v1/datasets/ds_a: sqlite: database /srv/secret/manipid.db is locked"),
+            std::string::npos)
+      << log();
+
+  // Not a std::exception: past `guarded`, caught by the exception handler (the net under the net).
+  fake_.script([](Script& s) { s.throw_non_standard = true; });
+  result = get("/v1/datasets/ds_a");
+  problem = expect_problem(result, 500, "INTERNAL", "");
+  EXPECT_EQ(problem["detail"], "internal error; see the server log");
+  ASSERT_TRUE(result);
+  EXPECT_FALSE(result->has_header("EXCEPTION_WHAT"));
+
+  fake_.script([](Script& s) { s.throw_bad_alloc = true; });
+  problem = expect_problem(get("/v1/jobs"), 500, "INTERNAL", "");
+  EXPECT_EQ(problem["detail"], "out of memory while handling the request");
+
+  fake_.script([](Script&) {});
+  result = get("/v1/datasets/ds_a");  // and the server serves on
+  ASSERT_TRUE(result);
+  EXPECT_EQ(result->status, 200);
+}
+
+// ---- Static files, health, metrics -------------------------------------------------------
+
+TEST_F(Routes, HealthAndTheOpenApiDocument) {
+  auto result = get("/healthz");
+  ASSERT_TRUE(result);
+  EXPECT_EQ(result->status, 200);
+  EXPECT_EQ(json_of(result), Json::parse(R"({"status": "ok"})"));
+  result = get("/openapi.json");
+  ASSERT_TRUE(result);
+  EXPECT_EQ(result->status, 200);
+  EXPECT_EQ(result->get_header_value("Content-Type"), "application/json");
+  const Json document = json_of(result);
+  EXPECT_EQ(document["openapi"].get<std::string>().substr(0, 2), "3.");
+  for (const char* path : {"/v1/datasets", "/v1/identifications", "/v1/simulations", "/v1/jobs/{id}",
+                           "/v1/jobs/{id}/history", "/v1/jobs/{id}/fit", "/v1/datasets/{id}/data"}) {
+    EXPECT_TRUE(document["paths"].contains(path)) << path;
+  }
+}
+
+TEST_F(Routes, MetricsCountRequestsByMethodAndStatus) {
+  // One keep-alive connection: the server thread logs each request before it reads the next.
+  httplib::Client connection("127.0.0.1", port_);
+  connection.set_keep_alive(true);
+  for (int i = 0; i < 3; ++i) ASSERT_TRUE(connection.Get("/healthz"));
+  ASSERT_TRUE(connection.Get("/v1/nothing"));
+  ASSERT_TRUE(connection.Post("/v1/simulations", R"({"preset": "nope"})", "application/json"));
+  const auto result = connection.Get("/metrics");
+  ASSERT_TRUE(result);
+  EXPECT_EQ(result->status, 200);
+  EXPECT_EQ(result->get_header_value("Content-Type"), "text/plain; version=0.0.4");
+  const std::string& text = result->body;
+  EXPECT_NE(text.find("manipid_queue_depth 7\n"), std::string::npos) << text;  // the service's part
+  EXPECT_NE(text.find("# TYPE manipid_http_requests_total counter\n"), std::string::npos) << text;
+  EXPECT_NE(text.find("manipid_http_requests_total{method=\"GET\",status=\"200\"} 3\n"), std::string::npos) << text;
+  EXPECT_NE(text.find("manipid_http_requests_total{method=\"GET\",status=\"404\"} 1\n"), std::string::npos) << text;
+  EXPECT_NE(text.find("manipid_http_requests_total{method=\"POST\",status=\"422\"} 1\n"), std::string::npos) << text;
+  // One log line per request: address, method, target, status, bytes, time.
+  EXPECT_NE(log().find("127.0.0.1 GET /v1/nothing 404 "), std::string::npos) << log();
+}
+
+TEST_F(Routes, MetricsNeverEchoAMethodHttplibRefused) {
+  // 0.11.4 logs a request whose method it refused (400), with that method as sent.
+  RawConnection connection(port_);
+  const RawAnswer refused = connection.exchange("A\"}x /v1/jobs HTTP/1.1\r\nHost: test\r\n\r\n");
+  expect_problem(refused, 400, "MALFORMED_BODY", "");
+  const RawAnswer answer = connection.exchange("GET /metrics HTTP/1.1\r\nHost: test\r\n\r\n");
+  EXPECT_EQ(answer.status, 200);
+  EXPECT_EQ(answer.body.find("A\"}x"), std::string::npos) << answer.body;
+  EXPECT_NE(answer.body.find("manipid_http_requests_total{method=\"other\",status=\"400\"} 1\n"), std::string::npos)
+      << answer.body;
+}
+
+TEST_F(Routes, DashboardIsServed) {
+  for (const char* path : {"/", "/jobs/job_0123456789abcdef"}) {
+    const auto result = get(path);
+    ASSERT_TRUE(result) << path;
+    EXPECT_EQ(result->status, 200) << path;
+    EXPECT_EQ(result->get_header_value("Content-Type").rfind("text/html", 0), 0u) << path;
+    EXPECT_EQ(result->get_header_value("Cache-Control"), "no-cache") << path;
+    EXPECT_EQ(result->get_header_value("X-Content-Type-Options"), "nosniff") << path;
+    EXPECT_NE(result->get_header_value("Content-Security-Policy").find("default-src 'self'"), std::string::npos) << path;
+  }
+  if (dashboard_complete()) {
+    const auto script = get("/assets/app.js");
+    ASSERT_TRUE(script);
+    EXPECT_EQ(script->status, 200);
+    EXPECT_EQ(script->get_header_value("Content-Type").rfind("text/javascript", 0), 0u);
+    EXPECT_FALSE(script->has_header("Content-Security-Policy"));
+  }
+  const Json problem = expect_problem(get("/assets/secret.db"), 404, "NOT_FOUND", "path");
+  EXPECT_EQ(problem["detail"], "no file /assets/secret.db");
+  expect_problem(get("/assets/..%2Fmanipid.db"), 404, "NOT_FOUND", "");
+}
+
+// ---- The bearer token --------------------------------------------------------------------
+
+TEST_F(RoutesWithToken, TheApiNeedsTheBearerToken) {
+  fake_.add_job(job_info("job_a", JobKind::identification, JobState::running));
+  for (const httplib::Headers& headers : std::vector<httplib::Headers>{
+           {}, {{"Authorization", "Bearer wrong!"}}, {{"Authorization", "bearer s3cret"}}, {{"Authorization", "s3cret"}}}) {
+    const auto result = get("/v1/jobs", headers);
+    const Json problem = expect_problem(result, 401, "UNAUTHORIZED", "Authorization");
+    EXPECT_EQ(problem["detail"], "this server needs 'Authorization: Bearer <token>'");
+    ASSERT_TRUE(result);
+    EXPECT_EQ(result->get_header_value("WWW-Authenticate"), "Bearer");
+  }
+  expect_problem(get("/v1"), 401, "UNAUTHORIZED", "Authorization");
+  expect_problem(get("/v1/no-such-route"), 401, "UNAUTHORIZED", "Authorization");  // before routing
+  EXPECT_EQ(fake_.calls(), 0);
+  const auto result = get("/v1/jobs", {{"Authorization", "Bearer s3cret"}});
+  ASSERT_TRUE(result);
+  EXPECT_EQ(result->status, 200);
+  const auto posted = post("/v1/simulations", R"({"duration": 0.5})", "application/json", {{"Authorization", "Bearer s3cret"}});
+  ASSERT_TRUE(posted);
+  EXPECT_EQ(posted->status, 202);
+}
+
+TEST_F(RoutesWithToken, StaticFilesAreNotBehindTheToken) {
+  for (const char* path : {"/", "/jobs/job_0123456789abcdef", "/healthz", "/metrics", "/openapi.json"}) {
+    const auto result = get(path);
+    ASSERT_TRUE(result) << path;
+    EXPECT_EQ(result->status, 200) << path;
+  }
+  expect_problem(get("/assets/missing.js"), 404, "NOT_FOUND", "path");  // not 401
+}
+
+TEST_F(RoutesWithToken, BodilessCancelNeedsTheTokenToo) {
+  fake_.add_job(job_info("job_a", JobKind::identification, JobState::running));
+  RawAnswer answer = raw("POST /v1/jobs/job_a/cancel HTTP/1.1\r\nHost: test\r\nConnection: close\r\n\r\n");
+  expect_problem(answer, 401, "UNAUTHORIZED", "Authorization");
+  EXPECT_EQ(fake_.calls(), 0);
+  answer = raw("POST /v1/jobs/job_a/cancel HTTP/1.1\r\nHost: test\r\nAuthorization: Bearer s3cret\r\nConnection: close\r\n\r\n");
+  EXPECT_EQ(answer.status, 200) << answer.head << answer.body;
+  EXPECT_EQ(Json::parse(answer.body)["state"], "cancelled");
+}
+
+}  // namespace
+}  // namespace manipid::api
