@@ -373,7 +373,7 @@ expect_error "excitation: --max-acceleration count" 2 "one per joint (6), got 2"
   "$manipid" excitation --robot "$robots/ur5_like.urdf" --max-acceleration 1,2
 expect_error "excitation: a margin wider than a joint's range" 2 "joint panda_joint2: its range" \
   "$manipid" excitation --robot "$robots/panda_like.urdf" --position-margin 2
-expect_error "excitation: unknown friction term" 2 "--friction: unknown term 'stiction'" \
+expect_error "excitation: unknown friction term" 2 "--friction: unknown friction term 'stiction'" \
   "$manipid" excitation --robot "$robots/ur5_like.urdf" --friction viscous,stiction
 
 echo "$passed passed, $failed failed"
