@@ -29,7 +29,7 @@ std::string option_for_field(const std::string& field, const std::string& urdf) 
   if (field == "max_seconds") return "--max-seconds";
   if (field == "max_evaluations") return "--max-evaluations";
   if (field == "dt") return "--dt";
-  if (field == "periods") return "--duration";
+  if (field == "periods" || field == "duration") return "--duration";
   return urdf;
 }
 
@@ -54,97 +54,6 @@ Eigen::VectorXd parse_accelerations(const std::string& text) {
 }
 
 /// --duration as a whole number of periods (default 1): any other length would not end at rest.
-int periods_for(const std::optional<double>& duration, double period) {
-  if (!duration) return 1;
-  const double ratio = *duration / period;
-  const double periods = std::round(ratio);
-  if (!(periods >= 1.0) || std::abs(ratio - periods) > 1e-9 * ratio || periods > 1e6) {
-    std::ostringstream message;
-    message << "--duration: " << *duration << " s is not a whole number of periods (--period " << period
-            << " s); the trajectory ends at rest only after whole periods";
-    throw InputError("duration", message.str());
-  }
-  return static_cast<int>(periods);
-}
-
-nlohmann::ordered_json vector_json(const Eigen::VectorXd& v) {
-  nlohmann::ordered_json array = nlohmann::ordered_json::array();
-  for (Eigen::Index i = 0; i < v.size(); ++i) array.push_back(v[i]);  // ±∞ becomes null
-  return array;
-}
-
-nlohmann::ordered_json rows_json(const Eigen::MatrixXd& m) {
-  nlohmann::ordered_json array = nlohmann::ordered_json::array();
-  for (Eigen::Index r = 0; r < m.rows(); ++r) array.push_back(vector_json(m.row(r).transpose()));
-  return array;
-}
-
-nlohmann::ordered_json coefficients_json(const robot::Model& model, const robot::ExcitationOptions& design_options,
-                                         const robot::ExcitationLimits& limits, const robot::ExcitationDesign& design) {
-  const robot::FourierTrajectory& trajectory = design.trajectory;
-  const robot::ExcitationSummary& summary = design.summary;
-  nlohmann::ordered_json joints = nlohmann::ordered_json::array();
-  for (const robot::Joint& joint : model.joints) joints.push_back(joint.name);
-  nlohmann::ordered_json active = nlohmann::ordered_json::array();
-  for (const robot::ActiveLimit& limit : summary.active_limits) {
-    active.push_back({{"joint", limit.joint_name},
-                      {"index", limit.joint},
-                      {"kind", robot::to_string(limit.kind)},
-                      {"peak", limit.peak},
-                      {"limit", limit.limit}});
-  }
-  const robot::ParameterLayout& layout = design_options.layout;
-  return nlohmann::ordered_json{
-      {"robot", model.name},
-      {"joints", joints},
-      {"series", "q_k(t) = q0_k + sum_{l=1..L} [a_kl/(w l) sin(w l t) - b_kl/(w l) cos(w l t)], w = 2 pi / period; "
-                 "qd_k(t) = sum_l [a_kl cos(w l t) + b_kl sin(w l t)]"},
-      {"period", trajectory.period},
-      {"harmonics", trajectory.harmonics()},
-      {"angular_frequency", trajectory.angular_frequency()},
-      {"q0", vector_json(trajectory.q0)},
-      {"a", rows_json(trajectory.a)},
-      {"b", rows_json(trajectory.b)},
-      {"start", vector_json(trajectory.start())},
-      {"criterion", robot::to_string(summary.criterion)},
-      {"criterion_value", summary.final_value},
-      {"initial_criterion_value", summary.initial_value},
-      {"condition_number", summary.condition_number},
-      {"log_det", summary.log_det},
-      {"base_parameters", summary.base_parameters},
-      {"samples", summary.samples},
-      {"layout",
-       {{"viscous", layout.viscous}, {"coulomb", layout.coulomb}, {"offset", layout.offset}, {"armature", layout.armature}}},
-      {"limits",
-       {{"lower", vector_json(limits.lower)},
-        {"upper", vector_json(limits.upper)},
-        {"velocity", vector_json(limits.velocity)},
-        {"acceleration", vector_json(limits.acceleration)},
-        {"position_margin", design_options.position_margin}}},
-      {"active_limits", active},
-      {"seed", design_options.seed},
-      {"evaluations", summary.evaluations},
-      {"wall_seconds", summary.wall_seconds},
-      {"termination", robot::to_string(summary.termination)},
-      {"message", summary.message},
-  };
-}
-
-api::CsvTable states_table(const robot::SampledExcitation& sampled) {
-  const Eigen::Index n = sampled.q.rows();
-  api::CsvTable table;
-  table.columns.emplace_back("t");
-  for (const char* prefix : {"q", "qd", "qdd"}) {
-    for (Eigen::Index k = 1; k <= n; ++k) table.columns.push_back(std::string(prefix).append(std::to_string(k)));
-  }
-  table.data.resize(sampled.t.size(), 1 + 3 * n);
-  table.data.col(0) = sampled.t;
-  table.data.middleCols(1, n) = sampled.q.transpose();
-  table.data.middleCols(1 + n, n) = sampled.qd.transpose();
-  table.data.middleCols(1 + 2 * n, n) = sampled.qdd.transpose();
-  return table;
-}
-
 }  // namespace
 
 CLI::App* add_excitation_command(CLI::App& app, ExcitationOptions& options) {
@@ -233,11 +142,10 @@ int run_excitation(const ExcitationOptions& options) {
   robot::ExcitationLimits limits;
   int periods = 1;
   try {
-    periods = periods_for(options.duration, options.period);
+    periods = options.duration ? robot::whole_periods(*options.duration, options.period) : 1;
     limits = robot::excitation_limits(model, design_options);
     robot::check_sampling(options.period, options.harmonics, options.dt, periods);
   } catch (const InputError& error) {
-    if (error.field() == "duration") throw;  // already names --duration
     rethrow_with_source(error, option_for_field(error.field(), urdf_name));
   }
   print_urdf_warnings(options.urdf, parsed);
@@ -268,9 +176,9 @@ int run_excitation(const ExcitationOptions& options) {
     std::fprintf(stderr, "manipid: warning: %s\n", summary.message.c_str());
   }
 
-  write_table(options.output, states_table(sampled));
+  write_table(options.output, api::trajectory_to_csv(robot::to_trajectory(sampled)));
   if (!options.coefficients.empty()) {
-    write_text(options.coefficients, coefficients_json(model, design_options, limits, design).dump(2) + "\n");
+    write_text(options.coefficients, api::excitation_to_json(model, design_options, limits, design).dump(2) + "\n");
   }
   std::fprintf(stderr, "manipid excitation: %s, %d joints, %d harmonics, period %g s: %s; %ld samples (t = 0..%g s) -> %s\n",
                model.name.c_str(), model.joint_count(), options.harmonics, options.period,

@@ -9,7 +9,8 @@ const std::string kJobColumns =
     "id, kind, state, created_at, started_at, finished_at, request, dataset_id, evaluations, best_cost, "
     "cancel_requested, attempts, result, error, robot_id, validation_dataset_id, seq";
 const std::string kDatasetColumns =
-    "id, name, created_at, source_job, joints, samples, dt, has_torque, has_reference, uniform, has_rates, seq";
+    "id, name, created_at, source_job, joints, samples, dt, has_torque, has_reference, uniform, has_rates, "
+    "has_accelerations, seq";
 const std::string kRobotColumns = "id, name, created_at, base, tip, joints, summary, seq";
 
 api::JobInfo read_job(const Statement& row) {
@@ -49,6 +50,7 @@ api::DatasetInfo read_dataset(const Statement& row) {
   dataset.has_reference = row.integer(8) != 0;
   dataset.uniform = row.integer(9) != 0;
   dataset.has_rates = row.integer(10) != 0;
+  dataset.has_accelerations = row.integer(11) != 0;
   return dataset;
 }
 

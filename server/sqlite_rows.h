@@ -17,7 +17,7 @@ extern const std::string kJobColumns;
 inline constexpr int kJobSeqColumn = 16;
 /// Only the description: the sample blobs stay on disk.
 extern const std::string kDatasetColumns;
-inline constexpr int kDatasetSeqColumn = 11;
+inline constexpr int kDatasetSeqColumn = 12;
 /// Only the description: the URDF document stays on disk.
 extern const std::string kRobotColumns;
 inline constexpr int kRobotSeqColumn = 7;

@@ -155,16 +155,18 @@ constexpr std::array<const char*, 3> kMigrations = {
       has_torque    INTEGER NOT NULL,
       has_reference INTEGER NOT NULL,
       has_rates     INTEGER NOT NULL,
+      has_accelerations INTEGER NOT NULL,
       t   BLOB,   -- samples doubles, little-endian
       q   BLOB,   -- samples x joints, column-major
       tau BLOB,   -- NULL when has_torque = 0
       ref BLOB,   -- NULL when has_reference = 0
-      qd  BLOB    -- NULL when has_rates = 0
+      qd  BLOB,   -- NULL when has_rates = 0
+      qdd BLOB    -- NULL when has_accelerations = 0
     );
     INSERT INTO datasets_v3 (seq, id, name, created_at, source_job, joints, samples, dt, uniform, has_torque,
-                             has_reference, has_rates, t, q, tau, ref, qd)
-      SELECT seq, id, name, created_at, source_job, joints, samples, dt, 1, has_torque, has_reference, 0, t, q, tau,
-             ref, NULL FROM datasets;
+                             has_reference, has_rates, has_accelerations, t, q, tau, ref, qd, qdd)
+      SELECT seq, id, name, created_at, source_job, joints, samples, dt, 1, has_torque, has_reference, 0, 0, t, q,
+             tau, ref, NULL, NULL FROM datasets;
     DROP TABLE datasets;
     ALTER TABLE datasets_v3 RENAME TO datasets;
 

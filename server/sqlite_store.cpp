@@ -69,12 +69,14 @@ class SqliteStore final : public Store {
     check_shape(data.tau, samples, joints, "tau");
     check_shape(data.ref, samples, joints, "ref");
     check_shape(data.qd, samples, joints, "qd");
+    check_shape(data.qdd, samples, joints, "qdd");
     // Encoded before the transaction: the write lock is held only for the insert itself.
     const auto t = sqlite::encode_doubles(data.t.data(), static_cast<std::size_t>(data.t.size()));
     const auto q = sqlite::encode_doubles(data.q.data(), static_cast<std::size_t>(data.q.size()));
     const auto tau = sqlite::encode_doubles(data.tau.data(), static_cast<std::size_t>(data.tau.size()));
     const auto ref = sqlite::encode_doubles(data.ref.data(), static_cast<std::size_t>(data.ref.size()));
     const auto qd = sqlite::encode_doubles(data.qd.data(), static_cast<std::size_t>(data.qd.size()));
+    const auto qdd = sqlite::encode_doubles(data.qdd.data(), static_cast<std::size_t>(data.qdd.size()));
     const bool uniform = data.is_uniform();
 
     auto connection = pool_.checkout();
@@ -99,11 +101,12 @@ class SqliteStore final : public Store {
       dataset.has_torque = data.has_torque();
       dataset.has_reference = data.has_reference();
       dataset.has_rates = data.has_rates();
+      dataset.has_accelerations = data.has_accelerations();
 
       auto insert = connection->prepare(
           "INSERT INTO datasets (id, name, created_at, source_job, joints, samples, dt, has_torque, "
-          "has_reference, t, q, tau, ref, uniform, has_rates, qd) "
-          "VALUES (?1, ?2, ?3, ?4, ?5, ?6, ?7, ?8, ?9, ?10, ?11, ?12, ?13, ?14, ?15, ?16)");
+          "has_reference, t, q, tau, ref, uniform, has_rates, qd, has_accelerations, qdd) "
+          "VALUES (?1, ?2, ?3, ?4, ?5, ?6, ?7, ?8, ?9, ?10, ?11, ?12, ?13, ?14, ?15, ?16, ?17, ?18)");
       insert.bind_text(1, dataset.id)
           .bind_text(2, dataset.name)
           .bind_text(3, dataset.created_at)
@@ -119,7 +122,9 @@ class SqliteStore final : public Store {
           .bind_blob_or_null(13, ref)
           .bind_integer(14, uniform ? 1 : 0)
           .bind_integer(15, dataset.has_rates ? 1 : 0)
-          .bind_blob_or_null(16, qd);
+          .bind_blob_or_null(16, qd)
+          .bind_integer(17, dataset.has_accelerations ? 1 : 0)
+          .bind_blob_or_null(18, qdd);
       insert.run();
       if (key) store_key(*connection, "dataset", *key, dataset.id, dataset.created_at);
       return {SubmitStatus::created, dataset};
@@ -135,7 +140,8 @@ class SqliteStore final : public Store {
     auto connection = pool_.checkout();
     return sqlite::run_transaction(*connection, TransactionKind::read, [&]() -> std::optional<Trajectory> {
       auto row = connection->prepare(
-          "SELECT samples, joints, has_torque, has_reference, t, q, tau, ref, has_rates, qd FROM datasets WHERE id = ?1");
+          "SELECT samples, joints, has_torque, has_reference, t, q, tau, ref, has_rates, qd, has_accelerations, qdd "
+          "FROM datasets WHERE id = ?1");
       row.bind_text(1, id);
       if (!row.step()) return std::nullopt;
       const auto samples = static_cast<Eigen::Index>(row.integer(0));
@@ -146,11 +152,13 @@ class SqliteStore final : public Store {
       data.tau.resize(samples, row.integer(2) != 0 ? joints : 0);
       data.ref.resize(samples, row.integer(3) != 0 ? joints : 0);
       data.qd.resize(samples, row.integer(8) != 0 ? joints : 0);
+      data.qdd.resize(samples, row.integer(10) != 0 ? joints : 0);
       const bool intact = sqlite::decode_doubles(row.blob(4), data.t.data(), static_cast<std::size_t>(data.t.size())) &&
                           sqlite::decode_doubles(row.blob(5), data.q.data(), static_cast<std::size_t>(data.q.size())) &&
                           sqlite::decode_doubles(row.blob(6), data.tau.data(), static_cast<std::size_t>(data.tau.size())) &&
                           sqlite::decode_doubles(row.blob(7), data.ref.data(), static_cast<std::size_t>(data.ref.size())) &&
-                          sqlite::decode_doubles(row.blob(9), data.qd.data(), static_cast<std::size_t>(data.qd.size()));
+                          sqlite::decode_doubles(row.blob(9), data.qd.data(), static_cast<std::size_t>(data.qd.size())) &&
+                          sqlite::decode_doubles(row.blob(11), data.qdd.data(), static_cast<std::size_t>(data.qdd.size()));
       if (!intact) throw StoreError("dataset " + id + " has samples of the wrong size in the database");
       return data;
     });

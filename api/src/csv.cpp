@@ -370,6 +370,7 @@ Trajectory trajectory_from_csv(const CsvTable& table, bool require_torque) {
   }
   const int reference_count = numbered_group(table, "ref", joint_count);
   const int rate_count = numbered_group(table, "qd", joint_count);
+  const int acceleration_count = numbered_group(table, "qdd", joint_count);
 
   Trajectory trajectory;
   trajectory.t = table.column("t");
@@ -377,6 +378,7 @@ Trajectory trajectory_from_csv(const CsvTable& table, bool require_torque) {
   trajectory.tau = gather(table, "tau", torque_count);
   trajectory.ref = gather(table, "ref", reference_count);
   trajectory.qd = gather(table, "qd", rate_count);
+  trajectory.qdd = gather(table, "qdd", acceleration_count);
   trajectory.validate();
   return trajectory;
 }
@@ -395,6 +397,7 @@ CsvTable trajectory_to_csv(const Trajectory& trajectory) {
   check_rows(trajectory.tau, "tau");
   check_rows(trajectory.ref, "ref");
   check_rows(trajectory.qd, "qd");
+  check_rows(trajectory.qdd, "qdd");
 
   CsvTable table;
   table.columns.emplace_back("t");
@@ -407,6 +410,9 @@ CsvTable trajectory_to_csv(const Trajectory& trajectory) {
   }
   if (trajectory.has_rates()) {
     for (int joint = 1; joint <= joint_count; ++joint) table.columns.push_back(numbered("qd", joint));
+  }
+  if (trajectory.has_accelerations()) {
+    for (int joint = 1; joint <= joint_count; ++joint) table.columns.push_back(numbered("qdd", joint));
   }
   table.data.resize(samples, static_cast<Eigen::Index>(table.columns.size()));
   Eigen::Index column = 0;
@@ -421,7 +427,11 @@ CsvTable trajectory_to_csv(const Trajectory& trajectory) {
     table.data.middleCols(column, joint_count) = trajectory.ref;
     column += joint_count;
   }
-  if (trajectory.has_rates()) table.data.middleCols(column, joint_count) = trajectory.qd;
+  if (trajectory.has_rates()) {
+    table.data.middleCols(column, joint_count) = trajectory.qd;
+    column += joint_count;
+  }
+  if (trajectory.has_accelerations()) table.data.middleCols(column, joint_count) = trajectory.qdd;
   return table;
 }
 

@@ -71,6 +71,7 @@ Trajectory thin(const Trajectory& data, long max_points) {
   thinned.tau = pick_rows(data.tau);
   thinned.ref = pick_rows(data.ref);
   thinned.qd = pick_rows(data.qd);
+  thinned.qdd = pick_rows(data.qdd);
   return thinned;
 }
 
@@ -80,6 +81,7 @@ nlohmann::ordered_json trajectory_to_json(const Trajectory& data) {
   if (data.has_torque()) json["tau"] = columns(data.tau, all);
   if (data.has_reference()) json["ref"] = columns(data.ref, all);
   if (data.has_rates()) json["qd"] = columns(data.qd, all);
+  if (data.has_accelerations()) json["qdd"] = columns(data.qdd, all);
   return json;
 }
 

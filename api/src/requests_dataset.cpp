@@ -111,7 +111,7 @@ Eigen::VectorXd read_times(const Json& value, SampleCount& count) {
 }  // namespace
 
 DatasetUpload dataset_from_json(const nlohmann::json& body) {
-  const fields::ObjectFields object(body, "", {"name", "t", "dt", "t0", "q", "tau", "ref", "qd"});
+  const fields::ObjectFields object(body, "", {"name", "t", "dt", "t0", "q", "tau", "ref", "qd", "qdd"});
   DatasetUpload upload;
   if (const Json* name = object.find("name")) upload.name = fields::read_label(*name, "name");
 
@@ -133,6 +133,7 @@ DatasetUpload dataset_from_json(const nlohmann::json& body) {
   if (const Json* tau = object.find("tau")) trajectory.tau = read_block(*tau, "tau", joints, count);
   if (const Json* ref = object.find("ref")) trajectory.ref = read_block(*ref, "ref", joints, count);
   if (const Json* qd = object.find("qd")) trajectory.qd = read_block(*qd, "qd", joints, count);
+  if (const Json* qdd = object.find("qdd")) trajectory.qdd = read_block(*qdd, "qdd", joints, count);
 
   if (count.samples < 2) {
     throw InputError(count.source, "a dataset needs at least 2 samples, " + count.source + " has " +

@@ -3,6 +3,7 @@
 
 #include "manipid/core/model.h"
 #include "manipid/core/robot/base_parameters.h"
+#include "manipid/core/robot/excitation.h"
 
 #include <algorithm>
 #include <cmath>
@@ -39,6 +40,18 @@ Json prediction_json(const robot::TorquePrediction& prediction) {
   return {{"relative_error", numbers(prediction.relative_error)},
           {"rms_error", numbers(prediction.rms_error)},
           {"overall_relative_error", number(prediction.overall_relative_error)}};
+}
+
+Json vector_json(const Eigen::VectorXd& v) {
+  Json array = Json::array();
+  for (Eigen::Index i = 0; i < v.size(); ++i) array.push_back(v[i]);  // ±∞ becomes null
+  return array;
+}
+
+Json rows_json(const Eigen::MatrixXd& m) {
+  Json array = Json::array();
+  for (Eigen::Index r = 0; r < m.rows(); ++r) array.push_back(vector_json(m.row(r).transpose()));
+  return array;
 }
 
 }  // namespace
@@ -200,5 +213,57 @@ ParameterValues parameters_from_json(const robot::Model& model, const nlohmann::
   }
   return result;
 }
+
+nlohmann::ordered_json excitation_to_json(const robot::Model& model, const robot::ExcitationOptions& design_options,
+                                         const robot::ExcitationLimits& limits, const robot::ExcitationDesign& design) {
+  const robot::FourierTrajectory& trajectory = design.trajectory;
+  const robot::ExcitationSummary& summary = design.summary;
+  nlohmann::ordered_json joints = nlohmann::ordered_json::array();
+  for (const robot::Joint& joint : model.joints) joints.push_back(joint.name);
+  nlohmann::ordered_json active = nlohmann::ordered_json::array();
+  for (const robot::ActiveLimit& limit : summary.active_limits) {
+    active.push_back({{"joint", limit.joint_name},
+                      {"index", limit.joint},
+                      {"kind", robot::to_string(limit.kind)},
+                      {"peak", limit.peak},
+                      {"limit", limit.limit}});
+  }
+  const robot::ParameterLayout& layout = design_options.layout;
+  return nlohmann::ordered_json{
+      {"robot", model.name},
+      {"joints", joints},
+      {"series", "q_k(t) = q0_k + sum_{l=1..L} [a_kl/(w l) sin(w l t) - b_kl/(w l) cos(w l t)], w = 2 pi / period; "
+                 "qd_k(t) = sum_l [a_kl cos(w l t) + b_kl sin(w l t)]"},
+      {"period", trajectory.period},
+      {"harmonics", trajectory.harmonics()},
+      {"angular_frequency", trajectory.angular_frequency()},
+      {"q0", vector_json(trajectory.q0)},
+      {"a", rows_json(trajectory.a)},
+      {"b", rows_json(trajectory.b)},
+      {"start", vector_json(trajectory.start())},
+      {"criterion", robot::to_string(summary.criterion)},
+      {"criterion_value", summary.final_value},
+      {"initial_criterion_value", summary.initial_value},
+      {"condition_number", summary.condition_number},
+      {"log_det", summary.log_det},
+      {"base_parameters", summary.base_parameters},
+      {"samples", summary.samples},
+      {"layout",
+       {{"viscous", layout.viscous}, {"coulomb", layout.coulomb}, {"offset", layout.offset}, {"armature", layout.armature}}},
+      {"limits",
+       {{"lower", vector_json(limits.lower)},
+        {"upper", vector_json(limits.upper)},
+        {"velocity", vector_json(limits.velocity)},
+        {"acceleration", vector_json(limits.acceleration)},
+        {"position_margin", design_options.position_margin}}},
+      {"active_limits", active},
+      {"seed", design_options.seed},
+      {"evaluations", summary.evaluations},
+      {"wall_seconds", summary.wall_seconds},
+      {"termination", robot::to_string(summary.termination)},
+      {"message", summary.message},
+  };
+}
+
 
 }  // namespace manipid::api

@@ -17,8 +17,10 @@ namespace {
 constexpr Eigen::Index kLongestStaleRun = 3;
 
 /// The measured blocks of a trajectory, in one list, so every step treats them alike.
-std::vector<const Eigen::MatrixXd*> blocks(const Trajectory& data) { return {&data.q, &data.tau, &data.ref, &data.qd}; }
-std::vector<Eigen::MatrixXd*> blocks(Trajectory& data) { return {&data.q, &data.tau, &data.ref, &data.qd}; }
+std::vector<const Eigen::MatrixXd*> blocks(const Trajectory& data) {
+  return {&data.q, &data.tau, &data.ref, &data.qd, &data.qdd};
+}
+std::vector<Eigen::MatrixXd*> blocks(Trajectory& data) { return {&data.q, &data.tau, &data.ref, &data.qd, &data.qdd}; }
 
 bool same_row(const Trajectory& data, Eigen::Index a, Eigen::Index b) {
   for (const Eigen::MatrixXd* block : blocks(data)) {

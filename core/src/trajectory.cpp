@@ -81,6 +81,7 @@ void Trajectory::validate() const {
   check_columns("tau", tau, sample_count, joints, true);
   check_columns("ref", ref, sample_count, joints, true);
   check_columns("qd", qd, sample_count, joints, true);
+  check_columns("qdd", qdd, sample_count, joints, true);
 
   for (Eigen::Index i = 0; i < t.size(); ++i) {
     if (!std::isfinite(t[i])) {
@@ -105,6 +106,7 @@ void Trajectory::validate() const {
   check_finite("tau", tau, t);
   check_finite("ref", ref, t);
   check_finite("qd", qd, t);
+  check_finite("qdd", qdd, t);
 }
 
 }  // namespace manipid

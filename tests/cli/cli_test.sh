@@ -367,7 +367,7 @@ expect_error "excitation: a URDF that fails to parse" 2 "broken.urdf" "$manipid"
 expect_error "excitation: an unreadable URDF" 2 "cannot read missing.urdf" "$manipid" excitation --robot missing.urdf
 expect_error "excitation: --dt that does not divide the period" 2 "--dt: dt = 0.003 s does not divide the period" \
   "$manipid" excitation --robot "$robots/ur5_like.urdf" --dt 0.003
-expect_error "excitation: --duration not a whole number of periods" 2 "--duration: 15 s is not a whole number of periods" \
+expect_error "excitation: --duration not a whole number of periods" 2 "--duration: duration 15 s is not a whole number of periods" \
   "$manipid" excitation --robot "$robots/ur5_like.urdf" --duration 15
 expect_error "excitation: --max-acceleration count" 2 "one per joint (6), got 2" \
   "$manipid" excitation --robot "$robots/ur5_like.urdf" --max-acceleration 1,2

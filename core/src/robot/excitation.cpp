@@ -42,6 +42,7 @@
 #include <algorithm>
 #include <chrono>
 #include <cmath>
+#include <sstream>
 #include <cstdio>
 #include <exception>
 #include <limits>
@@ -1038,6 +1039,27 @@ ExcitationQuality excitation_quality(const Model& model, const FourierTrajectory
   CriterionWorkspace workspace(model, options.layout, base, trajectory.period, L, samples);
   workspace.stack(trajectory.q0, stacked_coefficients(trajectory));
   return workspace.exact_quality();
+}
+
+int whole_periods(double duration, double period) {
+  const double ratio = duration / period;
+  const double periods = std::round(ratio);
+  if (!(periods >= 1.0) || std::abs(ratio - periods) > 1e-9 * ratio || periods > 1e6) {
+    std::ostringstream message;
+    message << "duration " << duration << " s is not a whole number of periods (period " << period
+            << " s): the trajectory ends at rest only after whole periods";
+    throw InputError("duration", message.str());
+  }
+  return static_cast<int>(periods);
+}
+
+Trajectory to_trajectory(const SampledExcitation& sampled) {
+  Trajectory trajectory;
+  trajectory.t = sampled.t;
+  trajectory.q = sampled.q.transpose();
+  trajectory.qd = sampled.qd.transpose();
+  trajectory.qdd = sampled.qdd.transpose();
+  return trajectory;
 }
 
 }  // namespace manipid::robot

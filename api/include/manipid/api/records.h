@@ -32,6 +32,7 @@ struct DatasetInfo {
   bool has_torque = false;
   bool has_reference = false;
   bool has_rates = false;   ///< qd1..qdn columns
+  bool has_accelerations = false;  ///< qdd1..qddn columns
 };
 
 /// A robot uploaded as a URDF: what the store keeps beside the document itself.

@@ -30,10 +30,11 @@ struct DatasetUpload {
 };
 
 /// JSON body: {"name"?, "t": [...] | "dt": s [, "t0": s], "q": [[joint 1 samples], ...],
-/// "tau"?: [[...], ...], "ref"?: [[...], ...], "qd"?: [[...], ...]} — per-joint arrays, all of one
+/// "tau"?: [[...], ...], "ref"?: [[...], ...], "qd"?: [[...], ...], "qdd"?: [[...], ...]} — per-joint arrays, all of one
 /// length; t strictly increasing, steps may jitter (stored as measured).
 DatasetUpload dataset_from_json(const nlohmann::json& body);
-/// CSV body: header t,q1..qn[,tau1..taun][,ref1..refn][,qd1..qdn] (what `manipid simulate` writes).
+/// CSV body: header t,q1..qn[,tau1..taun][,ref1..refn][,qd1..qdn][,qdd1..qddn] (what `manipid simulate`
+/// and `manipid excitation` write).
 DatasetUpload dataset_from_csv(std::string_view text);
 
 // ---- Simulations -----------------------------------------------------------------------

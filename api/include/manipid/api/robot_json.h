@@ -21,6 +21,7 @@
 //     "warnings": [...], "wall_seconds" }
 #pragma once
 
+#include "manipid/core/robot/excitation.h"
 #include "manipid/core/robot/identification.h"
 #include "manipid/core/robot/model.h"
 
@@ -43,6 +44,13 @@ namespace manipid::api {
 ///   "base_parameters": {"count", "friction": ["viscous", "coulomb"]}   (for any excitation),
 ///   "warnings": [...]}
 nlohmann::ordered_json robot_description(const robot::Model& model, const std::vector<std::string>& warnings);
+
+/// An excitation design as JSON: the series' formula, period, harmonics, q0, a, b per joint, the start,
+/// the criterion's value and the condition number, the layout, the limits, the binding ones, the seed,
+/// evaluations, time and why it stopped (what `manipid excitation --coefficients` writes and an excitation
+/// job's result carries).
+nlohmann::ordered_json excitation_to_json(const robot::Model& model, const robot::ExcitationOptions& options,
+                                          const robot::ExcitationLimits& limits, const robot::ExcitationDesign& design);
 
 /// The friction terms a layout has, by name: "viscous", "coulomb", "offset".
 std::vector<std::string> friction_names(const robot::ParameterLayout& layout);

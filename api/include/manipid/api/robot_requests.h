@@ -3,6 +3,7 @@
 #pragma once
 
 #include "manipid/core/resample.h"
+#include "manipid/core/robot/excitation.h"
 #include "manipid/core/robot/identification.h"
 #include "manipid/core/robot/model.h"
 
@@ -54,6 +55,26 @@ bool names_a_robot(const nlohmann::json& body);
 ///  "comparison_band"?, "weights"?: "unit" | "per-joint"}. The paper preset's options (method,
 ///  algorithm, free, initial, kp, ...) are refused with the reason; so is a "preset" beside robot_id.
 RobotIdentificationSpec robot_identification_from_json(const nlohmann::json& body);
+
+// ---- Excitations -------------------------------------------------------------------------
+
+struct ExcitationSpec {
+  std::string robot_id;
+  std::string name;                  ///< of the dataset it makes; default "excitation <robot> (<job>)"
+  robot::ExcitationOptions options;  ///< cancel and progress left empty
+  int periods = 1;                   ///< whole periods sampled
+  double dt = 0.001;                 ///< s, the dataset's sample period
+};
+
+/// {"robot_id", "name"?, "period"?: 10, "harmonics"?: 5, "criterion"?: "condition"|"logdet",
+///  "max_acceleration"?: rad/s² (one number, or one per joint), "position_margin"?, "duration"?: s (whole
+///  periods; default one), "dt"?: 0.001, "friction"?: [...], "armature"?, "seed"?, "max_seconds"?: 30}.
+/// What needs the robot (limits, the joint count of max_acceleration) is checked by the core when the
+/// job runs, and at submission by check_excitation.
+ExcitationSpec excitation_from_json(const nlohmann::json& body);
+/// Checks the request against the robot (its limits leave room, per-joint values match its joints), so
+/// a job that is accepted can run.
+void check_excitation(const ExcitationSpec& spec, const robot::Model& model);
 
 /// Checks what needs the robot and the data: joint counts equal (naming both), torque present.
 /// `field` names the dataset in messages ("dataset_id" or "validation_dataset_id").

@@ -41,6 +41,7 @@
 
 #include "manipid/core/robot/model.h"
 #include "manipid/core/robot/parameters.h"
+#include "manipid/core/trajectory.h"
 
 #include <Eigen/Core>
 
@@ -226,6 +227,12 @@ struct SampledExcitation {
 /// period (too coarse to show the highest harmonic) or more than 10^7 samples in all; InputError("periods")
 /// for periods < 1.
 SampledExcitation sample_excitation(const FourierTrajectory& trajectory, double dt, int periods = 1);
+/// The number of whole periods in `duration` (s); InputError("duration") unless it is one (to 1e-9): a
+/// trajectory ends at rest only after whole periods.
+int whole_periods(double duration, double period);
+/// The samples as a Trajectory (samples × joints): t, q, qd and qdd.
+Trajectory to_trajectory(const SampledExcitation& sampled);
+
 /// The checks of sample_excitation's dt and periods alone (for a period and harmonics), so a caller can
 /// refuse a bad step before spending seconds on a design. Throws InputError("dt"/"periods"/"period").
 void check_sampling(double period, int harmonics, double dt, int periods = 1);
