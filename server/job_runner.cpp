@@ -6,6 +6,7 @@
 #include "manipid/api/result_json.h"
 #include "manipid/api/robot_json.h"
 #include "manipid/api/robot_requests.h"
+#include "manipid/core/robot/excitation.h"
 #include "manipid/core/robot/identification.h"
 #include "manipid/core/identification.h"
 
@@ -201,11 +202,66 @@ JobOutcome run_robot_identification_job(const api::JobInfo& job, Store& store, L
   return outcome;
 }
 
+/// An excitation design: the trajectory sampled into a dataset (stored idempotently under the job's id,
+/// like a simulation's) and the coefficients in the result.
+JobOutcome run_excitation_job(const api::JobInfo& job, Store& store, LiveJob& live, const RunnerOptions& options) {
+  const auto started = Clock::now();
+  api::ExcitationSpec spec = api::excitation_from_json(nlohmann::json::parse(job.request));
+  const auto robot = store.find_robot(spec.robot_id);
+  const auto urdf = store.load_robot_urdf(spec.robot_id);
+  if (!robot || !urdf) {
+    return failed(api::problem_to_json({api::ProblemKind::not_found, "robot " + spec.robot_id + " was deleted before the job ran",
+                                        "robot_id"})
+                      .dump());
+  }
+  const api::ParsedRobot parsed = api::parse_robot({robot->name, *urdf, robot->base, robot->tip});
+  robot::ExcitationOptions& design_options = spec.options;
+  design_options.max_seconds = std::min(design_options.max_seconds, options.job_time_limit_seconds);
+  design_options.cancel = &live.cancel;
+  design_options.progress = [&live](const robot::ExcitationProgress& progress) {
+    live.evaluations.store(progress.evaluation + 1, std::memory_order_relaxed);
+    if (std::isfinite(progress.best_value)) live.best_cost.store(progress.best_value, std::memory_order_relaxed);
+  };
+  const robot::ExcitationLimits limits = robot::excitation_limits(parsed.model, design_options);
+  const robot::ExcitationDesign design = robot::design_excitation(parsed.model, design_options);
+  JobOutcome outcome;
+  if (design.summary.termination == robot::ExcitationTermination::cancelled) {
+    if (live.shutdown.load()) {
+      outcome.requeue = true;
+      return outcome;
+    }
+    outcome.state = api::JobState::cancelled;
+    return outcome;
+  }
+  const robot::SampledExcitation sampled = robot::sample_excitation(design.trajectory, spec.dt, spec.periods);
+  if (const auto violation = robot::first_limit_violation(limits, sampled)) {
+    return failed(job_failed("the designed trajectory leaves a limit of joint " + std::to_string(violation->joint) +
+                             " at t = " + std::to_string(violation->t) + " s"));
+  }
+  const std::string name = spec.name.empty() ? "excitation " + robot->name + " (" + job.id + ")" : spec.name;
+  const api::IdempotencyKey key{"job-output:" + job.id, job.id};
+  const api::DatasetInfo dataset = store.insert_dataset(name, robot::to_trajectory(sampled), job.id, key).dataset;
+  outcome.state = api::JobState::succeeded;
+  outcome.dataset_id = dataset.id;
+  outcome.result = nlohmann::ordered_json{
+      {"dataset_id", dataset.id},
+      {"robot_id", spec.robot_id},
+      {"samples", dataset.samples},
+      {"dt", dataset.dt},
+      {"periods", spec.periods},
+      {"condition_number", design.summary.condition_number},
+      {"coefficients", api::excitation_to_json(parsed.model, design_options, limits, design)},
+      {"wall_seconds", std::chrono::duration<double>(Clock::now() - started).count()},
+  }.dump();
+  return outcome;
+}
+
 }  // namespace
 
 JobOutcome run_job(const api::JobInfo& job, Store& store, LiveJob& live, const RunnerOptions& options) {
   try {
     if (job.kind == api::JobKind::simulation) return run_simulation_job(job, store);
+    if (job.kind == api::JobKind::excitation) return run_excitation_job(job, store, live, options);
     if (!job.robot_id.empty()) return run_robot_identification_job(job, store, live);
     return run_identification_job(job, store, live, options);
   } catch (const InputError& error) {

@@ -2,6 +2,9 @@
 #include "manipid/api/plots.h"
 
 #include "manipid/api/requests.h"
+#include "manipid/api/robot_requests.h"
+#include "manipid/core/robot/filtered_regressor.h"
+#include "manipid/core/robot/parameters.h"
 #include "manipid/core/input_error.h"
 #include "manipid/core/resample.h"
 
@@ -144,6 +147,74 @@ nlohmann::ordered_json torque_fit_to_json(const std::string& request_json, const
           {"samples", fit.t.size()},
           {"t", pick(fit.t, indices)},
           {"joints", joints}};
+}
+
+namespace {
+
+FilterSettings stored_filter(const nlohmann::json& filters, const char* which) {
+  if (!filters.contains(which) || !filters[which].is_object()) {
+    throw InputError("result", std::string("the job's result has no ") + which + " filter");
+  }
+  const std::string where = std::string("filters.") + which + ".";
+  FilterSettings filter;
+  filter.half_length = static_cast<int>(stored_number(filters[which], "half_length", where));
+  filter.band = stored_number(filters[which], "band", where);
+  filter.dt = stored_number(filters[which], "dt", where);
+  return filter;
+}
+
+}  // namespace
+
+nlohmann::ordered_json robot_fit_to_json(const robot::Model& model, const std::string& request_json,
+                                         const std::string& result_json, const Trajectory& stored, long max_points,
+                                         bool prior) {
+  const RobotIdentificationSpec spec = robot_identification_from_json(nlohmann::json::parse(request_json));
+  const nlohmann::json result = nlohmann::json::parse(result_json);
+  if (!result.contains("filters") || !result["filters"].is_object() || !result.contains("point")) {
+    throw InputError("result", "the job's result has no filters or point");
+  }
+  const robot::FilterPair filters{stored_filter(result["filters"], "differentiation"),
+                                  stored_filter(result["filters"], "comparison")};
+  const robot::ParameterLayout& layout = spec.options.layout;
+  const std::vector<std::string> names = robot::standard_parameter_names(model, layout);
+  Eigen::VectorXd point(static_cast<Eigen::Index>(names.size())), urdf(point.size());
+  for (std::size_t i = 0; i < names.size(); ++i) {
+    point[static_cast<Eigen::Index>(i)] = stored_number(result["point"], names[i].c_str(), "point.");
+    urdf[static_cast<Eigen::Index>(i)] = result.contains("prior") ? stored_number(result["prior"], names[i].c_str(), "prior.") : 0.0;
+  }
+  // The samples the identification saw: trimmed, and on its grid.
+  DataPreparation preparation = spec.options.preparation;
+  preparation.uniform.dt = filters.differentiation.dt;
+  const Trajectory data = prepare_data(stored, preparation);
+  const robot::TorquePrediction fit = robot::predict_torque(model, layout, point, data, filters);
+  const std::vector<long> indices = plot_indices(fit.t.size(), max_points);
+  Json joints = Json::array();
+  for (Eigen::Index j = 0; j < fit.model.cols(); ++j) {
+    const Eigen::VectorXd residual = fit.model.col(j) - fit.measured.col(j);
+    joints.push_back({{"joint", j + 1},
+                      {"name", model.joints[static_cast<std::size_t>(j)].name},
+                      {"measured", pick(fit.measured.col(j), indices)},
+                      {"model", pick(fit.model.col(j), indices)},
+                      {"residual", pick(residual, indices)},
+                      {"rms_measured", number(rms(fit.measured.col(j)))},
+                      {"rms_residual", number(rms(residual))},
+                      {"relative_error", number(fit.relative_error[j])}});
+  }
+  const auto filter_json = [](const FilterSettings& filter) {
+    return Json{{"half_length", filter.half_length}, {"band", filter.band}, {"dt", filter.dt}};
+  };
+  Json json = {{"filters", {{"differentiation", filter_json(filters.differentiation)}, {"comparison", filter_json(filters.comparison)}}},
+               {"samples", fit.t.size()},
+               {"t", pick(fit.t, indices)},
+               {"joints", joints},
+               {"overall_relative_error", number(fit.overall_relative_error)}};
+  if (prior) {
+    const robot::TorquePrediction by_urdf = robot::predict_torque(model, layout, urdf, data, filters);
+    Json errors = Json::array();
+    for (Eigen::Index j = 0; j < by_urdf.relative_error.size(); ++j) errors.push_back(number(by_urdf.relative_error[j]));
+    json["prior"] = {{"relative_error", errors}, {"overall_relative_error", number(by_urdf.overall_relative_error)}};
+  }
+  return json;
 }
 
 }  // namespace manipid::api

@@ -157,6 +157,76 @@ RobotIdentificationSpec robot_identification_from_json(const nlohmann::json& bod
   return spec;
 }
 
+ExcitationSpec excitation_from_json(const nlohmann::json& body) {
+  const fields::ObjectFields object(body, "",
+                                    {"robot_id", "name", "period", "harmonics", "criterion", "max_acceleration",
+                                     "position_margin", "duration", "dt", "friction", "armature", "seed", "max_seconds"});
+  ExcitationSpec spec;
+  const Json* robot_id = object.find("robot_id");
+  if (!robot_id) throw InputError("robot_id", "missing robot_id: the robot to design the excitation for");
+  spec.robot_id = read_id(*robot_id, "robot_id");
+  robot::ExcitationOptions& options = spec.options;
+  if (const Json* name = object.find("name")) spec.name = fields::read_label(*name, "name");
+  if (const Json* period = object.find("period")) options.period = fields::read_positive(*period, "period", 3600.0, " s");
+  if (const Json* harmonics = object.find("harmonics")) {
+    options.harmonics = static_cast<int>(fields::read_integer(*harmonics, "harmonics", 2, 20));
+  }
+  if (const Json* criterion = object.find("criterion")) {
+    options.criterion = robot::parse_excitation_criterion(
+        fields::read_choice(*criterion, "criterion", {"condition", "logdet"}), "criterion");
+  }
+  if (const Json* acceleration = object.find("max_acceleration")) {
+    if (acceleration->is_number()) {
+      options.max_acceleration = Eigen::VectorXd::Constant(1, fields::read_positive(*acceleration, "max_acceleration"));
+    } else if (acceleration->is_array() && !acceleration->empty()) {
+      options.max_acceleration.resize(static_cast<Eigen::Index>(acceleration->size()));
+      for (std::size_t i = 0; i < acceleration->size(); ++i) {
+        options.max_acceleration[static_cast<Eigen::Index>(i)] =
+            fields::read_positive((*acceleration)[i], fields::element_path("max_acceleration", i));
+      }
+    } else {
+      throw InputError("max_acceleration", "max_acceleration must be a number or one number per joint, rad/s^2, got " +
+                                               fields::describe(*acceleration));
+    }
+  }
+  if (const Json* margin = object.find("position_margin")) {
+    options.position_margin = fields::read_non_negative(*margin, "position_margin");
+  }
+  if (const Json* dt = object.find("dt")) spec.dt = fields::read_positive(*dt, "dt", 1.0, " s");
+  if (const Json* duration = object.find("duration")) {
+    spec.periods = robot::whole_periods(fields::read_positive(*duration, "duration", 86'400.0, " s"), options.period);
+  }
+  if (const Json* friction = object.find("friction")) {
+    if (!friction->is_array()) {
+      throw InputError("friction", "friction must be an array of viscous, coulomb, offset (or [] for none), got " +
+                                       fields::describe(*friction));
+    }
+    std::vector<std::string> terms;
+    for (std::size_t i = 0; i < friction->size(); ++i) {
+      terms.push_back(fields::read_string((*friction)[i], fields::element_path("friction", i)));
+    }
+    if (terms.empty()) terms.emplace_back("none");
+    parse_friction(terms, options.layout, "friction");
+  }
+  if (const Json* armature = object.find("armature")) {
+    if (!armature->is_boolean()) throw InputError("armature", "armature must be true or false, got " + fields::describe(*armature));
+    options.layout.armature = armature->get<bool>();
+  }
+  if (const Json* seed = object.find("seed")) options.seed = fields::read_unsigned(*seed, "seed");
+  if (const Json* seconds = object.find("max_seconds")) options.max_seconds = fields::read_positive(*seconds, "max_seconds", 600.0, " s");
+  robot::check_sampling(options.period, options.harmonics, spec.dt, spec.periods);
+  const double samples = options.period * spec.periods / spec.dt + 1.0;
+  if (samples > fields::max_samples) {
+    throw InputError("duration", "the excitation would have " + fields::format_number(samples) + " samples, at most " +
+                                     fields::format_number(fields::max_samples) + " are allowed");
+  }
+  return spec;
+}
+
+void check_excitation(const ExcitationSpec& spec, const robot::Model& model) {
+  (void)robot::excitation_limits(model, spec.options);  // the robot's limits leave room; per-joint sizes match
+}
+
 void check_robot_data(int robot_joints, const std::string& robot_name, int data_joints, bool has_torque,
                       const std::string& field) {
   const std::string noun = field == "validation_dataset_id" ? "the validation dataset" : "the dataset";

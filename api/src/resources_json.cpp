@@ -31,8 +31,11 @@ nlohmann::ordered_json dataset_to_json(const DatasetInfo& dataset) {
           {"joints", dataset.joints},
           {"samples", dataset.samples},
           {"dt", dataset.dt},
+          {"uniform", dataset.uniform},
           {"has_torque", dataset.has_torque},
           {"has_reference", dataset.has_reference},
+          {"has_rates", dataset.has_rates},
+          {"has_accelerations", dataset.has_accelerations},
           {"source_job", text_or_null(dataset.source_job)},
           {"links", {{"self", self}, {"data", self + "?format=csv"}}}};
 }
@@ -47,6 +50,8 @@ nlohmann::ordered_json job_to_json(const JobInfo& job) {
                {"finished_at", text_or_null(job.finished_at)},
                {"attempts", job.attempts},
                {"dataset_id", text_or_null(job.dataset_id)},
+               {"robot_id", text_or_null(job.robot_id)},
+               {"validation_dataset_id", text_or_null(job.validation_dataset_id)},
                {"cancel_requested", job.cancel_requested},
                {"progress", {{"evaluations", job.evaluations}, {"best_cost", job.best_cost ? number(*job.best_cost) : Json(nullptr)}}},
                {"request", embedded(job.request)}};
@@ -54,7 +59,25 @@ nlohmann::ordered_json job_to_json(const JobInfo& job) {
   if (!job.error.empty()) json["error"] = embedded(job.error);
   Json links = {{"self", self}, {"history", self + "/history"}, {"cancel", self + "/cancel"}};
   if (!job.dataset_id.empty()) links["dataset"] = "/v1/datasets/" + job.dataset_id;
+  if (!job.robot_id.empty()) links["robot"] = "/v1/robots/" + job.robot_id;
+  if (!job.validation_dataset_id.empty()) {
+    links["validation_dataset"] = "/v1/datasets/" + job.validation_dataset_id;
+    links["validation"] = self + "/validation";
+  }
+  if (job.kind == JobKind::identification) links["fit"] = self + "/fit";
   json["links"] = links;
+  return json;
+}
+
+nlohmann::ordered_json robot_to_json(const RobotInfo& robot) {
+  const std::string self = "/v1/robots/" + robot.id;
+  Json json = {{"id", robot.id}, {"name", robot.name}, {"created_at", robot.created_at}};
+  // The description made at upload (robot_json.h: robot_description), stored as JSON text.
+  const Json description = embedded(robot.summary);
+  if (description.is_object()) {
+    for (const auto& [key, value] : description.items()) json[key] = value;
+  }
+  json["links"] = {{"self", self}, {"urdf", self + "?format=urdf"}};
   return json;
 }
 

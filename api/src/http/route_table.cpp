@@ -101,10 +101,17 @@ void register_routes(httplib::Server& server, Service& service, RouteOptions opt
   routes.Post("/v1/identifications", submit_identification);
 
   // ---- Jobs (routes/jobs.cpp); a bodiless cancel is answered before routing (httplib_guards.cpp) ----
+  routes.Post("/v1/robots", create_robot);
+  routes.Get("/v1/robots", list_robots);
+  routes.Get("/v1/robots/" + id, get_robot);
+  routes.Delete("/v1/robots/" + id, delete_robot);
+  routes.Post("/v1/excitations", submit_excitation);
+
   routes.Get("/v1/jobs", list_jobs);
   routes.Get("/v1/jobs/" + id, get_job);
   routes.Get("/v1/jobs/" + id + "/history", job_history);
   routes.Get("/v1/jobs/" + id + "/fit", job_fit);
+  routes.Get("/v1/jobs/" + id + "/validation", job_validation);
   routes.Post("/v1/jobs/" + id + "(?:/cancel|:cancel)", cancel_job);
   routes.Delete("/v1/jobs/" + id, delete_job);
 }

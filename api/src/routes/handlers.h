@@ -8,6 +8,11 @@
 #pragma once
 
 #include "manipid/api/records.h"
+#include "manipid/api/requests.h"
+
+#include <nlohmann/json.hpp>
+
+#include <optional>
 
 #include "http/route_state.h"  // includes httplib.h, after the manipid headers
 
@@ -30,12 +35,25 @@ void get_preset(RouteState& state, const httplib::Request& request, httplib::Res
 void submit_simulation(RouteState& state, const httplib::Request& request, httplib::Response& response);
 void submit_identification(RouteState& state, const httplib::Request& request, httplib::Response& response);
 
+// ---- robots.cpp: /v1/robots, /v1/excitations ------------------------------------------------
+
+void create_robot(RouteState& state, const httplib::Request& request, httplib::Response& response);
+void list_robots(RouteState& state, const httplib::Request& request, httplib::Response& response);
+void get_robot(RouteState& state, const httplib::Request& request, httplib::Response& response);
+void delete_robot(RouteState& state, const httplib::Request& request, httplib::Response& response);
+void submit_excitation(RouteState& state, const httplib::Request& request, httplib::Response& response);
+/// /v1/identifications with a robot_id (submissions.cpp hands those over): checked against the stored
+/// robot and datasets, then queued.
+void submit_robot_identification(RouteState& state, const nlohmann::json& body, const std::optional<IdempotencyKey>& key,
+                                 httplib::Response& response);
+
 // ---- jobs.cpp: /v1/jobs ------------------------------------------------------------------
 
 void list_jobs(RouteState& state, const httplib::Request& request, httplib::Response& response);
 void get_job(RouteState& state, const httplib::Request& request, httplib::Response& response);
 void job_history(RouteState& state, const httplib::Request& request, httplib::Response& response);
 void job_fit(RouteState& state, const httplib::Request& request, httplib::Response& response);
+void job_validation(RouteState& state, const httplib::Request& request, httplib::Response& response);
 void cancel_job(RouteState& state, const httplib::Request& request, httplib::Response& response);
 void delete_job(RouteState& state, const httplib::Request& request, httplib::Response& response);
 

@@ -3,6 +3,7 @@
 #include "manipid/api/plots.h"
 #include "manipid/api/problem.h"
 #include "manipid/api/resources_json.h"
+#include "manipid/api/robot_requests.h"
 
 #include "http/request_helpers.h"  // includes httplib.h, after the manipid headers
 #include "http/responses.h"
@@ -121,13 +122,26 @@ void job_history(RouteState& state, const httplib::Request& request, httplib::Re
   send_json(response, 200, history_page_to_json(*page));
 }
 
+namespace {
+
+/// The robot a robot identification ran on, parsed as the job parsed it.
+ParsedRobot job_robot(RouteState& state, const JobInfo& job) {
+  const auto robot = state.service.robot(job.robot_id);
+  const auto urdf = state.service.robot_urdf(job.robot_id);
+  if (!robot || !urdf) throw ApiError(ProblemKind::conflict, "the robot of job " + job.id + " was deleted", "robot_id");
+  return parse_robot({robot->name, *urdf, robot->base, robot->tip});
+}
+
+}  // namespace
+
 void job_fit(RouteState& state, const httplib::Request& request, httplib::Response& response) {
   const std::string id = request.matches[1];
   const long max_points = max_points_parameter(request, 2000);
   const auto job = state.service.job(id);
   if (!job) throw ApiError(ProblemKind::not_found, "no job " + id, "id");
   if (job->kind != JobKind::identification) {
-    throw ApiError(ProblemKind::conflict, "job " + id + " is a simulation; only identifications have a fit", "id");
+    throw ApiError(ProblemKind::conflict, "job " + id + " is a " + std::string(to_string(job->kind)) +
+                                              "; only identifications have a fit", "id");
   }
   if (job->result.empty()) {
     throw ApiError(ProblemKind::conflict,
@@ -136,8 +150,40 @@ void job_fit(RouteState& state, const httplib::Request& request, httplib::Respon
   const auto data = state.service.dataset_data(job->dataset_id);
   if (!data) throw ApiError(ProblemKind::conflict, "the dataset of job " + id + " was deleted", "dataset_id");
   try {
+    if (!job->robot_id.empty()) {
+      send_json(response, 200, robot_fit_to_json(job_robot(state, *job).model, job->request, job->result, *data, max_points, false));
+      return;
+    }
     send_json(response, 200, torque_fit_to_json(job->request, job->result, *data, max_points));
   } catch (const nlohmann::json::exception&) {
+    throw ApiError(ProblemKind::conflict, "job " + id + " has no usable stored result", "id");
+  } catch (const InputError&) {
+    throw ApiError(ProblemKind::conflict, "job " + id + " has no usable stored result", "id");
+  }
+}
+
+void job_validation(RouteState& state, const httplib::Request& request, httplib::Response& response) {
+  const std::string id = request.matches[1];
+  const long max_points = max_points_parameter(request, 2000);
+  const auto job = state.service.job(id);
+  if (!job) throw ApiError(ProblemKind::not_found, "no job " + id, "id");
+  if (job->robot_id.empty() || job->validation_dataset_id.empty()) {
+    throw ApiError(ProblemKind::conflict,
+                   "job " + id + " has no validation run: only a robot identification with a validation_dataset_id has one",
+                   "id");
+  }
+  if (job->state != JobState::succeeded) {
+    throw ApiError(ProblemKind::conflict, "job " + id + " is " + to_string(job->state) + " and has no estimate yet", "id");
+  }
+  const auto data = state.service.dataset_data(job->validation_dataset_id);
+  if (!data) {
+    throw ApiError(ProblemKind::conflict, "the validation dataset of job " + id + " was deleted", "validation_dataset_id");
+  }
+  try {
+    send_json(response, 200, robot_fit_to_json(job_robot(state, *job).model, job->request, job->result, *data, max_points, true));
+  } catch (const nlohmann::json::exception&) {
+    throw ApiError(ProblemKind::conflict, "job " + id + " has no usable stored result", "id");
+  } catch (const InputError&) {
     throw ApiError(ProblemKind::conflict, "job " + id + " has no usable stored result", "id");
   }
 }

@@ -4,6 +4,7 @@
 #include "manipid/api/problem.h"
 #include "manipid/api/requests.h"
 #include "manipid/api/resources_json.h"
+#include "manipid/api/robot_requests.h"
 
 #include "http/request_helpers.h"  // includes httplib.h, after the manipid headers
 #include "http/responses.h"
@@ -46,6 +47,12 @@ void submit_simulation(RouteState& state, const httplib::Request& request, httpl
 }
 
 void submit_identification(RouteState& state, const httplib::Request& request, httplib::Response& response) {
+  const auto key = idempotency_key(request);
+  const nlohmann::json body = json_body(request);
+  if (names_a_robot(body)) {
+    submit_robot_identification(state, body, key, response);
+    return;
+  }
   submit(state, request, response, JobKind::identification);
 }
 

@@ -6,6 +6,7 @@
 // Decimation is for drawing only: the stored data and histories are never thinned.
 #pragma once
 
+#include "manipid/core/robot/model.h"
 #include "manipid/core/trajectory.h"
 
 #include <nlohmann/json.hpp>
@@ -37,5 +38,14 @@ nlohmann::ordered_json trajectory_to_json(const Trajectory& data);
 /// decimated to max_points. Throws InputError when request, result and data do not fit together.
 nlohmann::ordered_json torque_fit_to_json(const std::string& request_json, const std::string& result_json,
                                           const Trajectory& data, long max_points);
+
+/// The same for a URDF robot's identification (request with robot_id): its filtered measured torque on
+/// `data` beside the torque its "point" predicts through its filters, per joint, with "relative_error"
+/// per joint and overall. With `prior`, also the URDF's own values' errors under "prior" (the validation
+/// view). {"filters", "samples", "t", "joints": [{"joint", "name", "measured", "model", "residual",
+/// "rms_measured", "rms_residual", "relative_error"}], "overall_relative_error", "prior"?}.
+nlohmann::ordered_json robot_fit_to_json(const robot::Model& model, const std::string& request_json,
+                                         const std::string& result_json, const Trajectory& data, long max_points,
+                                         bool prior);
 
 }  // namespace manipid::api

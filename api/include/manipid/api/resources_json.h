@@ -11,16 +11,22 @@
 
 namespace manipid::api {
 
-/// {"id", "name", "created_at", "joints", "samples", "dt", "has_torque", "has_reference",
-///  "source_job" (null unless a simulation made it), "links": {"self", "data"}}
+/// {"id", "name", "created_at", "joints", "samples", "dt", "uniform", "has_torque", "has_reference",
+///  "has_rates", "has_accelerations", "source_job" (null unless a simulation or excitation made it),
+///  "links": {"self", "data"}}
 nlohmann::ordered_json dataset_to_json(const DatasetInfo& dataset);
 
 /// {"id", "kind", "state", "created_at", "started_at", "finished_at" (null until then),
-///  "attempts", "dataset_id" (null when none yet), "cancel_requested",
+///  "attempts", "dataset_id" (null when none yet), "robot_id", "validation_dataset_id" (null when none),
+///  "cancel_requested",
 ///  "progress": {"evaluations", "best_cost"}, "request": {...},
 ///  "result": {...} (succeeded; also cancelled identifications: the best point reached),
 ///  "error": {problem} (failed), "links": {"self", "history", "cancel", "dataset"?}}
 nlohmann::ordered_json job_to_json(const JobInfo& job);
+
+/// {"id", "name", "created_at", the stored description (robot_json.h: robot_description's members),
+///  "links": {"self", "urdf"}}
+nlohmann::ordered_json robot_to_json(const RobotInfo& robot);
 
 /// {"name", "description", "joints", "parameters": [m1..ln], "true_parameters": {...},
 ///  "initial_parameters": {...}, "kp", "kd", "reference": {"step_times", "amplitudes",

@@ -1,0 +1,118 @@
+// robots.cpp — the /v1/robots routes (upload a URDF as XML or JSON, list, the resource or the document
+// back byte for byte, delete) and /v1/excitations (a job that designs a trajectory for a robot).
+#include "manipid/api/problem.h"
+#include "manipid/api/resources_json.h"
+#include "manipid/api/robot_json.h"
+#include "manipid/api/robot_requests.h"
+
+#include "http/request_helpers.h"  // includes httplib.h, after the manipid headers
+#include "http/responses.h"
+#include "routes/handlers.h"
+
+namespace manipid::api::http {
+namespace {
+
+/// The stored robot parsed again (as a job does), for requests that check against it.
+ParsedRobot stored_robot(RouteState& state, const std::string& id, const std::string& field) {
+  const auto robot = state.service.robot(id);
+  const auto urdf = state.service.robot_urdf(id);
+  if (!robot || !urdf) throw ApiError(ProblemKind::invalid_field, "no robot " + id, field);
+  return parse_robot({robot->name, *urdf, robot->base, robot->tip});
+}
+
+}  // namespace
+
+void create_robot(RouteState& state, const httplib::Request& request, httplib::Response& response) {
+  const auto key = idempotency_key(request);
+  const std::string type = media_type(request);
+  RobotUpload upload;
+  // `curl --data-binary @arm.urdf` labels the body form-urlencoded unless told otherwise: an unlabelled
+  // body is JSON when it looks like JSON, else the document.
+  const bool unlabelled = type.empty() || type == "application/x-www-form-urlencoded";
+  if (type == "application/xml" || type == "text/xml" || (unlabelled && !looks_like_json(request.body))) {
+    // The document as the body; what JSON carries beside it comes as query parameters.
+    upload.urdf = request.body;
+    upload.name = request.get_param_value("name");
+    upload.base = request.get_param_value("base");
+    upload.tip = request.get_param_value("tip");
+    if (upload.name.size() > 200) throw ApiError(ProblemKind::invalid_field, "name is longer than 200 bytes", "name");
+  } else {
+    upload = robot_from_json(json_body(request));  // refuses other media types with 415
+  }
+  const ParsedRobot parsed = parse_robot(upload);
+  if (upload.name.empty()) upload.name = parsed.model.name;
+  const std::string description = robot_description(parsed.model, parsed.warnings).dump();
+  const RobotCreated created = state.service.create_robot(upload, parsed.model.joint_count(), description, key);
+  response.set_header("Location", "/v1/robots/" + created.robot.id);
+  if (created.replayed) response.set_header("Idempotent-Replayed", "true");
+  send_json(response, 201, robot_to_json(created.robot));
+}
+
+void list_robots(RouteState& state, const httplib::Request& request, httplib::Response& response) {
+  const Page<RobotInfo> page = state.service.robots(page_request(request, 50));
+  nlohmann::ordered_json items = nlohmann::ordered_json::array();
+  for (const RobotInfo& robot : page.items) items.push_back(robot_to_json(robot));
+  nlohmann::ordered_json body = {{"items", items}};
+  if (!page.next_page_token.empty()) body["next_page_token"] = page.next_page_token;
+  send_json(response, 200, body);
+}
+
+void get_robot(RouteState& state, const httplib::Request& request, httplib::Response& response) {
+  const std::string id = request.matches[1];
+  const std::string format = request.has_param("format") ? request.get_param_value("format") : "json";
+  if (format != "json" && format != "urdf") {
+    throw ApiError(ProblemKind::invalid_field, "format must be json or urdf, got '" + format + "'", "format");
+  }
+  if (format == "urdf") {
+    const auto urdf = state.service.robot_urdf(id);
+    if (!urdf) throw ApiError(ProblemKind::not_found, "no robot " + id, "id");
+    response.status = 200;
+    response.set_content(*urdf, "application/xml");  // as uploaded, byte for byte
+    return;
+  }
+  const auto robot = state.service.robot(id);
+  if (!robot) throw ApiError(ProblemKind::not_found, "no robot " + id, "id");
+  send_json(response, 200, robot_to_json(*robot));
+}
+
+void delete_robot(RouteState& state, const httplib::Request& request, httplib::Response& response) {
+  const std::string id = request.matches[1];
+  switch (state.service.delete_robot(id)) {
+    case DeleteOutcome::deleted: response.status = 204; return;
+    case DeleteOutcome::not_found: throw ApiError(ProblemKind::not_found, "no robot " + id, "id");
+    case DeleteOutcome::conflict:
+      throw ApiError(ProblemKind::conflict, "robot " + id + " is used by a queued or running job", "id");
+  }
+}
+
+void submit_excitation(RouteState& state, const httplib::Request& request, httplib::Response& response) {
+  const auto key = idempotency_key(request);
+  const nlohmann::json body = json_body(request);
+  const ExcitationSpec spec = excitation_from_json(body);
+  check_excitation(spec, stored_robot(state, spec.robot_id, "robot_id").model);
+  const SubmitResult submitted = state.service.submit({JobKind::excitation, body.dump(), "", spec.robot_id, ""}, key);
+  response.set_header("Location", "/v1/jobs/" + submitted.job.id);
+  if (submitted.replayed) response.set_header("Idempotent-Replayed", "true");
+  send_job(response, 202, submitted.job);
+}
+
+void submit_robot_identification(RouteState& state, const nlohmann::json& body, const std::optional<IdempotencyKey>& key,
+                                 httplib::Response& response) {
+  const RobotIdentificationSpec spec = robot_identification_from_json(body);
+  const ParsedRobot robot = stored_robot(state, spec.robot_id, "robot_id");
+  const int joints = robot.model.joint_count();
+  for (const auto& [id, field] : {std::pair{spec.dataset_id, std::string("dataset_id")},
+                                  std::pair{spec.validation_dataset_id, std::string("validation_dataset_id")}}) {
+    if (id.empty()) continue;
+    const auto dataset = state.service.dataset(id);
+    if (!dataset) throw ApiError(ProblemKind::invalid_field, "no dataset " + id, field);
+    check_robot_data(joints, robot.model.name, dataset->joints, dataset->has_torque, field);
+  }
+  const SubmitResult submitted = state.service.submit(
+      {JobKind::identification, body.dump(), spec.dataset_id, spec.robot_id, spec.validation_dataset_id}, key);
+  response.set_header("Location", "/v1/jobs/" + submitted.job.id);
+  if (submitted.replayed) response.set_header("Idempotent-Replayed", "true");
+  send_job(response, 202, submitted.job);
+}
+
+}  // namespace manipid::api::http
