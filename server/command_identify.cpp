@@ -168,6 +168,10 @@ CLI::App* add_identify_command(CLI::App& app, IdentifyOptions& options) {
                       "With --robot: half-length of the low-pass applied to tau and the regressor alike, or 'auto'")
       ->capture_default_str()
       ->needs(robot);
+  command->add_option("--write-urdf", options.write_urdf,
+                      "With --robot: write the estimate (its point) into a copy of the URDF: each link's <inertial>, each "
+                      "joint's <dynamics>; everything else as it was")
+      ->needs(robot);
   command->add_option("--comparison-band", options.comparison_band,
                       "With --robot: its band edge in rad/sample, or 'auto'")
       ->capture_default_str()

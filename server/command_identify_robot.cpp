@@ -6,6 +6,7 @@
 #include "manipid/api/csv.h"
 #include "manipid/api/robot_json.h"
 #include "manipid/core/robot/identification.h"
+#include "manipid/core/robot/urdf_writer.h"
 
 #include <cmath>
 #include <cstdio>
@@ -155,6 +156,14 @@ int run_identify_robot(const IdentifyOptions& options) {
       validation = robot::validate(model, identification.layout, result, second, identification.preparation);
     } catch (const InputError& error) {
       rethrow_with_source(error, input_name(options.validate));
+    }
+  }
+  if (!options.write_urdf.empty()) {
+    try {
+      write_text(options.write_urdf,
+                 robot::write_identified_urdf(read_text(options.urdf.urdf), model, identification.layout, result.point));
+    } catch (const InputError& error) {
+      rethrow_with_source(error, "--write-urdf");
     }
   }
   if (options.json) {

@@ -192,6 +192,7 @@ struct IdentifyOptions {
   double dt = 0.0;                   ///< resampling period, 0 = the median step
   std::string comparison_half_length = "auto";
   std::string comparison_band = "auto";
+  std::string write_urdf;            ///< write the estimate into a copy of the URDF, empty = none
 };
 CLI::App* add_identify_command(CLI::App& app, IdentifyOptions& options);
 int run_identify(const IdentifyOptions& options);

@@ -112,6 +112,7 @@ void register_routes(httplib::Server& server, Service& service, RouteOptions opt
   routes.Get("/v1/jobs/" + id + "/history", job_history);
   routes.Get("/v1/jobs/" + id + "/fit", job_fit);
   routes.Get("/v1/jobs/" + id + "/validation", job_validation);
+  routes.Get("/v1/jobs/" + id + "/urdf", job_urdf);
   routes.Post("/v1/jobs/" + id + "(?:/cancel|:cancel)", cancel_job);
   routes.Delete("/v1/jobs/" + id, delete_job);
 }

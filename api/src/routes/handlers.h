@@ -54,6 +54,7 @@ void get_job(RouteState& state, const httplib::Request& request, httplib::Respon
 void job_history(RouteState& state, const httplib::Request& request, httplib::Response& response);
 void job_fit(RouteState& state, const httplib::Request& request, httplib::Response& response);
 void job_validation(RouteState& state, const httplib::Request& request, httplib::Response& response);
+void job_urdf(RouteState& state, const httplib::Request& request, httplib::Response& response);
 void cancel_job(RouteState& state, const httplib::Request& request, httplib::Response& response);
 void delete_job(RouteState& state, const httplib::Request& request, httplib::Response& response);
 

@@ -3,7 +3,9 @@
 #include "manipid/api/plots.h"
 #include "manipid/api/problem.h"
 #include "manipid/api/resources_json.h"
+#include "manipid/api/robot_json.h"
 #include "manipid/api/robot_requests.h"
+#include "manipid/core/robot/urdf_writer.h"
 
 #include "http/request_helpers.h"  // includes httplib.h, after the manipid headers
 #include "http/responses.h"
@@ -185,6 +187,33 @@ void job_validation(RouteState& state, const httplib::Request& request, httplib:
     throw ApiError(ProblemKind::conflict, "job " + id + " has no usable stored result", "id");
   } catch (const InputError&) {
     throw ApiError(ProblemKind::conflict, "job " + id + " has no usable stored result", "id");
+  }
+}
+
+void job_urdf(RouteState& state, const httplib::Request& request, httplib::Response& response) {
+  const std::string id = request.matches[1];
+  const auto job = state.service.job(id);
+  if (!job) throw ApiError(ProblemKind::not_found, "no job " + id, "id");
+  if (job->robot_id.empty() || job->state != JobState::succeeded) {
+    throw ApiError(ProblemKind::conflict, "job " + id + " is not a succeeded robot identification: no estimate to write", "id");
+  }
+  const auto robot = state.service.robot(job->robot_id);
+  const auto urdf = state.service.robot_urdf(job->robot_id);
+  if (!robot || !urdf) throw ApiError(ProblemKind::conflict, "the robot of job " + id + " was deleted", "robot_id");
+  const ParsedRobot parsed = parse_robot({robot->name, *urdf, robot->base, robot->tip});
+  // The result's point names its layout (fv…, fc…, fo…, Ia…).
+  const ParameterValues point = parameters_from_json(parsed.model, nlohmann::json::parse(job->result), "result");
+  try {
+    response.status = 200;
+    response.set_content(robot::write_identified_urdf(*urdf, parsed.model, point.layout, point.values), "application/xml");
+    // The name is the user's: only letters, digits, '.', '_' and '-' reach the header.
+    std::string file = robot->name;
+    for (char& c : file) {
+      if (!std::isalnum(static_cast<unsigned char>(c)) && c != '.' && c != '_' && c != '-') c = '_';
+    }
+    response.set_header("Content-Disposition", "attachment; filename=\"" + file + "-identified.urdf\"");
+  } catch (const InputError& error) {  // an estimate a URDF cannot hold
+    throw ApiError(ProblemKind::conflict, error.what(), "physical");
   }
 }
 

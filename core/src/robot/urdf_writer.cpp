@@ -1,0 +1,135 @@
+// urdf_writer.cpp — identified parameters written into the URDF document with TinyXML (robot/urdf_writer.h).
+#include "manipid/core/robot/urdf_writer.h"
+
+#include "manipid/core/model.h"
+
+#include <Eigen/Eigenvalues>
+#include <tinyxml.h>
+
+#include <cmath>
+#include <cstdio>
+#include <map>
+#include <set>
+#include <sstream>
+
+namespace manipid::robot {
+namespace {
+
+/// Shortest text that reads back to the same double.
+std::string number(double value) {
+  char text[32];
+  for (int digits = 6; digits <= 17; ++digits) {
+    std::snprintf(text, sizeof text, "%.*g", digits, value);
+    if (std::strtod(text, nullptr) == value) break;
+  }
+  return text;
+}
+
+std::string triple(const Eigen::Vector3d& v) { return number(v.x()) + " " + number(v.y()) + " " + number(v.z()); }
+
+/// The document's <link name="..."> and <joint name="..."> elements.
+std::map<std::string, TiXmlElement*> named_children(TiXmlElement* robot, const char* tag) {
+  std::map<std::string, TiXmlElement*> found;
+  for (TiXmlElement* element = robot->FirstChildElement(tag); element; element = element->NextSiblingElement(tag)) {
+    if (const char* name = element->Attribute("name")) found[name] = element;
+  }
+  return found;
+}
+
+/// Replaces (or adds) `parent`'s first <tag> with `replacement`.
+void replace_child(TiXmlElement* parent, const char* tag, const TiXmlElement& replacement) {
+  if (TiXmlElement* old = parent->FirstChildElement(tag)) {
+    parent->ReplaceChild(old, replacement);
+  } else {
+    parent->InsertEndChild(replacement);
+  }
+}
+
+}  // namespace
+
+std::string write_identified_urdf(const std::string& xml, const Model& model, const ParameterLayout& layout,
+                                  const Eigen::VectorXd& pi) {
+  const int n = model.joint_count();
+  if (pi.size() != layout.size(n)) {
+    throw InputError("parameters", "the parameter vector has " + std::to_string(pi.size()) + " entries, the robot " +
+                                       std::to_string(layout.size(n)));
+  }
+  if (!pi.allFinite()) throw InputError("parameters", "the parameter vector holds a value that is not a finite number");
+  TiXmlDocument document;
+  document.Parse(xml.c_str());
+  if (document.Error()) throw InputError("urdf", std::string("the URDF document cannot be read: ") + document.ErrorDesc());
+  TiXmlElement* robot = document.FirstChildElement("robot");
+  if (!robot) throw InputError("urdf", "the document has no <robot> element");
+  auto links = named_children(robot, "link");
+  auto joints = named_children(robot, "joint");
+
+  for (int k = 0; k < n; ++k) {
+    const Joint& joint = model.joints[static_cast<std::size_t>(k)];
+    const Body& body = model.bodies[static_cast<std::size_t>(k)];
+    const InertialParameters inertia = InertialParameters::from_vector(pi.segment<kInertialParametersPerBody>(kInertialParametersPerBody * k));
+    // What a URDF can hold: a positive mass and an inertia about the centre of mass that is a body's.
+    if (!(inertia.mass > 0.0)) {
+      throw InputError("parameters", "link " + joint.link + " has mass " + number(inertia.mass) +
+                                         " kg: a URDF holds only physical bodies; identify with the physical-consistency "
+                                         "option");
+    }
+    const Eigen::Matrix3d about_com = inertia.inertia_about_centre_of_mass();
+    const double smallest = Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d>(about_com, Eigen::EigenvaluesOnly).eigenvalues()[0];
+    if (smallest < -1e-12 * std::max(1.0, about_com.trace())) {
+      throw InputError("parameters", "link " + joint.link + "'s inertia about its centre of mass is not positive "
+                                         "semi-definite (smallest eigenvalue " + number(smallest) +
+                                         " kg m^2): a URDF holds only physical bodies; identify with the "
+                                         "physical-consistency option");
+    }
+    const auto link = links.find(joint.link);
+    if (link == links.end()) throw InputError("urdf", "the document has no link " + joint.link);
+    TiXmlElement inertial("inertial");
+    TiXmlElement origin("origin");
+    origin.SetAttribute("xyz", triple(inertia.centre_of_mass()));
+    origin.SetAttribute("rpy", "0 0 0");
+    inertial.InsertEndChild(origin);
+    TiXmlElement mass("mass");
+    mass.SetAttribute("value", number(inertia.mass));
+    inertial.InsertEndChild(mass);
+    TiXmlElement tensor("inertia");
+    tensor.SetAttribute("ixx", number(about_com(0, 0)));
+    tensor.SetAttribute("ixy", number(about_com(0, 1)));
+    tensor.SetAttribute("ixz", number(about_com(0, 2)));
+    tensor.SetAttribute("iyy", number(about_com(1, 1)));
+    tensor.SetAttribute("iyz", number(about_com(1, 2)));
+    tensor.SetAttribute("izz", number(about_com(2, 2)));
+    inertial.InsertEndChild(tensor);
+    replace_child(link->second, "inertial", inertial);
+    // The links merged into this body: their inertia is in the body's now.
+    for (std::size_t m = 1; m < body.links.size(); ++m) {
+      const auto merged = links.find(body.links[m]);
+      if (merged == links.end()) continue;
+      if (TiXmlElement* old = merged->second->FirstChildElement("inertial")) merged->second->RemoveChild(old);
+    }
+
+    const auto element = joints.find(joint.name);
+    if (element == joints.end()) throw InputError("urdf", "the document has no joint " + joint.name);
+    if (layout.viscous || layout.coulomb) {
+      TiXmlElement dynamics("dynamics");
+      if (const TiXmlElement* old = element->second->FirstChildElement("dynamics")) dynamics = *old;
+      if (layout.viscous) dynamics.SetAttribute("damping", number(pi[layout.viscous_begin(n) + k]));
+      if (layout.coulomb) dynamics.SetAttribute("friction", number(pi[layout.coulomb_begin(n) + k]));
+      replace_child(element->second, "dynamics", dynamics);
+    }
+    if (layout.offset || layout.armature) {
+      std::ostringstream note;
+      note << " identified by manipid, no URDF element for them:";
+      if (layout.offset) note << " torque offset fo = " << number(pi[layout.offset_begin(n) + k]) << (joint.is_prismatic() ? " N;" : " N m;");
+      if (layout.armature) note << " rotor inertia Ia = " << number(pi[layout.armature_begin(n) + k]) << (joint.is_prismatic() ? " kg;" : " kg m^2;");
+      note << " ";
+      TiXmlComment comment(note.str().c_str());
+      element->second->InsertEndChild(comment);
+    }
+  }
+  TiXmlPrinter printer;
+  printer.SetIndent("  ");
+  document.Accept(&printer);
+  return printer.CStr();
+}
+
+}  // namespace manipid::robot
