@@ -122,7 +122,6 @@ int run_identify_robot(const IdentifyOptions& options) {
     throw UsageError("--weights: a URDF robot takes unit or per-joint (each joint by its residual's variance)");
   }
   const robot::ParsedUrdf parsed_urdf = load_urdf_robot(options.urdf);
-  print_urdf_warnings(options.urdf, parsed_urdf);
   const robot::Model& model = parsed_urdf.model;
   robot::IdentificationOptions identification;
   identification.layout = parameter_layout(options.friction, options.armature);
@@ -158,6 +157,8 @@ int run_identify_robot(const IdentifyOptions& options) {
       rethrow_with_source(error, input_name(options.validate));
     }
   }
+  // The URDF's warnings once the call is known to work: a refused call prints one line.
+  print_urdf_warnings(options.urdf, parsed_urdf);
   if (!options.write_urdf.empty()) {
     try {
       write_text(options.write_urdf,

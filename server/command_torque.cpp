@@ -82,7 +82,6 @@ namespace {
 /// The URDF robot's torque for every row: parameters from --params, else the URDF's own.
 int run_urdf_torque(const TorqueOptions& options) {
   const robot::ParsedUrdf parsed_urdf = load_urdf_robot(options.urdf);
-  print_urdf_warnings(options.urdf, parsed_urdf);
   const robot::Model& model = parsed_urdf.model;
   api::ParameterValues parameters;
   if (options.parameters.empty()) {
@@ -109,6 +108,8 @@ int run_urdf_torque(const TorqueOptions& options) {
   } catch (const InputError& error) {
     rethrow_with_source(error, input_name(options.input));
   }
+  // The URDF's warnings once the call is known to work: a refused call prints one line.
+  print_urdf_warnings(options.urdf, parsed_urdf);
   const int time_column = states.column_index("t");
   api::CsvTable torques;
   if (time_column >= 0) torques.columns.emplace_back("t");

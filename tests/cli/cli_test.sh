@@ -376,5 +376,54 @@ expect_error "excitation: a margin wider than a joint's range" 2 "joint panda_jo
 expect_error "excitation: unknown friction term" 2 "--friction: unknown friction term 'stiction'" \
   "$manipid" excitation --robot "$robots/ur5_like.urdf" --friction viscous,stiction
 
+# ---- identify --robot, torque --robot: a URDF arm end to end -------------------------------------
+# An excitation (short: 5 s at 2 ms), the torques of the URDF's own values with a little noise, identify,
+# validate on a second seed, write the identified URDF.
+"$manipid" excitation --robot "$robots/ur5_like.urdf" --period 5 --harmonics 4 --dt 0.002 --duration 10 \
+  --max-evaluations 200 --out states.csv 2>/dev/null
+"$manipid" torque --robot "$robots/ur5_like.urdf" --in states.csv --with-states --noise-tau-relative 0.005 --seed 1 \
+  --out robot_run.csv 2>torque.err
+check "torque --robot --with-states: exit 0" test $? -eq 0
+check "torque --robot --with-states: a dataset header" \
+  test "$(head -1 robot_run.csv | cut -d, -f1,2,8,14,20,25)" = "t,q1,qd1,qdd1,tau1,tau6"
+check "torque --robot: one summary line, noise said" grep -q "measurement noise added -> robot_run.csv" torque.err
+"$manipid" torque --robot "$robots/ur5_like.urdf" --in states.csv --with-states --noise-tau-relative 0.005 --seed 2 \
+  --out robot_run2.csv 2>/dev/null
+"$manipid" identify robot_run.csv --robot "$robots/ur5_like.urdf" --friction viscous,coulomb --validate robot_run2.csv \
+  >robot_table.txt 2>robot_identify.err
+check "identify --robot: exit 0" test $? -eq 0
+check "identify --robot: base parameters listed" grep -q "^base parameter" robot_table.txt
+check "identify --robot: 48 base parameters" grep -q "48 base parameters" robot_table.txt
+check "identify --robot: friction per joint" grep -Eq "^shoulder_pan_joint +[-0-9.e]+ +[-0-9.e]+" robot_table.txt
+check "identify --robot: validation against the URDF's own values" grep -q "validation, URDF" robot_table.txt
+overall=$(awk '/validation, estimate/ { for (i = 1; i <= NF; i++) if ($i == "overall") print $(i + 1) }' robot_table.txt)
+check "identify --robot: the second run predicted within 1 %" awk -v e="$overall" 'BEGIN { exit !(e + 0 < 1.0) }'
+"$manipid" identify robot_run.csv --robot "$robots/ur5_like.urdf" --json >robot.json 2>/dev/null
+check "identify --robot --json: base parameters by name" grep -q '"base_parameters"' robot.json
+check "identify --robot --json: the point has every standard parameter" grep -q '"Izz6":' robot.json
+"$manipid" torque --robot "$robots/ur5_like.urdf" --params robot.json --in states.csv --out estimate_tau.csv 2>/dev/null
+check "torque --robot --params: the estimate's torques" test "$(head -1 estimate_tau.csv)" = "t,tau1,tau2,tau3,tau4,tau5,tau6"
+"$manipid" identify robot_run.csv --robot "$robots/ur5_like.urdf" --write-urdf identified.urdf >/dev/null 2>write.err
+status=$?
+if [[ $status -eq 0 ]]; then
+  check "identify --write-urdf: the identified URDF parses" "$manipid" torque --robot identified.urdf --in states.csv --out urdf_tau.csv
+else
+  check "identify --write-urdf: an unphysical estimate is refused, naming the option" grep -q -- "--write-urdf: link" write.err
+fi
+expect_error "identify --robot: joint count" 2 "the data has 4 joints, the robot (ur5_like) has 6" \
+  "$manipid" identify paper.csv --robot "$robots/ur5_like.urdf"
+expect_error "identify --robot: the paper's options do not apply" 2 "--preset excludes --robot" \
+  "$manipid" identify robot_run.csv --robot "$robots/ur5_like.urdf" --preset cedro2009
+expect_error "identify --robot: two-stage is the paper's" 2 "output-error and two-stage identify the paper's" \
+  "$manipid" identify robot_run.csv --robot "$robots/ur5_like.urdf" --method two-stage
+expect_error "identify --robot: unknown friction term" 2 "unknown friction term 'sticky'" \
+  "$manipid" identify robot_run.csv --robot "$robots/ur5_like.urdf" --friction viscous,sticky
+expect_error "identify --robot: --trim needs two numbers" 2 "--trim needs START,END" \
+  "$manipid" identify robot_run.csv --robot "$robots/ur5_like.urdf" --trim 1
+expect_error "torque --robot: unknown parameter in --params" 2 "'Iww3' is not a parameter" \
+  "$manipid" torque --robot "$robots/ur5_like.urdf" --params <(echo '{"Iww3": 1}') --in states.csv
+expect_error "identify: --friction needs --robot" 2 "--friction requires --robot" \
+  "$manipid" identify paper.csv --friction viscous
+
 echo "$passed passed, $failed failed"
 [[ $failed -eq 0 ]]
