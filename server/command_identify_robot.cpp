@@ -62,7 +62,7 @@ void print_table(const robot::Model& model, const robot::ParameterLayout& layout
               model.joints.front().name.c_str(), model.joints.back().name.c_str(), terms.empty() ? "none" : terms.c_str(),
               layout.armature ? "; armature" : "");
   const robot::FilterPair& filters = result.filters;
-  std::printf("input-error, linear least squares on %s: %d rows (every %d-th instant x %d joints), %d base parameters, "
+  std::printf("input-error, linear least squares on %s: %d rows (1 in %d filtered instants x %d joints), %d base parameters, "
               "condition number %s\n",
               data_name.c_str(), result.rows, result.decimation, n, result.base.size(), format(result.condition_number, 3).c_str());
   std::printf("filters%s: differentiation M = %d, band %s rad/sample (%s); comparison M = %d, band %s rad/sample (%s)",
