@@ -1,4 +1,4 @@
-// consistency_bench.cpp — the physically consistent fit of a 7-link arm with 21 friction parameters (p = 91), whole call.
+// consistency_bench.cpp — the consistent fit of a 7-link arm with 21 friction parameters (p = 91).
 //
 // R is the triangular factor of a random, well-scaled stacked regressor (4p rows, columns at
 // each parameter's natural size), z the torques of a truth with one slender link and a joint

@@ -1,4 +1,4 @@
-// consistency.cpp — physical-consistency checks of standard parameters and the projection onto the consistent set (consistency.h).
+// consistency.cpp — consistency checks of standard parameters and the projection onto the consistent set.
 #include "manipid/core/robot/consistency.h"
 
 #include "inertia_internal.h"
@@ -34,7 +34,7 @@ Eigen::Matrix3d inertia_matrix(const Vector10d& link) {
 
 }  // namespace
 
-void validate(const ParameterStructure& structure) {
+void check_structure(const ParameterStructure& structure) {
   const int p = structure.parameter_count;
   if (p <= 0) {
     throw InputError("structure.parameter_count", "the parameter vector must have at least one entry, got " +
@@ -194,7 +194,7 @@ LinkConsistency check_link(const Vector10d& link, const std::string& name, std::
 }
 
 ConsistencyReport check_consistency(const ParameterStructure& structure, const Eigen::VectorXd& pi) {
-  validate(structure);
+  check_structure(structure);
   if (pi.size() != structure.parameter_count) {
     throw InputError("pi", "expected " + std::to_string(structure.parameter_count) + " parameters, got " +
                                std::to_string(pi.size()));
@@ -258,8 +258,9 @@ std::optional<LinkProjection> try_project_link(const Vector10d& link, double len
 LinkProjection project_link(const Vector10d& link, const ProjectionOptions& options, const std::string& field) {
   if (!link.allFinite()) throw InputError(field, field + ": the inertial parameters are not all finite numbers");
   if (!std::isfinite(options.length_scale) || options.length_scale < 0.0) {
-    throw InputError("projection.length_scale", "the length scale must be a finite number ≥ 0 m (0: the link's own), got " +
-                                                    number(options.length_scale));
+    throw InputError("projection.length_scale",
+                     "the length scale must be a finite number ≥ 0 m (0: the link's own), got " +
+                         number(options.length_scale));
   }
   if (!(options.relative_floor > 0.0 && options.relative_floor < 1.0)) {
     throw InputError("projection.relative_floor", "the relative eigenvalue floor must lie in (0, 1), got " +

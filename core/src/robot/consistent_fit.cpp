@@ -1,14 +1,14 @@
-// consistent_fit.cpp — an interior-point Levenberg–Marquardt over log-Cholesky link coordinates and bounded friction (consistent_fit.h).
+// consistent_fit.cpp — interior-point Levenberg–Marquardt over log-Cholesky links and bounded friction.
 //
 // Variables y have π's layout: a link's ten entries hold its log-Cholesky θ, every other entry
 // holds the parameter itself (non-negative ones ≥ 0). π(y) is block-diagonal, so its Jacobian
 // P is identity outside the links and one 10×10 block per link. Each stage minimises
 //
 //   F_μ(π) = ‖Rπ − z‖² + γ‖S⁻¹(π − π₀)‖² + μ Σ_k 2·B_k(π),
-//   B_k = tr(A₀⁻¹A) − ln det(A₀⁻¹A) − 4,  A = J_k − F_k,  A₀ = J_k(start) − F_k,
+//   B_k = tr(A_c⁻¹A) − ln det(A_c⁻¹A) − 4,  A = J_k − F_k,  A_c = J_c,k − F_k,
 //
-// (F_k the floor J̃ ⪰ f·I written in J's units), with the model of each iteration Newton's in π
-// pulled back through P:
+// (F_k the margin J̃ ⪰ f·I written in J's units, J_c,k the barrier's centre, consistent_fit.h),
+// with the model of each iteration Newton's in π pulled back through P:
 //
 //   ½F(π + Pδ) ≈ ½F(π) + gᵀδ + ½ δᵀ Pᵀ(RᵀR + γS⁻² + μ∇²B) P δ,   g = Pᵀ∇_π(½F).
 //
@@ -60,8 +60,8 @@ constexpr double kFractionToBoundary = 0.95;
 // as thick as it is large. A start on the boundary is where the barrier's Newton model holds
 // only for tiny steps; a centred start costs the continuation a third fewer iterations.
 constexpr double kStartFloor = 1e-2;
-// The fit keeps J̃ ⪰ f·I with f this fraction of the projection's floor (relative to the
-// prior's largest eigenvalue), so the (projected) prior is strictly inside.
+// The fit keeps J̃ ⪰ f·I with f this fraction of the projection's floor (relative to the prior
+// link's largest eigenvalue): a link projected at that floor is then strictly inside.
 constexpr double kFitFloorShare = 0.1;
 
 std::string number(double value) {
@@ -110,7 +110,9 @@ void validate_options(const ConsistentFitOptions& options, int p) {
                                                         {"options.function_tolerance", options.function_tolerance},
                                                         {"options.step_tolerance", options.step_tolerance}};
   for (const auto& [field, value] : tolerances) {
-    if (!std::isfinite(value) || value < 0.0) throw InputError(field, "must be a finite number ≥ 0, got " + number(value));
+    if (!std::isfinite(value) || value < 0.0) {
+      throw InputError(field, "must be a finite number ≥ 0, got " + number(value));
+    }
   }
   if (!std::isfinite(options.initial_damping) || !(options.initial_damping > 0.0)) {
     throw InputError("options.initial_damping", "must be a positive finite number, got " +
@@ -141,11 +143,11 @@ Matrix10d log_det_curvature(const Eigen::Matrix4d& inverse_factor) {
   return curvature;
 }
 
-// What link k's barrier B_k needs: the floor F_k and its centre's shifted pseudo-inertia A₀.
+// What link k's barrier B_k needs: the margin F_k and its centre's shifted pseudo-inertia A_c.
 struct LinkBarrier {
   Eigen::Matrix4d floor;           // F_k = diag(f L², f L², f L², f): J̃ ⪰ f·I ⇔ J ⪰ F_k
-  Eigen::Matrix4d inverse;         // A₀⁻¹
-  double log_det = 0.0;            // ln det A₀
+  Eigen::Matrix4d inverse;         // A_c⁻¹
+  double log_det = 0.0;            // ln det A_c
 };
 
 // The data after validation, reduced to at most p rows, with what every iteration needs.
@@ -215,7 +217,7 @@ void linearise(const Data& d, const Point& point, Eigen::VectorXd& g, Eigen::Mat
     const Eigen::Matrix4d inverse_factor =
         point.shifted[k].triangularView<Eigen::Lower>().solve(Eigen::Matrix4d::Identity());
     const Eigen::Matrix4d inverse = inverse_factor.transpose() * inverse_factor;  // A⁻¹
-    // ∂B/∂π_i = ⟨A₀⁻¹ − A⁻¹, E_i⟩; ∂²B/∂π_i∂π_j = tr(A⁻¹E_iA⁻¹E_j).
+    // ∂B/∂π_i = ⟨A_c⁻¹ − A⁻¹, E_i⟩; ∂²B/∂π_i∂π_j = tr(A⁻¹E_iA⁻¹E_j).
     const Eigen::Matrix4d difference = d.barriers[k].inverse - inverse;
     for (int i = 0; i < 10; ++i) w[offset + i] += d.barrier_weight * (difference.array() * basis[i].array()).sum();
     curvature.block<10, 10>(offset, offset) += d.barrier_weight * log_det_curvature(inverse_factor);
@@ -343,8 +345,9 @@ Eigen::VectorXd make_consistent(const ParameterStructure& structure, const Eigen
     if (!projection) {
       projection = detail::try_project_link(prior.segment<10>(offset), length, options.projection.relative_floor);
       if (!projection) {
-        throw InputError("prior", structure.link_names[k] + ": neither the estimate nor the prior has a positive "
-                                                            "pseudo-inertia eigenvalue, so there is no consistent start");
+        throw InputError("prior", structure.link_names[k] +
+                                      ": neither the estimate nor the prior has a positive pseudo-inertia "
+                                      "eigenvalue, so there is no consistent start");
       }
       projection->changed = true;
     }
@@ -399,7 +402,7 @@ std::string ConsistentFitSummary::brief_report() const {
 ConsistentFitSummary fit_consistent(const ParameterStructure& structure, const ConsistentFitProblem& problem,
                                     const ConsistentFitOptions& options) {
   // ---- Validation: sizes, emptiness, finiteness, ranges. Nothing else reaches a solver. ----
-  validate(structure);
+  check_structure(structure);
   const int p = structure.parameter_count;
   if (problem.R.rows() == 0 || problem.R.cols() != p) {
     throw InputError("R", "R must have at least one row and " + std::to_string(p) +

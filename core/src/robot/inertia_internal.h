@@ -1,4 +1,4 @@
-// inertia_internal.h — internal: the projection and the log-Cholesky inverse without exceptions, the factor U, and the length scale rule, shared by the robot/ sources.
+// inertia_internal.h — internal: exception-free projection and log-Cholesky inverse, the factor U, the length scale.
 #pragma once
 
 #include "manipid/core/robot/consistency.h"

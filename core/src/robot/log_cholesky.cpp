@@ -1,4 +1,4 @@
-// log_cholesky.cpp — Rucker & Wensing's log-Cholesky map θ ↔ π and its exact Jacobian (log_cholesky.h).
+// log_cholesky.cpp — Rucker & Wensing's log-Cholesky map θ ↔ π and its exact Jacobian.
 #include "manipid/core/robot/log_cholesky.h"
 
 #include "inertia_internal.h"

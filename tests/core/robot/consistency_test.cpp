@@ -1,4 +1,4 @@
-// consistency_test.cpp — the consistency report on textbook solids and on each classic violation, and the projection onto the consistent set.
+// consistency_test.cpp — the consistency report on textbook solids and each classic violation; the projection.
 #include "manipid/core/robot/consistency.h"
 
 #include "manipid/core/model.h"
@@ -168,7 +168,8 @@ TEST(Consistency, FlatPlateAndPointMassAreOnTheBoundaryNotInside) {
   const double m = 1.0, a = 0.3, b = 0.2;
   std::vector<std::string> findings;
   const LinkConsistency plate =
-      check_link(place(m, Eigen::Vector3d(b * b, a * a, a * a + b * b).asDiagonal() * (m / 12), Eigen::Vector3d(0.1, 0.2, 0.3)),
+      check_link(place(m, Eigen::Vector3d(b * b, a * a, a * a + b * b).asDiagonal() * (m / 12),
+                       Eigen::Vector3d(0.1, 0.2, 0.3)),
                  "plate", &findings);
   EXPECT_TRUE(plate.inertia_about_com_positive_definite);
   EXPECT_FALSE(plate.triangle_inequalities);
@@ -288,7 +289,8 @@ TEST(Projection, ConsistentLinkIsReturnedUnchanged) {
 
 TEST(Projection, InconsistentLinkLandsConsistentAndNearest) {
   // A consistent truth, then an estimate of it with I_c made indefinite (as noisy data do).
-  const Vector10d truth = place(2.0, box_inertia(2.0, 0.4, 0.06, 0.05), Eigen::Vector3d(0.2, 0.01, 0.0), some_rotation());
+  const Vector10d truth =
+      place(2.0, box_inertia(2.0, 0.4, 0.06, 0.05), Eigen::Vector3d(0.2, 0.01, 0.0), some_rotation());
   Vector10d estimate = truth;
   estimate[4] -= 0.004;   // Ixx
   estimate[8] += 0.0015;  // Iyz

@@ -1,4 +1,4 @@
-// consistent_fit_test.cpp — the constrained fit: exact recovery, repair of an inconsistent least-squares estimate, the prior along the null space, active bounds, cancellation, bad input.
+// consistent_fit_test.cpp — the constrained fit: exact recovery, repair, the null space, bounds, cancel, bad input.
 #include "manipid/core/robot/consistent_fit.h"
 
 #include "manipid/core/model.h"

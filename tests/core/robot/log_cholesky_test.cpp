@@ -1,4 +1,4 @@
-// log_cholesky_test.cpp — θ ↔ π round trips, consistency of every θ, the header's written-out formulas, and the Jacobian against finite differences.
+// log_cholesky_test.cpp — θ ↔ π round trips, every θ consistent, the header's formulas, the Jacobian.
 #include "manipid/core/robot/log_cholesky.h"
 
 #include "manipid/core/model.h"
@@ -28,7 +28,8 @@ TEST(LogCholesky, BoxAtItsCentreHasKnownCoordinates) {
 
 TEST(LogCholesky, CentreOfMassIsT) {
   const Eigen::Vector3d com(0.3, -0.1, 0.25);
-  const LogCholesky theta = log_cholesky_from_standard(place(2.0, box_inertia(2.0, 0.3, 0.2, 0.1), com, some_rotation()));
+  const LogCholesky theta =
+      log_cholesky_from_standard(place(2.0, box_inertia(2.0, 0.3, 0.2, 0.1), com, some_rotation()));
   EXPECT_LT((theta.tail<3>() - com).cwiseAbs().maxCoeff(), 1e-15);
   EXPECT_NEAR(theta[0], 0.5 * std::log(2.0), 1e-15);
 }

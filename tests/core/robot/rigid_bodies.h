@@ -1,4 +1,4 @@
-// rigid_bodies.h — test support: textbook solid bodies as standard parameters, random log-Cholesky vectors, parameter structures.
+// rigid_bodies.h — test support: textbook solids as standard parameters, random θ, parameter structures.
 #pragma once
 
 #include "manipid/core/robot/consistency.h"

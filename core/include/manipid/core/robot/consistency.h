@@ -54,7 +54,7 @@ struct ParameterStructure {
 /// Throws manipid::InputError naming the field ("structure.link_offsets", ...) unless the
 /// structure is usable: p > 0, blocks inside [0, p) and disjoint, non-negative indices inside
 /// [0, p), outside every block and not repeated, one name per link and per parameter.
-void validate(const ParameterStructure& structure);
+void check_structure(const ParameterStructure& structure);
 
 /// \brief The pseudo-inertia J (4×4, symmetric) of one link's standard parameters.
 /// Units: Σ block kg·m², h column kg·m, m kg.
@@ -155,7 +155,8 @@ struct ProjectionOptions {
 /// The outcome of projecting one link.
 struct LinkProjection {
   Vector10d link;          ///< the projected standard parameters
-  bool changed = false;    ///< false: the input already had every eigenvalue of J̃ above the floor (returned unchanged)
+  /// false: every eigenvalue of the input's J̃ was already above the floor (returned unchanged)
+  bool changed = false;
   double distance = 0.0;   ///< ‖J̃_projected − J̃‖_F, kg
   double length_scale = 0.0;  ///< the L used, m
 };

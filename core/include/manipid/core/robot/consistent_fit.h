@@ -1,73 +1,64 @@
 // consistent_fit.h — the least-squares fit of τ = Y·π over physically consistent parameters only.
 //
-//   minimise   ‖R π − z‖²  +  γ ‖S⁻¹(π − π₀)‖²
-//   over       π whose every link has J̃ ⪰ f·I (J ≻ 0 with a margin) and whose non-negative
-//              entries are ≥ 0.
+//   minimise   ‖R π − z‖² + γ ‖S⁻¹(π − π₀)‖²
+//   over       π whose every link has J̃ ⪰ f·I (J ≻ 0 with a small margin) and whose
+//              non-negative entries are ≥ 0.
 //
 // R (m×p) and z (m) are any reduction of the stacked, filtered regression — in practice the
-// triangular factor of its QR, so the cost is cheap whatever the number of samples. R is
-// rank-deficient: only the base-parameter combinations are determined by data.
+// triangular factor of its QR, so the cost does not grow with the number of samples. R is
+// rank-deficient: the data determine only the base-parameter combinations.
 //
-// The prior term (rank deficiency). Directions the data do not see stay at the prior π₀ (the
-// URDF's CAD values): S = diag(s) puts every entry in its natural size (see
-// ConsistentFitOptions::parameter_scale), and
+// Prior term. Directions the data do not see stay at the prior π₀ (the URDF's CAD values).
+// S = diag(s) puts every entry in its natural size (ConsistentFitOptions::parameter_scale) and
+// γ = ε·σ_max(R S)², so ε weighs the prior against the data's strongest direction: along a
+// direction of R S with singular value σ the estimate moves toward the prior by the fraction
+// ε/(ε + (σ/σ_max)²). The default ε = 1e-8 = (1e-4)²: directions with σ/σ_max ≪ 1e-4 are the
+// prior's, at σ/σ_max = 1e-3 (uncertainty.cpp's edge of "poorly determined") the prior takes
+// 1 %, at 1e-2 0.01 %. The summary reports the term beside the data term.
 //
-//   γ = ε · σ_max(R S)²,
+// Links. Each link's ten entries are replaced by its log-Cholesky coordinates θ
+// (log_cholesky.h), so every iterate has J ≻ 0. That set is open: when the data push a link
+// outward (routine for slender or poorly excited links under noise) the constrained minimum
+// lies on its boundary, which θ reaches only at infinity — the iterates crawl outward, never
+// converge, and the link ends numerically flat (as observed without one). So the fit keeps a
+// margin, J̃ ⪰ f·I in project_link()'s scaled pseudo-inertia with f a tenth of the projection's
+// floor times the prior link's largest eigenvalue (the link stays at least ~3e-4 of its size
+// thick), and meets it as interior-point methods do, with a barrier: the shifted log-det
+// divergence (Lee, Wensing & Park, IEEE T-RO 2020)
 //
-// so ε is the prior's weight relative to the data's strongest direction: along a direction of
-// R S with singular value σ, the estimate is pulled toward the prior by the fraction
-// ε/(ε + (σ/σ_max)²). The default ε = 1e-8 = (1e-4)²: directions with σ/σ_max ≪ 1e-4 are
-// decided by the prior, directions with σ/σ_max = 1e-3 (the edge of "poorly determined" in
-// uncertainty.cpp) move 1 % of the way, with σ/σ_max = 1e-2 by 0.01 %. The summary reports the
-// term's size beside the data term.
+//   μ·2B(J),   B = tr(A_c⁻¹A) − ln det(A_c⁻¹A) − 4,   A = J − F,  A_c = J_c − F,
 //
-// The constraints:
-//  - links: each link's ten entries are replaced by its log-Cholesky coordinates θ
-//    (log_cholesky.h), so every iterate has J ≻ 0. The set J ≻ 0 is open, though, and when the
-//    data push a link outward (routine for thin or poorly excited links with noisy data) the
-//    constrained minimum lies on its boundary — which θ reaches only at infinity: the
-//    iterates crawl outward, never converge, and the link ends numerically flat. So the fit
-//    asks for a margin, J̃ ⪰ f·I in the scaled pseudo-inertia of project_link() (f a tenth of
-//    the projection's floor, relative to the prior's largest eigenvalue: the link stays at
-//    least about 3e-4 of its size thick), and meets it with a barrier, as interior-point
-//    methods do: the shifted log-det divergence (Lee, Wensing & Park, IEEE T-RO 2020)
-//        B(J) = tr(A₀⁻¹A) − ln det(A₀⁻¹A) − 4,   A = J − F, A₀ = J_c − F (F the floor in J's units),
-//    weighted by μ. B is convex in π and infinite on the margin's boundary. Its centre J_c is
-//    the regularised least-squares point (see fit_consistent), which has the data's values
-//    where the data see and the prior's where they do not (for a link that point has
-//    inconsistent, the start), so B has no gradient there: where that point is consistent it
-//    is the answer, and the barrier moves nothing. μ
-//    follows a continuation down to 0.1·γ; where links must move from it (the data push them
-//    against the margin) the barrier adds a pull toward it of about a tenth of the prior
-//    term's, more along a slender link's thin direction, whose relative changes B weighs
-//    (r⁻⁴/10 times the prior term for thickness ratio r) — it is what holds such a link off
-//    the margin;
-//  - non-negative entries (fv, fc, Ia): kept as themselves with the bound x ≥ 0, enforced by
-//    projecting each step (an active-set, projected Levenberg–Marquardt). A smooth map was
-//    the alternative and is worse exactly where it matters: with x = s², s = 0 is a
-//    stationary point of every cost, so an entry clipped to 0 at the start can never leave
-//    it, and near an active bound Gauss–Newton's model drops the term 2·r·∂²x/∂s² that is
-//    then the whole curvature; with x = eˢ or softplus, 0 is never reached and an entry
-//    whose optimum is 0 (a joint with no Coulomb friction, estimated at −0.01 N·m by least
-//    squares) creeps toward it linearly while the problem's conditioning grows as e^{−2s}.
-//    A bound is what the constraint is, and a projected step meets it exactly;
-//  - free entries (friction offsets, ...): as they are.
+// F the margin in J's units. B is convex in π and infinite on the margin. Its centre J_c is
+// the regularised least-squares point (fit_consistent()), which has the data's values where
+// the data see and the prior's where they do not: B has no gradient there, so where that
+// point is consistent it is the answer and the barrier moves nothing. (For a link it has
+// inconsistent, J_c is the start.) μ is followed down to 0.1·γ; where the data push a link
+// against the margin, the barrier holds it off with a pull toward J_c of about a tenth of the
+// prior term's — more along a slender link's thin direction, whose relative changes B weighs
+// (r⁻⁴/10 of the prior term for a thickness ratio r).
 //
-// Solver: Levenberg–Marquardt over y (θ for links, the parameter itself elsewhere) with the
-// exact Jacobian R·∂π/∂y, the model being Newton's in π pulled back through ∂π/∂y (exact for
-// the quadratic terms, the barrier's own Hessian for its part), Marquardt's diagonal scaling
-// and Nielsen's damping update, over Eigen's Cholesky. The objective is a function of π, so a
-// link's step is taken through π — θ_new = θ(π + P δθ), equal to θ + δθ to first order — where
-// the model describes the data term exactly; the chart step θ + δθ would bend away from it,
-// most on thin links. As in interior-point methods, a step goes at most 95 % of the way to the
-// margin's boundary along its direction, and μ decreases by factors of 10 from μ₀ (each stage
-// warm-started, the last solved to the requested tolerances): the barrier's Newton model holds
-// only for steps short against the distance to the boundary, and a thin link turns its thin
-// axis only slowly near it. μ₀ is the start's gap over the barrier parameter, (cost at the
-// start − cost at π_LS)/(4 × links), capped at 1e-2·σ_max(R S)²: a poor start begins fat, a
-// good one skips the stages it does not need. Each iteration costs O(p²·10 + p³/3) — a few
-// tenths of a millisecond for p = 91 — whatever the number of samples (R is first reduced to
-// p rows when it has more); a fit takes some tens of iterations.
+// Non-negative entries (fv, fc, Ia) keep their own values with the bound x ≥ 0, met by
+// projecting each step (an active-set projected Levenberg–Marquardt). A smooth map is worse
+// exactly where it matters: with x = s², s = 0 is a stationary point of every cost, so an
+// entry clipped to 0 at the start never leaves it, and near an active bound Gauss–Newton drops
+// the term 2·r·∂²x/∂s² that is then the whole curvature; with x = eˢ or softplus, 0 is never
+// reached and an entry whose optimum is 0 (a joint without Coulomb friction that least
+// squares puts at −0.01 N·m) creeps toward it while the conditioning grows as e^{−2s}. A bound
+// is what the constraint is. Free entries (friction offsets, ...) are as they are.
+//
+// Solver. Levenberg–Marquardt over y (θ for links, the parameter elsewhere) with the exact
+// Jacobian R·∂π/∂y; its model is Newton's in π pulled back through ∂π/∂y (exact for the
+// quadratic terms), with Marquardt's diagonal scaling, Nielsen's damping update and Eigen's
+// Cholesky. The objective depends on π only, so a link's step is taken through π,
+// θ_new = θ(π + P δθ) — θ + δθ to first order — where the model is exact for the data term;
+// the chart step θ + δθ would bend away from it, most on slender links. As interior-point
+// methods do, a step goes at most 95 % of the way to the margin along its direction, and μ
+// drops by factors of 10 from μ₀ = (start's cost − π_LS's cost)/(4 × links) (the start's gap
+// over the barrier parameter, capped at 1e-2·σ_max(R S)²), each stage warm-started and the
+// last solved to the requested tolerances: the barrier's Newton model holds only for steps
+// short against the distance to the margin, and a slender link turns its thin axis only
+// slowly near it. An iteration costs O(p²·10 + p³/3), about 0.1 ms at p = 91 whatever the
+// number of samples (R is first reduced to p rows when it has more); a fit takes 10–60.
 #pragma once
 
 #include "manipid/core/robot/consistency.h"
@@ -111,7 +102,7 @@ enum class FitTermination {
   converged_gradient,   ///< first-order optimality within gradient_tolerance
   converged_cost,       ///< an accepted step decreased F by less than function_tolerance·F
   converged_step,       ///< an accepted step moved no entry by more than step_tolerance of its scale
-  converged_exact,      ///< F (data and prior terms) is zero to rounding: an exact fit
+  converged_exact,      ///< the objective is zero to rounding: data and prior fit exactly
   rounding_limited,     ///< no step can decrease F any more in double precision (damping exhausted)
   max_iterations,       ///< stopped at max_iterations; the estimate is consistent but may not be optimal
   cancelled,            ///< the cancel flag was set; the estimate is the best consistent one so far
@@ -152,8 +143,9 @@ struct ConsistentFitOptions {
   /// scale of link k is L = s_h/s_m of the parameter scale unless set here.
   ProjectionOptions projection;
 
-  /// Stop rules (first met wins; checked after each iteration):
-  int max_iterations = 200;            ///< iterations (accepted or not); each costs ~0.1–0.3 ms at p = 91
+  /// Stop rules of the last continuation stage (first met wins; earlier stages end at relative
+  /// tolerances 1e-4 and go on to the next):
+  int max_iterations = 200;            ///< iterations (accepted or not), over all stages; ~0.1 ms each at p = 91
   /// MINPACK's gtol: max over the free variables of |g_i| / (√H_ii · √F), for least squares
   /// the cosine between the residual and each Jacobian column (scale-invariant), ≤ this.
   double gradient_tolerance = 1e-10;
@@ -174,10 +166,11 @@ struct ConsistentFitOptions {
 /// What happened (in the spirit of Ceres's Solver::Summary).
 struct ConsistentFitSummary {
   Eigen::VectorXd estimate;   ///< π, p: every link consistent, every non-negative entry ≥ 0
-  Eigen::VectorXd start;      ///< π the fit iterated from (see fit_consistent(): consistent, clipped)
-  std::vector<int> projected_links;  ///< links (structure order) the start had to project (at the ordinary floor)
-  std::vector<int> clipped_entries;  ///< indices of non-negative entries clipped to 0 at the start
-  std::vector<int> inconsistent_prior_links;  ///< links whose prior values are not consistent (the prior term still pulls toward them)
+  Eigen::VectorXd start;      ///< π the iterations started from (see fit_consistent())
+  std::vector<int> projected_links;  ///< links (structure order) the regularised point had inconsistent, projected
+  std::vector<int> clipped_entries;  ///< indices of non-negative entries it had negative, set to 0
+  /// Links whose prior values are not consistent (the prior term still pulls toward them).
+  std::vector<int> inconsistent_prior_links;
 
   FitTermination termination = FitTermination::max_iterations;
   std::string message;        ///< one sentence: why it stopped
@@ -214,15 +207,18 @@ struct ConsistentFitSummary {
 
 /// \brief The physically consistent constrained least-squares fit.
 ///
-/// Start: `problem.start` if given, else the regularised least-squares point
-/// π_LS + (RᵀR + γS⁻²)⁻¹(Rᵀ(z − Rπ_LS) + γS⁻²(π₀ − π_LS)) — the minimiser without the
-/// constraints: π_LS along what the data determine, the prior along what they do not (where
-/// π_LS is arbitrary, and projecting it would start from a degenerate link far from the
-/// answer) — then
-/// every link projected by project_link() with a relative floor of at least 1e-2 — a centred
-/// start, about a tenth as thick as it is large, not one on the boundary where the barrier's
-/// Newton model holds only for tiny steps (a link with no positive part takes its projected
-/// prior) — and every negative non-negative entry set to 0.
+/// The start is `problem.start` if given, else the regularised least-squares point
+///
+///   π_r = π_LS + (RᵀR + γS⁻²)⁻¹(Rᵀ(z − Rπ_LS) + γS⁻²(π₀ − π_LS)),
+///
+/// the minimiser without the constraints: π_LS along what the data determine and the prior
+/// along what they do not, where the caller's π_LS is arbitrary (minimum-norm, basic) and
+/// projecting it would start from a degenerate link far from the answer. That point made
+/// consistent by project_link() at the ordinary floor (a link with no positive part takes its
+/// projected prior; negative non-negative entries are set to 0) is the barrier's centre; the
+/// iterates start from it projected at a floor of 1e-2, a link at least about a tenth as thick
+/// as it is large, rather than on the margin, where the barrier's Newton model holds only for
+/// tiny steps.
 ///
 /// Throws manipid::InputError naming the field ("R", "z", "unconstrained", "prior", "start",
 /// "residual_offset", "options.regularization", ...) for wrong sizes, empty matrices,
