@@ -148,7 +148,7 @@ struct ProjectionOptions {
   /// become thin, never flat. Far above kConsistencyRelativeTolerance (the result passes
   /// check_link) and far below the size of a real body (the result stays close). Relative
   /// to the largest eigenvalue, which clipping leaves alone, so projecting twice with the
-  /// same L changes nothing the second time.
+  /// same L changes nothing the second time beyond rounding.
   double relative_floor = 1e-6;
 };
 
