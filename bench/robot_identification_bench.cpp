@@ -93,5 +93,18 @@ void BM_IdentifyPandaLike20000JitterySamples(benchmark::State& state) {
 }
 BENCHMARK(BM_IdentifyPandaLike20000JitterySamples)->Unit(benchmark::kMillisecond)->MinTime(2.0);
 
+/// The same with a physically consistent estimate (the constrained fit after the least squares).
+void BM_IdentifyPandaLike20000JitterySamplesPhysical(benchmark::State& state) {
+  const Run& r = run();
+  IdentificationOptions options;
+  options.layout = r.layout;
+  options.physical = true;
+  for (auto _ : state) {
+    const IdentificationResult result = identify(r.model, r.data, options);
+    benchmark::DoNotOptimize(result.estimate.data());
+  }
+}
+BENCHMARK(BM_IdentifyPandaLike20000JitterySamplesPhysical)->Unit(benchmark::kMillisecond)->MinTime(2.0);
+
 }  // namespace
 }  // namespace manipid::robot

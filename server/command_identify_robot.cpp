@@ -95,6 +95,14 @@ void print_table(const robot::Model& model, const robot::ParameterLayout& layout
     for (const std::string& name : result.unidentifiable) names += (names.empty() ? "" : ", ") + name;
     std::printf("\nnever in the torque (not identifiable; kept at the URDF's values): %s\n", names.c_str());
   }
+  if (result.consistency.consistent()) {
+    std::printf("\nphysically consistent: every link a real rigid body%s\n",
+                layout.viscous || layout.coulomb || layout.armature ? ", every friction term >= 0" : "");
+  } else {
+    std::printf("\nnot physically consistent (identify with --physical for an estimate that is):\n");
+    for (const std::string& finding : result.consistency.findings) std::printf("  - %s\n", finding.c_str());
+  }
+  if (result.physical) std::printf("physical fit: %s\n", result.physical->brief_report().c_str());
   std::printf("\nrelative error of the filtered torque, per joint (%s .. %s):\n", model.joints.front().name.c_str(),
               model.joints.back().name.c_str());
   print_prediction_row(("fit, " + data_name).substr(0, 22).c_str(), fit);
@@ -127,6 +135,7 @@ int run_identify_robot(const IdentifyOptions& options) {
   identification.layout = parameter_layout(options.friction, options.armature);
   identification.weighting =
       options.weights == "per-joint" ? robot::JointWeighting::per_joint : robot::JointWeighting::unit;
+  identification.physical = options.physical;
   if (!options.trim.empty()) {
     const auto comma = options.trim.find(',');
     if (comma == std::string::npos) throw InputError("trim", "--trim needs START,END: the seconds dropped at each end");

@@ -122,6 +122,7 @@ RobotIdentificationSpec robot_identification_from_json(const nlohmann::json& bod
   if (const Json* physical = object.find("physical")) {
     if (!physical->is_boolean()) throw InputError("physical", "physical must be true or false, got " + fields::describe(*physical));
     spec.physical = physical->get<bool>();
+    options.physical = spec.physical;
   }
   if (const Json* trim = object.find("trim")) {
     if (!trim->is_array() || trim->size() != 2) {

@@ -165,6 +165,35 @@ nlohmann::ordered_json robot_result_to_json(const robot::Model& model, const rob
         {"relative_error", numbers(fit.relative_error)},
         {"overall_relative_error", number(fit.overall_relative_error)}}},
   };
+  Json links_json = Json::array();
+  for (const robot::LinkConsistency& link : result.consistency.links) {
+    Json findings = Json::array();
+    for (const std::string& finding : result.consistency.findings) {
+      if (finding.rfind(link.name + ":", 0) == 0) findings.push_back(finding);
+    }
+    links_json.push_back({{"link", link.name},
+                          {"consistent", link.consistent()},
+                          {"mass", number(link.mass)},
+                          {"centre_of_mass", numbers(link.centre_of_mass)},
+                          {"principal_moments", numbers(link.principal_moments)},
+                          {"findings", findings}});
+  }
+  json["consistency"] = {{"consistent", result.consistency.consistent()},
+                         {"links", links_json},
+                         {"findings", result.consistency.findings}};
+  if (result.physical) {
+    const robot::ConsistentFitSummary& fit_summary = *result.physical;
+    json["physical"] = {{"converged", fit_summary.converged()},
+                        {"termination", robot::to_string(fit_summary.termination)},
+                        {"message", fit_summary.message},
+                        {"iterations", fit_summary.iterations},
+                        {"unconstrained_cost", number(fit_summary.unconstrained_cost)},
+                        {"projection_cost", number(fit_summary.projection_cost)},
+                        {"final_cost", number(fit_summary.final_cost)},
+                        {"cost_increase", number(fit_summary.relative_cost_increase)},
+                        {"prior_to_data_ratio", number(fit_summary.regularization_ratio)},
+                        {"report", fit_summary.brief_report()}};
+  }
   if (validation) {
     Json figures = prediction_json(validation->estimate);
     figures["prior"] = prediction_json(validation->prior);

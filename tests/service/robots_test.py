@@ -134,13 +134,16 @@ class RobotThroughTheService(unittest.TestCase):
             second = self.post("/v1/datasets?name=run2", stream.read(), {"Content-Type": "text/csv"}, 201)
 
         job = self.post("/v1/identifications", {"robot_id": robot["id"], "dataset_id": run["id"],
-                                                "validation_dataset_id": second["id"], "friction": ["viscous", "coulomb"]})
+                                                "validation_dataset_id": second["id"], "friction": ["viscous", "coulomb"],
+                                                "physical": True})
         self.assertEqual(job["robot_id"], robot["id"])
         job = self.server.wait_job(job["id"])
         self.assertEqual(job["state"], "succeeded", job)
         result = job["result"]
         self.assertEqual(len(result["base_parameters"]), 57)  # 43 inertial + 14 friction (viscous, Coulomb)
         self.assertTrue(any("repeated rows dropped" in warning for warning in result["warnings"]), result["warnings"])
+        self.assertTrue(result["consistency"]["consistent"], result["consistency"]["findings"])
+        self.assertTrue(result["physical"]["converged"], result["physical"])
         self.assertLess(result["validation"]["overall_relative_error"], 0.01)
         self.assertGreater(result["validation"]["prior"]["overall_relative_error"],
                            10 * result["validation"]["overall_relative_error"])
@@ -164,9 +167,6 @@ class RobotThroughTheService(unittest.TestCase):
 
         # The identified URDF: parses, and reproduces the estimate's torques.
         status, headers, identified = self.server.request("GET", f"/v1/jobs/{job['id']}/urdf")
-        if status == 409:  # the estimate is not a physical body: the server says so
-            self.assertIn("physical", identified["detail"])
-            self.skipTest("the unconstrained estimate is not a physical body: " + identified["detail"])
         self.assertEqual(status, 200, identified)
         self.assertIn("identified.urdf", headers["content-disposition"])
         with open(self.path("identified.urdf"), "w") as stream:

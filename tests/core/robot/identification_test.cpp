@@ -290,6 +290,45 @@ TEST(RobotIdentification, StandardErrorsCoverTheTruthOnNoisyData) {
   EXPECT_GT(largest_z, 0.3);
 }
 
+TEST(RobotIdentification, PhysicalEstimatesAreRealBodiesAtASmallCost) {
+  // Noisy torques and a short run: the unconstrained point is not a set of real bodies; the physical
+  // fit is, predicts about as well, and says what it cost.
+  const Model model = example("panda_like.urdf");
+  const ParameterLayout layout = with_offset();
+  std::mt19937_64 engine(23);
+  Eigen::VectorXd truth = standard_parameters(model, layout);  // the URDF's bodies: real ones
+  for (int k = 0; k < 7; ++k) {
+    truth[layout.viscous_begin(7) + k] = 0.5;
+    truth[layout.coulomb_begin(7) + k] = 1.0;
+    truth[layout.offset_begin(7) + k] = 0.1;
+  }
+  Trajectory data = measure(model, layout, truth, Fourier::random(7, 5, engine, 0.15), uniform_times(12.0, 1e-3));
+  const Eigen::VectorXd spread = data.tau.colwise().maxCoeff() - data.tau.colwise().minCoeff();
+  std::normal_distribution<double> normal;
+  for (Eigen::Index s = 0; s < data.tau.rows(); ++s) {
+    for (Eigen::Index k = 0; k < 7; ++k) data.tau(s, k) += 0.02 * spread[k] * normal(engine);
+  }
+  IdentificationOptions options;
+  options.layout = layout;
+  const IdentificationResult free = identify(model, data, options);
+  options.physical = true;
+  const IdentificationResult physical = identify(model, data, options);
+  EXPECT_FALSE(free.consistency.consistent());
+  EXPECT_FALSE(free.consistency.findings.empty());
+  EXPECT_FALSE(free.physical.has_value());
+  ASSERT_TRUE(physical.physical.has_value());
+  EXPECT_TRUE(physical.physical->converged()) << physical.physical->message;
+  EXPECT_TRUE(physical.consistency.consistent());
+  EXPECT_TRUE(physical.consistency.findings.empty());
+  EXPECT_GE(physical.physical->relative_cost_increase, -1e-9);
+  EXPECT_LT(physical.physical->relative_cost_increase, 0.5);
+  const double free_error = random_state_error(model, layout, free.point, truth, engine);
+  const double physical_error = random_state_error(model, layout, physical.point, truth, engine);
+  EXPECT_LT(physical_error, 2.0 * free_error + 1e-3) << free_error;
+  // The base estimates follow the physical point.
+  EXPECT_LT((physical.estimate - physical.base.combination * physical.point).norm(), 1e-9 * physical.estimate.norm());
+}
+
 TEST(RobotIdentification, ValidationOnASecondRunBeatsThePrior) {
   const Model model = example("ur5_like.urdf");
   const ParameterLayout layout = with_offset();

@@ -20,12 +20,19 @@
 //      independent: factor 1/(D Σc²), never below 1), correlations, the scaled regressor's condition
 //      number, the standard parameters no data can determine, and `point`: the full standard vector with
 //      the estimated base parameters that is nearest (Euclidean) to the prior — the URDF's own values —
-//      so what the data cannot see stays at the CAD values.
+//      so what the data cannot see stays at the CAD values;
+//   5. physical consistency (robot/consistency.h): whether each link of `point` is a real body (mass > 0,
+//      pseudo-inertia positive definite: inertia about the centre of mass positive definite, triangle
+//      inequalities) and each fv, fc, Ia ≥ 0. With `physical`, the constrained fit (robot/consistent_fit.h:
+//      log-Cholesky coordinates per link, Levenberg–Marquardt on the same rows, from the projected
+//      least-squares point) replaces `point` and the base estimates, and reports the cost it adds.
 #pragma once
 
 #include "manipid/core/filters.h"
 #include "manipid/core/resample.h"
 #include "manipid/core/robot/base_parameters.h"
+#include "manipid/core/robot/consistency.h"
+#include "manipid/core/robot/consistent_fit.h"
 #include "manipid/core/robot/filtered_regressor.h"
 #include "manipid/core/robot/model.h"
 #include "manipid/core/robot/parameters.h"
@@ -57,6 +64,9 @@ struct IdentificationOptions {
   int comparison_half_length = 0;
   double comparison_band = 0.0;
   JointWeighting weighting = JointWeighting::unit;
+  /// A physically consistent estimate (see the file comment, step 5). The standard errors stay the
+  /// unconstrained fit's: they describe the data, and they hold while no link sits on the boundary.
+  bool physical = false;
   /// The prior standard vector (the CAD values; dim layout.size(n)); empty = the model's own
   /// (standard_parameters(model, layout)).
   Eigen::VectorXd prior;
@@ -82,6 +92,10 @@ struct IdentificationResult {
   Eigen::VectorXd point;
   /// Standard parameters that never enter the torque (the base parameter names list the rest).
   std::vector<std::string> unidentifiable;
+  /// Whether `point` is physically consistent, link by link (robot/consistency.h).
+  ConsistencyReport consistency;
+  /// With IdentificationOptions::physical: the constrained fit's summary (what it cost, why it stopped).
+  std::optional<ConsistentFitSummary> physical;
 
   FilterPair filters;
   bool filters_chosen_automatically = false;
