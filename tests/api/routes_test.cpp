@@ -1032,6 +1032,128 @@ TEST_F(Routes, DashboardIsServed) {
 
 // ---- The bearer token --------------------------------------------------------------------
 
+// ---- Robots ------------------------------------------------------------------------------
+
+/// A small, valid two-joint arm.
+const char* const kTwoJointUrdf = R"(<robot name="two">
+  <link name="base"/>
+  <joint name="j1" type="revolute"><parent link="base"/><child link="l1"/><axis xyz="0 0 1"/>
+    <limit lower="-2" upper="2" velocity="2" effort="50"/></joint>
+  <link name="l1"><inertial><origin xyz="0.1 0 0"/><mass value="2"/><inertia ixx="0.01" ixy="0" ixz="0" iyy="0.02" iyz="0" izz="0.02"/></inertial></link>
+  <joint name="j2" type="revolute"><parent link="l1"/><child link="l2"/><origin xyz="0.3 0 0"/><axis xyz="0 1 0"/>
+    <limit lower="-2" upper="2" velocity="2" effort="50"/></joint>
+  <link name="l2"><inertial><origin xyz="0.1 0 0"/><mass value="1"/><inertia ixx="0.005" ixy="0" ixz="0" iyy="0.01" iyz="0" izz="0.01"/></inertial></link>
+</robot>)";
+
+TEST_F(Routes, ARobotUploadsAsXmlOrJsonAndComesBackByteForByte) {
+  const auto xml = post("/v1/robots?name=arm&tip=l2", kTwoJointUrdf, "application/xml", {{"Idempotency-Key", "r1"}});
+  ASSERT_TRUE(xml);
+  EXPECT_EQ(xml->status, 201) << xml->body;
+  EXPECT_EQ(xml->get_header_value("Location"), "/v1/robots/rb_1");
+  const Json robot = json_of(xml);
+  EXPECT_EQ(robot["name"], "arm");
+  EXPECT_EQ(robot["robot_name"], "two");
+  EXPECT_EQ(robot["tip_link"], "l2");
+  ASSERT_EQ(robot["joints"].size(), 2u);
+  EXPECT_EQ(robot["joints"][1]["axis"], Json::array({0.0, 1.0, 0.0}));
+  EXPECT_EQ(robot["parameters"]["names"].size(), 24u);  // 2 × 10 inertial + viscous and Coulomb per joint
+  EXPECT_EQ(robot["parameters"]["urdf_values"]["m2"], 1.0);
+  EXPECT_GT(robot["base_parameters"]["count"], 0);
+  EXPECT_EQ(robot["links"]["urdf"], "/v1/robots/rb_1?format=urdf");
+  const auto back = get("/v1/robots/rb_1?format=urdf");
+  ASSERT_TRUE(back);
+  EXPECT_EQ(back->status, 200);
+  EXPECT_EQ(back->get_header_value("Content-Type"), "application/xml");
+  EXPECT_EQ(back->body, kTwoJointUrdf);
+
+  const Json body = {{"urdf", kTwoJointUrdf}, {"base", "base"}};
+  const auto json = post("/v1/robots", body.dump());
+  ASSERT_TRUE(json);
+  EXPECT_EQ(json->status, 201) << json->body;
+  EXPECT_EQ(json_of(json)["name"], "two");  // the URDF's name when none is given
+  const Json list = json_of(get("/v1/robots"));
+  EXPECT_EQ(list["items"].size(), 2u);
+  EXPECT_EQ(json_of(get("/v1/robots/rb_2"))["base_link"], "base");
+}
+
+TEST_F(Routes, BadRobotsAreRefusedNamingTheFieldAndNothingIsStored) {
+  expect_problem(post("/v1/robots", "<robot name='x'><link", "application/xml"), 422, "INVALID_FIELD", "urdf");
+  expect_problem(post("/v1/robots?tip=nowhere", kTwoJointUrdf, "application/xml"), 422, "INVALID_FIELD", "tip");
+  const std::string negative = std::string(kTwoJointUrdf).replace(std::string(kTwoJointUrdf).find("value=\"1\""), 9, "value=\"-1\"");
+  const Json problem = expect_problem(post("/v1/robots", negative, "text/xml"), 422, "INVALID_FIELD", "urdf");
+  EXPECT_NE(problem["detail"].get<std::string>().find("l2"), std::string::npos) << problem["detail"];
+  expect_problem(post("/v1/robots", R"({"name": "no document"})"), 422, "INVALID_FIELD", "urdf");
+  expect_problem(post("/v1/robots", R"({"urdf": 3})"), 422, "INVALID_FIELD", "urdf");
+  expect_problem(post("/v1/robots", kTwoJointUrdf, "text/csv"), 415, "UNSUPPORTED_MEDIA", "Content-Type");
+  EXPECT_TRUE(json_of(get("/v1/robots"))["items"].empty());
+  expect_problem(get("/v1/robots/rb_9"), 404, "NOT_FOUND", "id");
+  expect_problem(get("/v1/robots/rb_9?format=urdf"), 404, "NOT_FOUND", "id");
+  expect_problem(get("/v1/robots/rb_9?format=yaml"), 422, "INVALID_FIELD", "format");
+}
+
+TEST_F(Routes, ARobotInUseIsNotDeleted) {
+  ASSERT_EQ(post("/v1/robots", kTwoJointUrdf, "application/xml")->status, 201);
+  fake_.script([](Script& s) { s.delete_outcome = DeleteOutcome::conflict; });
+  expect_problem(client().Delete("/v1/robots/rb_1"), 409, "CONFLICT", "id");
+  fake_.script([](Script&) {});
+  EXPECT_EQ(client().Delete("/v1/robots/rb_1")->status, 204);
+  expect_problem(client().Delete("/v1/robots/rb_1"), 404, "NOT_FOUND", "id");
+}
+
+TEST_F(Routes, ARobotIdentificationIsCheckedAgainstTheRobotAndBothDatasets) {
+  ASSERT_EQ(post("/v1/robots", kTwoJointUrdf, "application/xml")->status, 201);
+  fake_.add_dataset(dataset_info("ds_two", 2, 5000));
+  fake_.add_dataset(dataset_info("ds_second", 2, 4000));
+  fake_.add_dataset(dataset_info("ds_four", 4, 5000));
+  fake_.add_dataset(dataset_info("ds_no_tau", 2, 5000, false, true));
+  const Json request = {{"robot_id", "rb_1"}, {"dataset_id", "ds_two"}, {"validation_dataset_id", "ds_second"},
+                        {"friction", {"viscous", "coulomb", "offset"}}, {"physical", true}, {"trim", {0.5, 0.5}}};
+  const auto queued = post("/v1/identifications", request.dump());
+  ASSERT_TRUE(queued);
+  EXPECT_EQ(queued->status, 202) << queued->body;
+  const auto submissions = fake_.submissions();
+  ASSERT_EQ(submissions.size(), 1u);
+  EXPECT_EQ(submissions[0].robot_id, "rb_1");
+  EXPECT_EQ(submissions[0].dataset_id, "ds_two");
+  EXPECT_EQ(submissions[0].validation_dataset_id, "ds_second");
+  EXPECT_EQ(json_of(queued)["robot_id"], "rb_1");
+
+  const auto refused = [&](Json body, const std::string& field) {
+    return expect_problem(post("/v1/identifications", body.dump()), 422, "INVALID_FIELD", field);
+  };
+  const Json four = refused({{"robot_id", "rb_1"}, {"dataset_id", "ds_four"}}, "dataset_id");
+  EXPECT_NE(four["detail"].get<std::string>().find("4 joints, the robot two has 2"), std::string::npos) << four;
+  refused({{"robot_id", "rb_1"}, {"dataset_id", "ds_two"}, {"validation_dataset_id", "ds_four"}}, "validation_dataset_id");
+  refused({{"robot_id", "rb_1"}, {"dataset_id", "ds_no_tau"}}, "dataset_id");
+  refused({{"robot_id", "rb_7"}, {"dataset_id", "ds_two"}}, "robot_id");
+  refused({{"robot_id", "rb_1"}, {"dataset_id", "ds_nothing"}}, "dataset_id");
+  refused({{"robot_id", "rb_1"}, {"dataset_id", "ds_two"}, {"free", {"m2"}}}, "free");
+  refused({{"robot_id", "rb_1"}, {"dataset_id", "ds_two"}, {"friction", {"sticky"}}}, "friction");
+  refused({{"robot_id", "rb_1"}, {"dataset_id", "ds_two"}, {"trim", {1}}}, "trim");
+  refused({{"robot_id", "rb_1"}, {"dataset_id", "ds_two"}, {"band", 0.1}}, "half_length");
+  refused({{"robot_id", "rb_1"}, {"dataset_id", "ds_two"}, {"weights", "inverse-variance"}}, "weights");
+  refused({{"robot_id", "rb_1"}}, "dataset_id");
+  EXPECT_EQ(fake_.submissions().size(), 1u);  // nothing more was queued
+}
+
+TEST_F(Routes, AnExcitationIsQueuedForAnExistingRobotOnly) {
+  ASSERT_EQ(post("/v1/robots", kTwoJointUrdf, "application/xml")->status, 201);
+  const auto queued = post("/v1/excitations", R"({"robot_id": "rb_1", "period": 8, "harmonics": 4, "duration": 16})");
+  ASSERT_TRUE(queued);
+  EXPECT_EQ(queued->status, 202) << queued->body;
+  ASSERT_EQ(fake_.submissions().size(), 1u);
+  EXPECT_EQ(fake_.submissions()[0].kind, JobKind::excitation);
+  EXPECT_EQ(fake_.submissions()[0].robot_id, "rb_1");
+  EXPECT_EQ(json_of(queued)["kind"], "excitation");
+  expect_problem(post("/v1/excitations", R"({"robot_id": "rb_9"})"), 422, "INVALID_FIELD", "robot_id");
+  expect_problem(post("/v1/excitations", R"({"robot_id": "rb_1", "harmonics": 1})"), 422, "INVALID_FIELD", "harmonics");
+  expect_problem(post("/v1/excitations", R"({"robot_id": "rb_1", "duration": 15})"), 422, "INVALID_FIELD", "duration");
+  expect_problem(post("/v1/excitations", R"({"robot_id": "rb_1", "max_acceleration": [1, 2, 3]})"), 422, "INVALID_FIELD",
+                 "max_acceleration");
+  expect_problem(post("/v1/excitations", R"({"period": 10})"), 422, "INVALID_FIELD", "robot_id");
+  EXPECT_EQ(fake_.submissions().size(), 1u);
+}
+
 TEST_F(RoutesWithToken, TheApiNeedsTheBearerToken) {
   fake_.add_job(job_info("job_a", JobKind::identification, JobState::running));
   for (const httplib::Headers& headers : std::vector<httplib::Headers>{
