@@ -1154,6 +1154,24 @@ TEST_F(Routes, AnExcitationIsQueuedForAnExistingRobotOnly) {
   EXPECT_EQ(fake_.submissions().size(), 1u);
 }
 
+TEST_F(Routes, OnlyASucceededRobotIdentificationHasAnIdentifiedUrdf) {
+  ASSERT_EQ(post("/v1/robots", kTwoJointUrdf, "application/xml")->status, 201);
+  JobInfo excitation = job_info("job_excitation", JobKind::excitation, JobState::succeeded);
+  excitation.robot_id = "rb_1";
+  excitation.result = R"({"dataset_id": "ds_made", "criterion": "condition"})";
+  fake_.add_job(excitation);
+  JobInfo running = job_info("job_running", JobKind::identification, JobState::running);
+  running.robot_id = "rb_1";
+  fake_.add_job(running);
+  fake_.add_job(job_info("job_paper", JobKind::identification, JobState::succeeded));
+  for (const char* id : {"job_excitation", "job_running", "job_paper"}) {
+    const Json problem = expect_problem(get(std::string("/v1/jobs/") + id + "/urdf"), 409, "CONFLICT", "id");
+    EXPECT_NE(problem["detail"].get<std::string>().find("not a succeeded robot identification"), std::string::npos)
+        << problem;
+  }
+  expect_problem(get("/v1/jobs/job_none/urdf"), 404, "NOT_FOUND", "id");
+}
+
 TEST_F(RoutesWithToken, TheApiNeedsTheBearerToken) {
   fake_.add_job(job_info("job_a", JobKind::identification, JobState::running));
   for (const httplib::Headers& headers : std::vector<httplib::Headers>{

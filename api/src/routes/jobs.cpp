@@ -194,7 +194,7 @@ void job_urdf(RouteState& state, const httplib::Request& request, httplib::Respo
   const std::string id = request.matches[1];
   const auto job = state.service.job(id);
   if (!job) throw ApiError(ProblemKind::not_found, "no job " + id, "id");
-  if (job->robot_id.empty() || job->state != JobState::succeeded) {
+  if (job->kind != JobKind::identification || job->robot_id.empty() || job->state != JobState::succeeded) {
     throw ApiError(ProblemKind::conflict, "job " + id + " is not a succeeded robot identification: no estimate to write", "id");
   }
   const auto robot = state.service.robot(job->robot_id);
