@@ -274,6 +274,15 @@ class RobotsAgainstServer(unittest.TestCase):
         thinned = job.trajectory(max_points=100)["t"]  # for plotting: about 100, the first and the last
         self.assertTrue(90 <= len(thinned) <= 100 and thinned[0] == 0.0 and thinned[-1] == trajectory["t"][-1], thinned)
 
+    def test_friction_as_text_and_none(self) -> None:
+        job = self.client.identify(self.check, robot=self.arm, friction="none", trim=(0.5, 0.5), weights="per-joint")
+        self.assertEqual(job.data["request"], {"robot_id": self.arm.id, "dataset_id": self.check.id, "friction": [],
+                                               "trim": [0.5, 0.5], "weights": "per-joint"})
+        result = job.robot_result(timeout=300)
+        self.assertEqual(result["parameters"]["friction"], [])
+        self.assertFalse([name for name in result.base_parameters if name[:2] in ("fv", "fc", "fo")])
+        self.assertEqual(result.friction, {joint: {} for joint in PANDA_JOINTS})
+
     # --- errors ----------------------------------------------------------------------------
     def test_unknown_robot(self) -> None:
         with self.assertRaises(ManipidError) as caught:
