@@ -462,14 +462,14 @@ class Client:
             body["friction"] = _friction(body["friction"])
         return Job(self, self._request("POST", "/v1/excitations", body, headers=_idempotency(idempotency_key)))
 
-    def excitation_trajectory(self, job: Union[str, Job], path: Optional[PathLike] = None,
+    def excitation_trajectory(self, job: Union[str, Job, Mapping[str, Any]], path: Optional[PathLike] = None,
                               max_points: Optional[int] = None, timeout: Optional[float] = None) -> dict:
         """An excitation job's trajectory, waiting for the job if it has not ended: {"t", "q",
         "qd", "qdd"}, each of q, qd, qdd one list per joint (q[j][i] is joint j+1 at sample i),
         all the samples or about max_points for plotting. With `path`, also writes the whole
         trajectory there as CSV (t,q1..qn,qd1..qdn,qdd1..qddn), for the robot's controller.
         """
-        job = job if isinstance(job, Job) else self.job(job)
+        job = job if isinstance(job, Job) else self.job(_job_id(job))
         result = job.result(timeout=timeout)
         dataset_id = result.get("dataset_id")
         if not dataset_id:
@@ -567,9 +567,9 @@ class Client:
         body.update(robot_fields)
         return Job(self, self._request("POST", "/v1/identifications", body, headers=_idempotency(idempotency_key)))
 
-    def job(self, job_id: str) -> Job:
-        """A job by id (e.g. one submitted by another script)."""
-        return Job(self, self._request("GET", f"/v1/jobs/{_quote(job_id)}"))
+    def job(self, job_id: Union[str, Job, Mapping[str, Any]]) -> Job:
+        """A job by id (e.g. one submitted by another script), fetched anew."""
+        return Job(self, self._request("GET", f"/v1/jobs/{_quote(_job_id(job_id))}"))
 
     def jobs(self, state: Optional[str] = None, kind: Optional[str] = None, page_size: int = 50) -> Iterator[Job]:
         """Every job, newest first, optionally of one state and/or kind (paged as you iterate).

@@ -271,7 +271,7 @@ class RobotsAgainstServer(unittest.TestCase):
             lines = stream.read().splitlines()
         self.assertEqual(len(lines), 4002)
         self.assertEqual(lines[0], ",".join(["t"] + [f"{b}{k}" for b in ("q", "qd", "qdd") for k in range(1, 8)]))
-        thinned = job.trajectory(max_points=100)["t"]  # for plotting: about 100, the first and the last
+        thinned = self.client.excitation_trajectory(job.data, max_points=100)["t"]  # about 100, the first and the last
         self.assertTrue(90 <= len(thinned) <= 100 and thinned[0] == 0.0 and thinned[-1] == trajectory["t"][-1], thinned)
 
     def test_friction_as_text_and_none(self) -> None:
