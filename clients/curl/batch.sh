@@ -4,6 +4,12 @@
 #
 #   clients/curl/batch.sh --url http://127.0.0.1:8080 --out summary.csv \
 #       [--options '{"half_length": 100, "band": 0.2}'] [--token TOKEN] [--timeout S] DIR
+#   clients/curl/batch.sh --url ... --out summary.csv --robot arm.urdf \
+#       [--friction viscous,coulomb,offset] [--validate check.csv] [--options '{"trim": [1, 1]}'] DIR
+#
+# With --robot, the URDF is uploaded once (POST /v1/robots, Idempotency-Key batch-rb-<sha256 of
+# the file>), so is the --validate run, and every file is identified against the robot (a
+# robot identification: robot_id, dataset_id, validation_dataset_id, friction, the options).
 #
 # Each file is uploaded (POST /v1/datasets) with Idempotency-Key batch-ds-<sha256 of the file>
 # and identified (POST /v1/identifications, the options merged with {"dataset_id": ...}) with
@@ -11,8 +17,9 @@
 # again — after an interruption, or to collect the results — finds the same datasets and jobs
 # instead of creating new ones. The summary has the columns
 #   file,job_id,state,<estimate of each parameter, by name>,final_cost,error
-# with state one of succeeded, failed, cancelled, queued/running (still going at --timeout),
-# upload_failed or submit_failed. Exit status: 0 when every job succeeded, 1 when any upload,
+# (with --robot: file,job_id,state,fit_relative_error,validation_relative_error,<estimate of
+# each base parameter, by name>,error) with state one of succeeded, failed, cancelled,
+# queued/running (still going at --timeout), upload_failed or submit_failed. Exit status: 0 when every job succeeded, 1 when any upload,
 # submission or job did not (the reasons are printed), 2 for a usage error.
 set -euo pipefail
 
@@ -21,18 +28,28 @@ program=${0##*/}
 usage() {
   cat <<EOF
 Usage: $program --url URL --out SUMMARY.csv [--options JSON] [--token TOKEN] [--timeout SECONDS] DIR
+       $program --url URL --out SUMMARY.csv --robot URDF [--friction TERMS] [--validate CSV] [...] DIR
 
 Uploads every *.csv file in DIR to the manipid service at URL, submits an identification for
 each (the JSON object OPTIONS plus {"dataset_id": ...}), waits for all and writes SUMMARY.csv:
 file,job_id,state,<estimates by parameter name>,final_cost,error.
+With --robot, the files are runs of that URDF robot (t,q1..qn[,qd..,qdd..],tau1..taun) and
+each is identified against it; SUMMARY.csv then has file,job_id,state,fit_relative_error,
+validation_relative_error,<estimate of each base parameter by name>,error.
 
-Re-running with the same files and options creates no new datasets or jobs (Idempotency-Key
-from the SHA-256 of each file and of the options).
+Re-running with the same files and options creates no new robots, datasets or jobs
+(Idempotency-Key from the SHA-256 of each file and of the request).
 
 Options:
   --url URL           service address, e.g. http://127.0.0.1:8080
   --out FILE          summary CSV to write (replaced when the script ends)
-  --options JSON      identification options, e.g. '{"half_length":100,"band":0.2}' (default {})
+  --options JSON      identification options, e.g. '{"half_length":100,"band":0.2}' (default {});
+                      with --robot e.g. '{"armature":true,"trim":[1,1],"weights":"per-joint"}'
+  --robot URDF        identify a URDF robot's base parameters (uploaded once)
+  --friction TERMS    with --robot: viscous,coulomb,offset (any of them) or none
+                      (default: the service's, viscous,coulomb)
+  --validate CSV      with --robot: a run every estimate predicts (its error in the summary);
+                      skipped as a run to identify if it lies in DIR
   --token TOKEN       bearer token (default: \$MANIPID_TOKEN when set)
   --timeout SECONDS   stop waiting for the jobs after this long (default 0: no limit);
                       unfinished jobs are reported and a re-run picks them up again
@@ -54,6 +71,9 @@ log() { printf '%s: %s\n' "$program" "$*" >&2; }
 
 url=""
 out=""
+robot=""
+friction=""
+validate=""
 options="{}"
 token=${MANIPID_TOKEN:-}
 timeout=0
@@ -61,12 +81,15 @@ dir=""
 while [[ $# -gt 0 ]]; do
   case "$1" in
     -h|--help) usage; exit 0 ;;
-    --url|--out|--options|--token|--timeout)
+    --url|--out|--options|--token|--timeout|--robot|--friction|--validate)
       [[ $# -ge 2 ]] || die_usage "$1 needs a value"
       case "$1" in
         --url) url=$2 ;;
         --out) out=$2 ;;
         --options) options=$2 ;;
+        --robot) robot=$2 ;;
+        --friction) friction=$2 ;;
+        --validate) validate=$2 ;;
         --token) token=$2 ;;
         --timeout) timeout=$2 ;;
       esac
@@ -74,6 +97,9 @@ while [[ $# -gt 0 ]]; do
     --url=*) url=${1#*=}; shift ;;
     --out=*) out=${1#*=}; shift ;;
     --options=*) options=${1#*=}; shift ;;
+    --robot=*) robot=${1#*=}; shift ;;
+    --friction=*) friction=${1#*=}; shift ;;
+    --validate=*) validate=${1#*=}; shift ;;
     --token=*) token=${1#*=}; shift ;;
     --timeout=*) timeout=${1#*=}; shift ;;
     --) shift; [[ $# -eq 1 ]] || die_usage "expected one folder after --"; dir=$1; shift ;;
@@ -94,6 +120,18 @@ url=${url%/}
 [[ "$url" =~ ^https?:// ]] || die_usage "--url must start with http:// or https://, got '$url'"
 if ! options=$(jq -cS 'if type == "object" then . else error("not an object") end' <<<"$options" 2>/dev/null); then
   die_usage "--options must be a JSON object, e.g. '{\"band\": 0.2}'"
+fi
+if [[ -z "$robot" ]]; then
+  [[ -z "$friction" ]] || die_usage "--friction needs --robot (the paper's preset has no friction)"
+  [[ -z "$validate" ]] || die_usage "--validate needs --robot"
+else
+  [[ -f "$robot" && -r "$robot" ]] || die_usage "--robot: cannot read the URDF '$robot'"
+  [[ -z "$validate" || ( -f "$validate" && -r "$validate" ) ]] || die_usage "--validate: cannot read '$validate'"
+  if [[ -n "$friction" ]]; then
+    [[ "$friction" =~ ^[a-z]+(,[a-z]+)*$ ]] || die_usage "--friction: terms separated by commas, e.g. viscous,coulomb, got '$friction'"
+    # "none" is no friction at all: the empty array.
+    options=$(jq -cS --arg terms "$friction" '. + {friction: ($terms | split(",") | if . == ["none"] then [] else . end)}' <<<"$options")
+  fi
 fi
 
 out_dir=$(dirname -- "$out")
@@ -150,13 +188,56 @@ if [[ "$status" != 200 ]]; then
   exit 1
 fi
 
+# ---- The robot and the validation run (uploaded once) -----------------------------------
+
+# upload_dataset FILE: sets $dataset_id and $dataset_note, or returns 1 ($status, $body say why).
+# The key is the file's SHA-256: the same file is the same dataset on every run.
+upload_dataset() {
+  local file=$1 content_hash
+  content_hash=$(sha256sum <"$file" | cut -d' ' -f1) || return 1
+  api POST "/v1/datasets?name=$(jq -rn --arg name "${file##*/}" '$name | @uri')" -H 'Content-Type: text/csv' \
+      -H "Idempotency-Key: batch-ds-$content_hash" --data-binary @"$file"
+  [[ "$status" == 201 ]] || return 1
+  dataset_id=$(jq -r .id <<<"$body")
+  dataset_note=$(replayed)
+}
+
+robot_id=""
+validation_id=""
+if [[ -n "$robot" ]]; then
+  robot_hash=$(sha256sum <"$robot" | cut -d' ' -f1)
+  api POST /v1/robots -H 'Content-Type: application/xml' -H "Idempotency-Key: batch-rb-$robot_hash" \
+      --data-binary @"$robot"
+  if [[ "$status" != 201 ]]; then
+    log "${robot##*/}: robot upload failed: $(problem)"
+    exit 1
+  fi
+  robot_id=$(jq -r .id <<<"$body")
+  log "${robot##*/}: robot $robot_id$(replayed), $(jq -r '"\(.joints | length) joints \(.base_link) .. \(.tip_link)"' <<<"$body")"
+  if [[ -n "$validate" ]]; then
+    if ! upload_dataset "$validate"; then
+      log "${validate##*/}: validation run upload failed: $(problem)"
+      exit 1
+    fi
+    validation_id=$dataset_id
+    log "${validate##*/}: validation run $validation_id$dataset_note"
+  fi
+  options=$(jq -cS --arg robot "$robot_id" --arg validation "$validation_id" \
+               '. + {robot_id: $robot} + (if $validation != "" then {validation_dataset_id: $validation} else {} end)' \
+               <<<"$options")
+fi
+
 # ---- Files ------------------------------------------------------------------------------
 
 out_real=$(realpath -m -- "$out")
+validate_real=""
+[[ -z "$validate" ]] || validate_real=$(realpath -m -- "$validate")
 files=()
 while IFS= read -r -d '' file; do
   # Never upload a summary this script wrote (--out inside DIR, or one from an earlier run).
   [[ "$(realpath -m -- "$file")" == "$out_real" ]] && continue
+  # The validation run is predicted, not identified.
+  [[ -n "$validate_real" && "$(realpath -m -- "$file")" == "$validate_real" ]] && continue
   if [[ "$(head -c 24 -- "$file" 2>/dev/null)" == '"file","job_id","state",' ]]; then
     log "${file##*/}: skipped (a batch summary, not a trajectory)"
     continue
@@ -186,20 +267,17 @@ for i in "${!files[@]}"; do
     continue
   fi
 
-  api POST "/v1/datasets?name=$(jq -rn --arg name "${names[i]}" '$name | @uri')" -H 'Content-Type: text/csv' \
-      -H "Idempotency-Key: batch-ds-$file_hash" --data-binary @"$file"
-  if [[ "$status" != 201 ]]; then
+  if ! upload_dataset "$file"; then
     states[i]=upload_failed
     errors[i]=$(problem)
     log "${names[i]}: upload failed: ${errors[i]}"
     failures=$((failures + 1))
     continue
   fi
-  dataset_id=$(jq -r .id <<<"$body")
-  dataset_note=$(replayed)
 
   # The key: the file's hash and the hash of the request (the options, normalised, with the
-  # dataset id — a dataset deleted and uploaded again gets a new id, so a new job).
+  # dataset id and any robot and validation ids — a dataset deleted and uploaded again gets a
+  # new id, so a new job).
   request=$(jq -cS --arg id "$dataset_id" '. + {dataset_id: $id}' <<<"$options")
   request_hash=$(printf '%s' "$request" | sha256sum | cut -d' ' -f1)
   api POST /v1/identifications -H 'Content-Type: application/json' \
@@ -268,24 +346,37 @@ done
 
 # ---- Summary ----------------------------------------------------------------------------
 
-# Parameter columns: every name any result has, in the order the service gives them.
+# Parameter columns: every name any result has, in the order the service gives them (the
+# preset's estimates by name; a robot's base parameters, whose names are their combinations).
+names_filter='.result.estimates // {} | keys_unsorted[]'
+[[ -z "$robot" ]] || names_filter='.result.base_parameters // [] | .[].name'
 parameters='[]'
 for i in "${!files[@]}"; do
   [[ -f "$work/job.$i.json" ]] || continue
-  parameters=$(jq -c --argjson seen "$parameters" \
-                  '$seen + ([.result.estimates // {} | keys_unsorted[]] - $seen)' "$work/job.$i.json")
+  parameters=$(jq -c --argjson seen "$parameters" "\$seen + ([$names_filter] - \$seen)" "$work/job.$i.json")
 done
 
 summary="$work/summary.csv"
-jq -nr --argjson p "$parameters" '["file", "job_id", "state"] + $p + ["final_cost", "error"] | @csv' >"$summary"
+if [[ -z "$robot" ]]; then
+  jq -nr --argjson p "$parameters" '["file", "job_id", "state"] + $p + ["final_cost", "error"] | @csv' >"$summary"
+else
+  jq -nr --argjson p "$parameters" \
+     '["file", "job_id", "state", "fit_relative_error", "validation_relative_error"] + $p + ["error"] | @csv' >"$summary"
+fi
 for i in "${!files[@]}"; do
   job_json="$work/job.$i.json"
   [[ -f "$job_json" ]] || printf '{}\n' >"$job_json"
+  if [[ -z "$robot" ]]; then
+    row='(.result // {}) as $r
+         | [$file, $job, $state] + [$p[] as $name | $r.estimates[$name]?] + [$r.final_cost, $error]'
+  else
+    row='(.result // {}) as $r
+         | ([$r.base_parameters[]? | {key: .name, value: .estimate}] | from_entries) as $b
+         | [$file, $job, $state, $r.fit.overall_relative_error, $r.validation.overall_relative_error]
+           + [$p[] as $name | $b[$name]] + [$error]'
+  fi
   jq -r --argjson p "$parameters" --arg file "${names[i]}" --arg job "${job_ids[i]}" \
-        --arg state "${states[i]}" --arg error "${errors[i]}" '
-      (.result // {}) as $r
-      | [$file, $job, $state] + [$p[] as $name | $r.estimates[$name]?] + [$r.final_cost, $error]
-      | @csv' "$job_json" >>"$summary"
+        --arg state "${states[i]}" --arg error "${errors[i]}" "$row | @csv" "$job_json" >>"$summary"
 done
 cp -- "$summary" "$out"
 

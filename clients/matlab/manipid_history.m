@@ -28,7 +28,7 @@ token = '';
 while true
   path = sprintf('/v1/jobs/%s/history?page_size=%d', id, round(options.PageSize));
   if ~isempty(token)
-    path = [path '&page_token=' percent_encode(token)]; %#ok<AGROW>
+    path = [path '&page_token=' manipid_percent_encode(token)]; %#ok<AGROW>
   end
   page = manipid_request(url, 'GET', path);
   [page_index, page_cost, page_theta, names] = decode_page(page.items, names);
@@ -99,19 +99,4 @@ for i = 1:n
     end
   end
 end
-end
-
-function text = percent_encode(text)
-safe = (text >= 'A' & text <= 'Z') | (text >= 'a' & text <= 'z') | (text >= '0' & text <= '9') ...
-       | text == '-' | text == '_' | text == '.' | text == '~';
-if all(safe), return; end
-parts = cell(1, numel(text));
-for k = 1:numel(text)
-  if safe(k)
-    parts{k} = text(k);
-  else
-    parts{k} = sprintf('%%%02X', double(text(k)));
-  end
-end
-text = [parts{:}];
 end

@@ -21,18 +21,53 @@ function job = manipid_identify(url, dataset, options, varargin)
 %   JOB = MANIPID_IDENTIFY(..., 'IdempotencyKey', KEY): a retry with the same KEY and
 %   the same request returns the first job (a different request: IDEMPOTENCY_MISMATCH).
 %
+%   Your own robot (a URDF uploaded with manipid_upload_robot): name-value options,
+%   with or without an OPTIONS struct before them,
+%       JOB = MANIPID_IDENTIFY(URL, DATASET, 'Robot', RB, 'Validate', DS2, ...)
+%   identify RB's base parameters - its links' masses, first moments and inertias as
+%   far as the data determine them, and each joint's friction - by linear input-error
+%   from DATASET (q and tau of RB's joints; time stamps may jitter):
+%     'Robot', RB          'rb_...' or the robot struct
+%     'Validate', DS2      a second run the estimate then predicts (R.validation)
+%     'Friction', F        any of viscous, coulomb, offset, as a cell or as
+%                          'viscous,coulomb' (the default); {} or 'none': none
+%     'Armature', TF       each joint's rotor inertia Ia
+%     'Physical', TF       a physically consistent estimate (every link a real body)
+%     'Trim', [A B]        seconds dropped at the start and at the end
+%     'Dt', S              the resampling period, s (default: the median time step)
+%     'Weights', W         'unit' (default) or 'per-joint'
+%   The filter fields (half_length, band, comparison_half_length, comparison_band) go
+%   in OPTIONS; the preset's (method, free, initial, ...) are refused with a robot
+%   (manipid:INVALID_FIELD naming the field), and so is a dataset whose joints are
+%   not the robot's (field dataset_id or validation_dataset_id). The result
+%   (manipid_result) has the base parameters by name (R.base_names, R.base_values,
+%   R.base_std), the friction per joint and the validation figures;
+%   manipid_identified_urdf writes the estimate into the robot's URDF.
+%
 %   JOB is the job struct (id, kind, state 'queued', links, ...). Follow it with
 %   manipid_wait(URL, JOB) and manipid_result(URL, JOB).
 %
-%   See also manipid_wait, manipid_result, manipid_history, manipid_cancel, manipid_upload.
+%   Example:
+%       rb = manipid_upload_robot(url, 'arm.urdf');
+%       job = manipid_identify(url, run, 'Robot', rb, 'Friction', 'viscous,coulomb', 'Validate', check);
+%       r = manipid_result(url, manipid_wait(url, job));
+%
+%   See also manipid_wait, manipid_result, manipid_history, manipid_cancel, manipid_upload,
+%   manipid_upload_robot, manipid_identified_urdf.
 if nargin < 2
   error('manipid:usage', 'usage: job = manipid_identify(url, dataset_id, options)');
+end
+if nargin >= 3 && (ischar(options) || isa(options, 'string'))
+  varargin = [{options}, varargin];         % name-value options without an OPTIONS struct
+  options = struct();
 end
 if nargin < 3 || isempty(options), options = struct(); end
 if ~isstruct(options) || numel(options) ~= 1
   manipid_error('INVALID_FIELD', '', 'options must be a struct whose fields are the request fields', 0);
 end
-settings = manipid_options(varargin, struct('IdempotencyKey', ''), 'manipid_identify');
+defaults = struct('IdempotencyKey', '', 'Robot', [], 'Validate', [], 'Friction', [], 'Armature', [], ...
+                  'Physical', [], 'Trim', [], 'Dt', [], 'Weights', []);
+settings = manipid_options(varargin, defaults, 'manipid_identify');
 request = struct();
 if ~isempty(dataset)
   if isfield(options, 'dataset_id') && ~isempty(options.dataset_id)
@@ -45,6 +80,37 @@ for k = 1:numel(names)
   if ~(strcmp(names{k}, 'dataset_id') && isfield(request, 'dataset_id'))
     request.(names{k}) = options.(names{k});
   end
+end
+% The robot options by their request names; one given both ways is an error.
+robot_fields = {'Robot', 'robot_id'; 'Validate', 'validation_dataset_id'; 'Friction', 'friction'; ...
+                'Armature', 'armature'; 'Physical', 'physical'; 'Trim', 'trim'; 'Dt', 'dt'; 'Weights', 'weights'};
+for k = 1:size(robot_fields, 1)
+  value = settings.(robot_fields{k, 1});
+  field = robot_fields{k, 2};
+  if isempty(value) && ~(strcmp(field, 'friction') && iscell(value))
+    continue                                % left out: the service's default ({} is "no friction")
+  end
+  if isfield(request, field) && ~isempty(request.(field))
+    manipid_error('INVALID_FIELD', field, sprintf('give %s either as the ''%s'' option or as options.%s, not both', ...
+                  field, robot_fields{k, 1}, field), 0);
+  end
+  switch field
+    case 'robot_id'
+      value = manipid_id(value, 'robot');
+    case 'validation_dataset_id'
+      value = manipid_id(value, 'dataset');
+    case 'friction'
+      value = manipid_friction(value);
+    case {'armature', 'physical'}
+      value = logical(value);
+    case 'trim'
+      value = reshape(double(value), 1, []);
+  end
+  request.(field) = value;
+end
+if isfield(request, 'validation_dataset_id') && ~isfield(request, 'robot_id')
+  manipid_error('INVALID_FIELD', 'validation_dataset_id', ...
+                'Validate needs Robot: only robot identifications predict a validation run', 0);
 end
 headers = cell(0, 2);
 if ~isempty(settings.IdempotencyKey)

@@ -15,7 +15,25 @@ function result = manipid_result(url, job_id)
 %     R.evaluations, R.simulations, R.stop_reason, R.cancelled, R.filter,
 %     R.method, R.algorithm, R.torque_source, R.wall_seconds, R.dataset_id
 %     R.job_id, R.state  the job's id and final state
-%   For a simulation job, R is its result (dataset_id, joints, samples, dt, ...).
+%   A robot identification (manipid_identify with 'Robot') gives, by name:
+%     R.base_names, R.base_values, R.base_std
+%                        the base parameters: a 1-by-b cell of names - a standard
+%                        parameter such as 'fv2', or the combination the data determine,
+%                        such as 'my2 - 0.316*m3 - mz3' - and two 1-by-b vectors (std NaN
+%                        where there is none); R.base_parameters is the same as a struct
+%                        array (name, estimate, std_error, relative_std_error)
+%     R.friction         struct array per joint: joint (its URDF name), fv, fc, fo, Ia
+%                        (NaN for the terms not identified)
+%     R.point, R.prior   structs of every standard parameter by name (m1, mx1, ...,
+%                        Izz7, fv1, ...): the estimate nearest to the URDF's values (what
+%                        manipid_identified_urdf writes), and the URDF's own values
+%     R.validation       with 'Validate': relative_error and rms_error (1-by-joints),
+%                        overall_relative_error, and .prior: the same for the URDF's values
+%     R.fit              residual_rms, relative_error (1-by-joints), overall_relative_error
+%     R.correlation (matrix, NaN where undefined), R.condition_number, R.unexcited,
+%     R.unidentifiable, R.warnings (cells), R.filters, R.robot_id, R.dataset_id
+%   For a simulation job, R is its result (dataset_id, joints, samples, dt, ...); for
+%   an excitation, its dataset_id, samples, condition_number and coefficients.
 %   A cancelled identification returns the best point it reached (R.cancelled true).
 %
 %   JOB_ID is 'job_...' or a job struct; a finished job struct (from manipid_wait)
@@ -48,6 +66,8 @@ end
 result = job.result;
 if isfield(result, 'estimates') && isstruct(result.estimates)
   result = tidy_identification(result);
+elseif isfield(result, 'base_parameters') && (isstruct(result.base_parameters) || iscell(result.base_parameters))
+  result = tidy_robot_identification(result);
 end
 result.job_id = job.id;
 result.state = job.state;
@@ -94,6 +114,47 @@ if isfield(r, 'correlation') && isstruct(r.correlation)
 end
 end
 
+function r = tidy_robot_identification(r)
+r.base_parameters = struct_array(r.base_parameters, {'name', 'estimate', 'std_error', 'relative_std_error'});
+r.base_names = {r.base_parameters.name};
+r.base_values = [r.base_parameters.estimate];
+r.base_std = [r.base_parameters.std_error];
+if isempty(r.base_parameters)
+  r.base_values = zeros(1, 0);
+  r.base_std = zeros(1, 0);
+end
+if isfield(r, 'friction')
+  r.friction = struct_array(r.friction, {'joint', 'fv', 'fc', 'fo', 'Ia'});
+end
+for name = {'warnings', 'unexcited', 'unidentifiable'}
+  if isfield(r, name{1}), r.(name{1}) = manipid_cellstr(r.(name{1})); end
+end
+if isfield(r, 'correlation') && iscell(r.correlation)
+  r.correlation = numeric_matrix(r.correlation);
+elseif isfield(r, 'correlation') && isempty(r.correlation)
+  r.correlation = zeros(0, 0);
+end
+if isfield(r, 'condition_number') && isempty(r.condition_number), r.condition_number = NaN; end
+for block = {'fit', 'validation'}
+  if isfield(r, block{1}) && isstruct(r.(block{1}))
+    r.(block{1}) = per_joint_rows(r.(block{1}));
+    if isfield(r.(block{1}), 'prior') && isstruct(r.(block{1}).prior)
+      r.(block{1}).prior = per_joint_rows(r.(block{1}).prior);
+    end
+  end
+end
+end
+
+function figures = per_joint_rows(figures)
+%PER_JOINT_ROWS  Per-joint figures as 1-by-joints rows (jsondecode gives columns), null as NaN.
+for name = {'residual_rms', 'relative_error', 'rms_error'}
+  if isfield(figures, name{1}), figures.(name{1}) = reshape(double(figures.(name{1})), 1, []); end
+end
+if isfield(figures, 'overall_relative_error') && isempty(figures.overall_relative_error)
+  figures.overall_relative_error = NaN;
+end
+end
+
 function s = struct_array(value, fields)
 %STRUCT_ARRAY  A decoded array of objects as a 1-by-n struct array, null numbers as NaN.
 if isempty(value)
@@ -110,8 +171,8 @@ for k = 1:numel(items)
   for f = 1:numel(fields)
     if isfield(items{k}, fields{f}), s(k).(fields{f}) = items{k}.(fields{f}); end
   end
-  for f = {'value', 'std_error'}
-    if any(strcmp(f{1}, fields)) && isempty(s(k).(f{1})), s(k).(f{1}) = NaN; end
+  for f = fields
+    if ~any(strcmp(f{1}, {'name', 'joint'})) && isempty(s(k).(f{1})), s(k).(f{1}) = NaN; end
   end
 end
 end

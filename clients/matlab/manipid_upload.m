@@ -10,6 +10,10 @@ function dataset = manipid_upload(url, t_or_dt, q, tau, ref, name, varargin)
 %   DS = MANIPID_UPLOAD(..., 'IdempotencyKey', KEY) makes a retry with the same KEY
 %   and the same data return the first dataset instead of storing a second one.
 %   DS = MANIPID_UPLOAD(..., 't0', T0) gives the first sample time when T_OR_DT is dt.
+%   DS = MANIPID_UPLOAD(..., 'qd', QD, 'qdd', QDD) adds the joint rates (rad/s) and
+%   accelerations (rad/s^2) as logged, both the size of Q (kept with the data).
+%   Time stamps may jitter, as a real logger's do: the dataset is stored as measured
+%   (DS.uniform is false) and an identification resamples it.
 %
 %   The matrices are sent as the service's per-joint arrays (q(:,j) is joint j),
 %   exactly (17 significant digits), so one joint (N-by-1) and one-row shapes keep
@@ -32,7 +36,7 @@ end
 if nargin < 4, tau = []; end
 if nargin < 5, ref = []; end
 if nargin < 6 || isempty(name), name = ''; end
-options = manipid_options(varargin, struct('IdempotencyKey', '', 't0', []), 'manipid_upload');
+options = manipid_options(varargin, struct('IdempotencyKey', '', 't0', [], 'qd', [], 'qdd', []), 'manipid_upload');
 
 if ~(isnumeric(q) || islogical(q)) || ndims(q) ~= 2 || isempty(q)
   manipid_error('INVALID_FIELD', 'q', 'q must be a non-empty numeric matrix, samples x joints', 0);
@@ -62,8 +66,8 @@ else
   parts{end + 1} = ['"t":' manipid_json(t_or_dt, 't', 'array')];
 end
 parts{end + 1} = ['"q":' manipid_json(q, 'q', 'columns')];
-extra = {'tau', tau; 'ref', ref};
-for k = 1:2
+extra = {'qd', options.qd; 'qdd', options.qdd; 'tau', tau; 'ref', ref};
+for k = 1:size(extra, 1)
   value = extra{k, 2};
   if isempty(value), continue; end
   if ~isequal(size(value), [samples joints])

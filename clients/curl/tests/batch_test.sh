@@ -8,13 +8,21 @@
 #      and a summary row per file saying why; a file that is not a trajectory does too;
 #   4. a server started with --token: without the token the script stops at once, with
 #      --token it succeeds;
-#   5. usage errors exit 2 with a message.
+#   5. usage errors exit 2 with a message;
+#   6. --robot: a 7-joint URDF and a folder of its runs (one uniform, one with a real logger's
+#      jittery time stamps and stale rows, made by clients/python/tests/robot_data.py with the
+#      real binary) plus a validation run inside the folder: one robot, every run identified
+#      against it with the friction asked for, the base parameters by name in the summary and
+#      near the truth, the validation error small; a re-run creates no robot, dataset or job;
+#      other friction makes new jobs only; a robot whose joints do not match, a broken URDF and
+#      robot options without --robot fail with the reason.
 # Usage: clients/curl/tests/batch_test.sh path/to/manipid    (exit 0 when everything passes)
 set -euo pipefail
 
 [[ $# -eq 1 && -x "$1" ]] || { echo "usage: $0 path/to/manipid" >&2; exit 2; }
 binary=$(realpath -- "$1")
 batch="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)/batch.sh"
+root="$(cd "$(dirname "${BASH_SOURCE[0]}")/../../.." && pwd)"
 for tool in curl jq; do
   command -v "$tool" >/dev/null || { echo "batch_test: needs $tool" >&2; exit 2; }
 done
@@ -179,6 +187,79 @@ status=0
 "$batch" --url http://127.0.0.1:9 --out "$work/x.csv" --options '[1,2]' "$data" >"$work/usage.out" 2>&1 || status=$?
 check "options not an object: exit 2" test "$status" -eq 2
 check "--help: exit 0 with the usage" help_shows_usage
+
+# ---- 6. A URDF robot ---------------------------------------------------------------------
+panda="$root/examples/robots/panda_like.urdf"
+robot_runs="$work/robot-runs"
+python3 "$root/clients/python/tests/robot_data.py" "$binary" "$panda" "$work/robot-data" >"$work/robot-data.json"
+mkdir -p -- "$robot_runs"
+cp -- "$work/robot-data/run.csv" "$work/robot-data/jitter.csv" "$work/robot-data/check.csv" "$robot_runs/"
+start_server "$work/robot.db"
+robot_summary="$work/robot-summary.csv"
+status=0
+"$batch" --url "$url" --out "$robot_summary" --robot "$panda" --friction viscous,coulomb,offset \
+  --validate "$robot_runs/check.csv" "$robot_runs" >"$work/robot1.out" 2>&1 || status=$?
+check "robot: first run exits 0" test "$status" -eq 0
+[[ $status -eq 0 ]] || cat -- "$work/robot1.out"
+robot_rows=$(python3 -c 'import csv,json,sys; print(json.dumps(list(csv.DictReader(open(sys.argv[1])))))' "$robot_summary" 2>/dev/null || echo '[]')
+check "robot: the two runs identified, the validation run not" \
+  test "$(jq -r '[.[] | "\(.file)=\(.state)"] | sort | join(" ")' <<<"$robot_rows")" = 'jitter.csv=succeeded run.csv=succeeded'
+check "robot: header file,job_id,state,fit_relative_error,validation_relative_error,<base parameters>,error" \
+  bash -c '[[ "$(head -n1 "$1")" == "\"file\",\"job_id\",\"state\",\"fit_relative_error\",\"validation_relative_error\",\"Izz1 + Iyy2\",\"mx2\",\"my2 - 0.316*m3"* && "$(head -n1 "$1")" == *",\"fv2\","*",\"fo7\",\"error\"" ]]' _ "$robot_summary"
+check "robot: fv2 and fc2 by name near the truth (0.4, 0.7) for both runs" \
+  jq_true '[.[] | ((.fv2 | tonumber) - 0.4 | fabs < 0.03) and ((.fc2 | tonumber) - 0.7 | fabs < 0.03)] | length == 2 and all' "$robot_rows"
+check "robot: validation error under 1 % for both runs" \
+  jq_true '[.[] | (.validation_relative_error | tonumber) < 0.01 and (.fit_relative_error | tonumber) < 0.01] | length == 2 and all' "$robot_rows"
+check "robot: one robot, three datasets, two jobs on the server" \
+  test "$(count /v1/robots)/$(count /v1/datasets)/$(count /v1/jobs)" = 1/3/2
+robot_id=$(curl -sS "$url/v1/robots" | jq -r '.items[0].id')
+jobs_ok=$(curl -sS "$url/v1/jobs" | jq --arg robot "$robot_id" \
+            '[.items[] | .robot_id == $robot and .validation_dataset_id != null] | length == 2 and all')
+check "robot: both jobs name the robot and the validation run" test "$jobs_ok" = true
+job_id=$(jq -r '.[0].job_id' <<<"$robot_rows")
+check "robot: the request carries friction viscous,coulomb,offset" \
+  jq_true '.request.friction == ["viscous", "coulomb", "offset"]' "$(curl -sS "$url/v1/jobs/$job_id")"
+
+cp -- "$robot_summary" "$work/robot-summary.first.csv"
+status=0
+"$batch" --url "$url" --out "$robot_summary" --robot "$panda" --friction viscous,coulomb,offset \
+  --validate "$robot_runs/check.csv" "$robot_runs" >"$work/robot2.out" 2>&1 || status=$?
+check "robot: second run exits 0" test "$status" -eq 0
+check "robot: second run creates no robot, dataset or job" \
+  test "$(count /v1/robots)/$(count /v1/datasets)/$(count /v1/jobs)" = 1/3/2
+check "robot: second run says the robot and the jobs existed" \
+  test "$(grep -c 'robot rb_[0-9a-f]* (existing)' "$work/robot2.out")/$(grep -c 'job job_[0-9a-f]* (existing)' "$work/robot2.out")" = 1/2
+check "robot: second run, same summary" cmp -s -- "$robot_summary" "$work/robot-summary.first.csv"
+
+status=0
+"$batch" --url "$url" --out "$work/robot-none.csv" --robot "$panda" --friction none "$robot_runs" \
+  >"$work/robot3.out" 2>&1 || status=$?
+check "robot: no friction, no validation run: exit 0, three new jobs, nothing else new" \
+  test "$status/$(count /v1/robots)/$(count /v1/datasets)/$(count /v1/jobs)" = 0/1/3/5
+check "robot: without --validate the validation run is identified too, and no fv columns" \
+  bash -c '[[ $(wc -l <"$1") -eq 4 && "$(head -n1 "$1")" != *"\"fv1\""* ]]' _ "$work/robot-none.csv"
+
+status=0
+"$batch" --url "$url" --out "$work/robot-ur5.csv" --robot "$root/examples/robots/ur5_like.urdf" "$robot_runs" \
+  >"$work/robot-ur5.out" 2>&1 || status=$?
+check "robot: 7-joint runs for a 6-joint robot: exit 1" test "$status" -eq 1
+check "robot: each run refused, naming dataset_id" \
+  test "$(grep -c '"submit_failed",.*INVALID_FIELD (field dataset_id): the dataset has 7 joints' "$work/robot-ur5.csv")" -eq 3
+printf '<robot name="broken"><link name="a"/>' >"$work/broken.urdf"
+status=0
+"$batch" --url "$url" --out "$work/robot-broken.csv" --robot "$work/broken.urdf" "$robot_runs" \
+  >"$work/robot-broken.out" 2>&1 || status=$?
+check "robot: a broken URDF: exit 1, the reason printed, no summary" \
+  bash -c '[[ $0 -eq 1 ]] && grep -q "broken.urdf: robot upload failed: INVALID_FIELD (field urdf)" "$1" && [[ ! -e "$2" ]]' \
+  "$status" "$work/robot-broken.out" "$work/robot-broken.csv"
+stop_server
+status=0
+"$batch" --url http://127.0.0.1:9 --out "$work/x.csv" --friction viscous "$robot_runs" >"$work/usage.out" 2>&1 || status=$?
+check "--friction without --robot: exit 2 with a message" \
+  bash -c '[[ $0 -eq 2 ]] && grep -q -- "--friction needs --robot" "$1"' "$status" "$work/usage.out"
+status=0
+"$batch" --url http://127.0.0.1:9 --out "$work/x.csv" --robot "$work/missing.urdf" "$robot_runs" >"$work/usage.out" 2>&1 || status=$?
+check "--robot with a missing file: exit 2" test "$status" -eq 2
 
 if [[ $failures -gt 0 ]]; then
   echo "batch_test: $failures check(s) failed; server log:" >&2

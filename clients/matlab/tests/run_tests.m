@@ -5,6 +5,13 @@ function run_tests(url, run_csv)
 %   (written by `manipid simulate --out RUN_CSV`), identified, waited for, its result
 %   and history checked; shapes of one joint / few samples; Idempotency-Key; cancel;
 %   and the error mapping (problem+json code/field, NaN refused before sending).
+%   With the environment variables MANIPID_URDF (a 7-joint URDF: examples/robots/
+%   panda_like.urdf) and MANIPID_ROBOT_DIR (run.csv, check.csv and truth.json made by
+%   run_tests.sh with manipid excitation and manipid torque), also the URDF robot
+%   functions: upload (byte for byte back, idempotent), identification with friction
+%   and validation checked against the truth by name, the identified URDF's masses,
+%   an excitation design and its trajectory, and their errors; MANIPID_UR5 (a 6-joint
+%   URDF) adds the joint-count mismatch.
 %   Without arguments, URL and RUN_CSV come from the environment variables MANIPID_URL
 %   and MANIPID_RUN_CSV. When the server was started with --token, MANIPID_TOKEN must
 %   hold it (MANIPID_TEST_TOKEN=1 then also checks that a wrong token is refused).
@@ -150,7 +157,131 @@ if strcmp(getenv('MANIPID_TEST_TOKEN'), '1')
 end
 passed = passed + 1;
 
+% --- URDF robots (when run_tests.sh made the data).
+urdf_file = getenv('MANIPID_URDF');
+robot_dir = getenv('MANIPID_ROBOT_DIR');
+if ~isempty(urdf_file) && ~isempty(robot_dir)
+  passed = passed + robot_tests(url, urdf_file, robot_dir, getenv('MANIPID_UR5'), job);
+end
+
 fprintf('run_tests: %d groups passed in %.1f s\n', passed, toc(started));
+end
+
+function passed = robot_tests(url, urdf_file, robot_dir, ur5_file, preset_job)
+%ROBOT_TESTS  The URDF robot functions; returns the number of groups passed.
+passed = 0;
+document = fileread(urdf_file);
+truth = jsondecode(fileread(fullfile(robot_dir, 'truth.json')));
+
+% Upload: the document back byte for byte, the same key twice is one robot, name and tip.
+key = sprintf('octave-robot-%d', round(rand() * 1e9));
+rb = manipid_upload_robot(url, urdf_file, 'Name', 'octave arm', 'IdempotencyKey', key);
+check(strncmp(rb.id, 'rb_', 3) && strcmp(rb.name, 'octave arm') && strcmp(rb.robot_name, 'panda_like'), ...
+      'manipid_upload_robot: id rb_..., the name given, the URDF''s robot name');
+check(numel(rb.joints) == 7 && isequal(rb.joint_names, arrayfun(@(k) sprintf('panda_joint%d', k), 1:7, 'UniformOutput', false)), ...
+      'the robot has the 7 joints panda_joint1..7, in order');
+check(rb.parameters.urdf_values.m3 == 2.5 && strcmp(rb.parameters.names{1}, 'm1'), 'the URDF''s values by name');
+again = manipid_upload_robot(url, urdf_file, 'Name', 'octave arm', 'IdempotencyKey', key);
+check(strcmp(again.id, rb.id), 'the same Idempotency-Key returns the first robot');
+[back, text] = manipid_robot(url, rb);
+check(strcmp(back.id, rb.id) && isequal(back.joint_names, rb.joint_names), 'manipid_robot gives the robot back');
+check(strcmp(text, document), 'manipid_robot gives the URDF back byte for byte');
+short = manipid_upload_robot(url, document, 'Name', 'six & more', 'Tip', 'panda_link6');
+check(strcmp(short.name, 'six & more') && numel(short.joints) == 6 && strcmp(short.tip_link, 'panda_link6'), ...
+      'the document as text, a name with & and space, the chain cut at Tip');
+passed = passed + 1;
+
+% Identification: a run (q, qd, qdd, tau) and a validation run; the result by name.
+M = dlmread(fullfile(robot_dir, 'run.csv'), ',', 1, 0);
+C = dlmread(fullfile(robot_dir, 'check.csv'), ',', 1, 0);
+check(size(M, 2) == 29, 'run.csv: t, q1..q7, qd1..qd7, qdd1..qdd7, tau1..tau7');
+ds = manipid_upload(url, M(:, 1), M(:, 2:8), M(:, 23:29), [], 'robot run', 'qd', M(:, 9:15), 'qdd', M(:, 16:22));
+check(ds.joints == 7 && ds.samples == size(M, 1) && ds.has_rates && ds.has_accelerations && ds.has_torque, ...
+      'manipid_upload with qd and qdd: 7 joints, rates, accelerations, torques');
+[~, ds_back] = manipid_dataset(url, ds);
+check(isequal(ds_back.qd, M(:, 9:15)) && isequal(ds_back.qdd, M(:, 16:22)) && isequal(ds_back.tau, M(:, 23:29)), ...
+      'manipid_dataset gives qd, qdd and tau back bit for bit');
+chk = manipid_upload(url, C(:, 1), C(:, 2:8), C(:, 23:29), [], 'robot check');
+job = manipid_identify(url, ds, 'Robot', rb, 'Friction', 'viscous,coulomb,offset', 'Validate', chk);
+check(strcmp(job.robot_id, rb.id) && strcmp(job.request.validation_dataset_id, chk.id) ...
+      && isequal(job.request.friction, {'viscous'; 'coulomb'; 'offset'}), ...
+      'manipid_identify with Robot, Friction and Validate sends a robot identification');
+job = manipid_wait(url, job, 300, 'Quiet', true);
+r = manipid_result(url, job);
+fv2 = r.base_values(strcmp(r.base_names, 'fv2'));
+fc2 = r.base_values(strcmp(r.base_names, 'fc2'));
+check(abs(fv2 - truth.fv2) < 0.01 && abs(fc2 - truth.fc2) < 0.01, ...
+      sprintf('base parameters by name: fv2 = %.4f (truth %.1f), fc2 = %.4f (truth %.1f)', fv2, truth.fv2, fc2, truth.fc2));
+check(numel(r.base_names) == numel(r.base_values) && numel(r.base_std) == numel(r.base_values) ...
+      && all(r.base_std(~isnan(r.base_std)) > 0) && any(strncmp(r.base_names, 'my2 - 0.316*m3', 14)), ...
+      'base_names, base_values and base_std line up; combinations keep their names');
+check(numel(r.friction) == 7 && strcmp(r.friction(2).joint, 'panda_joint2') && r.friction(2).fv == fv2 ...
+      && ~isnan(r.friction(3).fo) && isnan(r.friction(3).Ia), 'friction per joint by name (no armature: Ia NaN)');
+check(r.point.fv2 == fv2 && r.prior.m3 == 2.5 && isequal(size(r.correlation), [numel(r.base_names) numel(r.base_names)]), ...
+      'point and prior by name, the correlation matrix');
+check(isequal(size(r.validation.relative_error), [1 7]) ...
+      && r.validation.overall_relative_error < r.validation.prior.overall_relative_error / 5, ...
+      sprintf('validation: %.3g of the torque, the URDF''s own values %.3g', ...
+              r.validation.overall_relative_error, r.validation.prior.overall_relative_error));
+passed = passed + 1;
+
+% The identified URDF: the server's document, with the estimate's masses.
+file = [tempname() '.urdf'];
+cleanup = onCleanup(@() delete(file)); %#ok<NASGU>
+urdf = manipid_identified_urdf(url, job, file);
+check(strcmp(fileread(file), urdf), 'manipid_identified_urdf writes what it returns to the file');
+for k = 1:7
+  link = rb.joints(k).link;
+  token = regexp(urdf, ['<link name="' link '"[^>]*>\s*<inertial>.*?<mass value="([^"]+)"'], 'tokens', 'once');
+  mass = r.point.(sprintf('m%d', k));
+  check(~isempty(token) && abs(str2double(token{1}) - mass) <= 1e-12 * max(1, mass), ...
+        sprintf('the identified URDF has link %s''s estimated mass %.6g', link, mass));
+end
+check(abs(r.point.m3 - 2.5) > 1e-3, 'the estimate''s mass, not the URDF''s');
+passed = passed + 1;
+
+% Excitation: a job that makes a dataset of t, q, qd, qdd, at rest at both ends.
+ex = manipid_design_excitation(url, rb, 'Period', 2, 'Harmonics', 3, 'Duration', 4, 'MaxSeconds', 3, ...
+                               'Friction', {'viscous', 'coulomb'}, 'Name', 'octave excitation');
+check(strcmp(ex.kind, 'excitation') && strcmp(ex.robot_id, rb.id) && ex.request.period == 2 ...
+      && isequal(ex.request.friction, {'viscous'; 'coulomb'}), 'manipid_design_excitation sends the options by their names');
+ex = manipid_wait(url, ex, 120, 'Quiet', true);
+[meta, trajectory] = manipid_dataset(url, ex);
+check(strcmp(meta.name, 'octave excitation') && strcmp(meta.source_job, ex.id) && ex.result.condition_number > 1, ...
+      'the excitation made its named dataset');
+check(isequal(size(trajectory.q), [4001 7]) && isequal(size(trajectory.qd), [4001 7]) && isequal(size(trajectory.qdd), [4001 7]) ...
+      && isempty(trajectory.tau), 'the trajectory: 4001 samples of q, qd, qdd for 7 joints, no torque');
+ends = [trajectory.qd([1 end], :), trajectory.qdd([1 end], :)];
+check(all(ends(:) == 0), 'at rest at both ends');
+lower = arrayfun(@(joint) joint.limits.lower, rb.joints);
+upper = arrayfun(@(joint) joint.limits.upper, rb.joints);
+check(all(min(trajectory.q) >= lower) && all(max(trajectory.q) <= upper), 'within the URDF''s position limits');
+passed = passed + 1;
+
+% Errors.
+[code, ~, problem] = caught(@() manipid_identify(url, ds, 'Robot', 'rb_0000000000000000'));
+check(strcmp(code, 'manipid:INVALID_FIELD') && strcmp(problem.field, 'robot_id') && problem.status == 422, ...
+      'an unknown robot: manipid:INVALID_FIELD, field robot_id');
+[code, ~, problem] = caught(@() manipid_robot(url, 'rb_0000000000000000'));
+check(strcmp(code, 'manipid:NOT_FOUND') && problem.status == 404, 'manipid_robot of an unknown robot: NOT_FOUND');
+[code, ~, problem] = caught(@() manipid_identify(url, ds, struct('method', 'two-stage'), 'Robot', rb));
+check(strcmp(code, 'manipid:INVALID_FIELD') && strcmp(problem.field, 'method'), 'a preset option with a robot is refused, naming it');
+[code, ~, problem] = caught(@() manipid_identify(url, ds, 'Validate', chk));
+check(strcmp(code, 'manipid:INVALID_FIELD') && problem.status == 0, 'Validate without Robot: refused before sending');
+[code, ~, problem] = caught(@() manipid_identify(url, ds, 'Robot', rb, 'Colour', 'red'));
+check(strcmp(code, 'manipid:INVALID_FIELD') && strcmp(problem.field, 'Colour') && problem.status == 0, 'an unknown option name');
+[code, ~, problem] = caught(@() manipid_upload_robot(url, '<robot name="broken"><link name="a"/>'));
+check(strcmp(code, 'manipid:INVALID_FIELD') && strcmp(problem.field, 'urdf') && problem.status == 422, ...
+      'a document the service cannot read: field urdf');
+[code, ~, problem] = caught(@() manipid_identified_urdf(url, preset_job));
+check(strcmp(code, 'manipid:CONFLICT') && problem.status == 409, 'the identified URDF of a preset job: CONFLICT');
+if ~isempty(ur5_file)
+  ur5 = manipid_upload_robot(url, ur5_file);
+  [code, ~, problem] = caught(@() manipid_identify(url, ds, 'Robot', ur5));
+  check(strcmp(code, 'manipid:INVALID_FIELD') && strcmp(problem.field, 'dataset_id') ...
+        && ~isempty(strfind(problem.detail, '7 joints')), ['a 7-joint run for a 6-joint robot: ' problem.detail]);
+end
+passed = passed + 1;
 end
 
 function check(condition, what)

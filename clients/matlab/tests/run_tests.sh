@@ -2,7 +2,9 @@
 # run_tests.sh — the MATLAB/Octave client against a real `manipid serve`, with GNU Octave.
 #
 # Starts `manipid serve --port 0` on a temporary database (with a bearer token, so the
-# Authorization header is exercised), writes the paper's run with `manipid simulate`, runs
+# Authorization header is exercised), writes the paper's run with `manipid simulate` and a
+# URDF robot's runs with `manipid excitation` and `manipid torque` (examples/robots/
+# panda_like.urdf, a known truth; run.csv noise-free, check.csv with 1 % torque noise), runs
 # clients/matlab/tests/run_tests.m in octave-cli, stops the server (SIGTERM, expects exit 0)
 # and exits non-zero on any failure.
 #
@@ -40,6 +42,17 @@ trap cleanup EXIT
 token="octave-test-$RANDOM$RANDOM"
 "$binary" simulate --out "$work/run.csv" 2> /dev/null
 
+# The robot's runs: link 3 heavier and joint 2 with more friction than the URDF says.
+urdf="$root/examples/robots/panda_like.urdf"
+mkdir -p "$work/robot"
+echo '{"m3": 3.0, "fv2": 0.4, "fc2": 0.7, "fo3": 0.05}' > "$work/robot/truth.json"
+"$binary" excitation --robot "$urdf" --period 10 --harmonics 5 --duration 20 --max-evaluations 300 --seed 1 \
+  --out "$work/robot/excitation.csv" 2> /dev/null
+"$binary" torque --robot "$urdf" --params "$work/robot/truth.json" --with-states --in "$work/robot/excitation.csv" \
+  --out "$work/robot/run.csv" 2> /dev/null
+"$binary" torque --robot "$urdf" --params "$work/robot/truth.json" --with-states --in "$work/robot/excitation.csv" \
+  --noise-tau-relative 0.01 --seed 2 --out "$work/robot/check.csv" 2> /dev/null
+
 # The first stdout line is "listening on http://HOST:PORT"; keep reading the pipe from a
 # file descriptor so that the server never blocks on a full stdout.
 mkfifo "$work/stdout"
@@ -58,6 +71,7 @@ echo "run_tests.sh: server $url (pid $server_pid), $($octave --version | head -n
 
 status=0
 MANIPID_URL="$url" MANIPID_RUN_CSV="$work/run.csv" MANIPID_TOKEN="$token" MANIPID_TEST_TOKEN=1 \
+  MANIPID_URDF="$urdf" MANIPID_UR5="$root/examples/robots/ur5_like.urdf" MANIPID_ROBOT_DIR="$work/robot" \
   "$octave" --no-gui --norc --no-history --quiet \
   --eval "addpath('$here'); try, run_tests(); catch err, fprintf(2, '%s\n', err.message); exit(1); end" \
   || status=$?

@@ -6,7 +6,6 @@ pointless. numpy is used only when the caller hands numpy arrays in or asks for 
 """
 from __future__ import annotations
 
-import csv
 import http.client
 import json
 import os
@@ -17,6 +16,7 @@ import urllib.parse
 from typing import Any, Dict, Iterator, List, Mapping, NamedTuple, Optional, Sequence, TextIO, Union
 
 from .errors import JobCancelled, JobFailed, JobTimeout, ManipidConnectionError, ManipidError
+from .results import RobotResult
 
 TERMINAL_STATES = ("succeeded", "failed", "cancelled")
 LONG_POLL_LIMIT = 30.0  # the server caps ?wait= at 30 s
@@ -25,12 +25,9 @@ PROGRESS_POLL = 1.0  # seconds per long-poll while a live progress line is shown
 PathLike = Union[str, "os.PathLike[str]"]
 
 
-class Dataset:
-    """A stored dataset: `id` plus the server's metadata (`name`, `joints`, `samples`, `dt`,
-    `has_torque`, `has_reference`, `source_job`, `created_at`) as attributes and in `data`.
-
-    Pass it (or its id string) to Client.identify(). str(dataset) is its id.
-    """
+class _Resource:
+    """A stored resource: `id` plus the server's fields as attributes, as items (res["name"])
+    and in `data`. str(resource) is its id."""
 
     def __init__(self, client: "Client", data: Mapping[str, Any]) -> None:
         self.client = client
@@ -47,18 +44,61 @@ class Dataset:
         except KeyError:
             raise AttributeError(name) from None
 
+    def __getitem__(self, key: str) -> Any:
+        return self.data[key]
+
+    def get(self, key: str, default: Any = None) -> Any:
+        return self.data.get(key, default)
+
+    def __str__(self) -> str:
+        return self.id
+
+
+class Dataset(_Resource):
+    """A stored dataset: `id` plus the server's metadata (`name`, `joints`, `samples`, `dt`,
+    `uniform`, `has_torque`, `has_reference`, `has_rates`, `has_accelerations`, `source_job`,
+    `created_at`) as attributes, as items and in `data`.
+
+    Pass it (or its id string) to Client.identify(). str(dataset) is its id.
+    """
+
     def csv(self) -> str:
-        """The samples as CSV text (header t,q1..qn[,tau1..taun][,ref1..refn])."""
+        """The samples as CSV text (header t,q1..qn[,qd..][,qdd..][,tau1..taun][,ref1..refn])."""
         return self.client.dataset_csv(self.id)
 
     def delete(self) -> None:
         self.client.delete_dataset(self.id)
 
-    def __str__(self) -> str:
-        return self.id
-
     def __repr__(self) -> str:
         return f"<Dataset {self.id} {self.data.get('joints')} joints × {self.data.get('samples')} samples>"
+
+
+class Robot(_Resource):
+    """An uploaded URDF robot: `id` ("rb_…") plus the server's description as attributes, as
+    items (robot["joints"]) and in `data`: `name`, `robot_name`, `base_link`, `tip_link`,
+    `joints` (name, link, type, axis, limits, damping, friction per moving joint, from the
+    base), `gravity`, `parameters`
+    (`names`: m1 mx1 my1 mz1 Ixx1 … fv1 … fc1 …, `urdf_values`), `base_parameters`
+    (`count`), `warnings`, `created_at`.
+
+    Pass it (or its id) to Client.identify(robot=...) and Client.design_excitation().
+    """
+
+    @property
+    def joint_names(self) -> List[str]:
+        """The moving joints' URDF names, k = 1..n (parameter names end in k)."""
+        return [joint["name"] for joint in self.data.get("joints", [])]
+
+    def urdf(self) -> str:
+        """The URDF document as uploaded (byte for byte; see Client.robot_urdf)."""
+        return self.client.robot_urdf(self.id)
+
+    def delete(self) -> None:
+        """Deletes the robot (409 CONFLICT while a queued or running job uses it)."""
+        self.client.delete_robot(self.id)
+
+    def __repr__(self) -> str:
+        return f"<Robot {self.id} {self.data.get('name')!r} {len(self.data.get('joints', []))} joints>"
 
 
 class History(NamedTuple):
@@ -74,8 +114,8 @@ class History(NamedTuple):
 
 
 class Job:
-    """A simulation or identification job. `data` is the JSON last seen from the server;
-    `refresh()` fetches it again, `wait()` long-polls until the job ends."""
+    """A simulation, identification or excitation job. `data` is the JSON last seen from the
+    server; `refresh()` fetches it again, `wait()` long-polls until the job ends."""
 
     def __init__(self, client: "Client", data: Mapping[str, Any]) -> None:
         self.client = client
@@ -106,9 +146,15 @@ class Job:
 
     @property
     def dataset_id(self) -> Optional[str]:
-        """The dataset identified, or the one a simulation made (once it has succeeded)."""
+        """The dataset identified, or the one a simulation or an excitation made (once it has
+        succeeded)."""
         result = self.data.get("result") or {}
         return self.data.get("dataset_id") or result.get("dataset_id")
+
+    @property
+    def robot_id(self) -> Optional[str]:
+        """The URDF robot a robot identification or an excitation works on (None otherwise)."""
+        return self.data.get("robot_id")
 
     def __repr__(self) -> str:
         return f"<Job {self.id} {self.kind} {self.state}>"
@@ -231,7 +277,26 @@ class Job:
         """A finished identification's torque fit: the filtered measured torque beside the model
         torque at the estimate, per joint ({"t", "joints": [{"measured", "model", "residual",
         "rms_measured", "rms_residual"}], "filter", ...}), thinned to max_points for plotting."""
-        return self.client._request("GET", f"/v1/jobs/{_quote(self.id)}/fit", query={"max_points": max_points})
+        return self.client.fit(self, max_points=max_points)
+
+    # --- robot identifications and excitations ------------------------------------------
+    def robot_result(self, timeout: Optional[float] = None) -> "RobotResult":
+        """A robot identification's result by name (a RobotResult), waiting for it if needed
+        (raises as wait() does)."""
+        return RobotResult(self.result(timeout=timeout))
+
+    def validation(self, max_points: int = 2000) -> dict:
+        """A robot identification's prediction of its validation run (see Client.validation)."""
+        return self.client.validation(self, max_points=max_points)
+
+    def to_urdf(self, path: Optional[PathLike] = None) -> str:
+        """The identified URDF (see Client.to_urdf); written to `path` when given."""
+        return self.client.to_urdf(self, path)
+
+    def trajectory(self, path: Optional[PathLike] = None, max_points: Optional[int] = None,
+                   timeout: Optional[float] = None) -> dict:
+        """An excitation's trajectory (see Client.excitation_trajectory), waiting for it if needed."""
+        return self.client.excitation_trajectory(self, path=path, max_points=max_points, timeout=timeout)
 
 
 class Client:
@@ -261,31 +326,33 @@ class Client:
         """Stores a trajectory and returns its Dataset.
 
         path_or_arrays is either
-        - a CSV file path (str or os.PathLike) with header t,q1..qn[,tau1..taun][,ref1..refn]
-          (what `manipid simulate --out` writes), sent as it is; or
-        - a dict with `t` (sample times) or `dt` (with optional `t0`), `q`, and optionally `tau`
-          and `ref`. Plain lists are per joint, as the API has them: q[j][i] is joint j+1 at
-          sample i. numpy arrays are samples × joints (one row per sample, like the CSV) and
-          are transposed; a 1-D array is one joint.
-        name: stored with the dataset. The server takes no name with a CSV body, so a CSV file
-        with a name is read here and sent as JSON (numbers round-trip exactly).
-        idempotency_key: a retry with the same key returns the first dataset.
+        - a CSV file path (str or os.PathLike) with header t,q1..qn[,qd1..qdn][,qdd1..qddn]
+          [,tau1..taun][,ref1..refn] (what `manipid simulate --out` and `manipid torque
+          --with-states` write), sent as it is; or
+        - a dict with `t` (sample times) or `dt` (with optional `t0`), `q`, and optionally `qd`,
+          `qdd`, `tau` and `ref`. Plain lists are per joint, as the API has them: q[j][i] is
+          joint j+1 at sample i. numpy arrays are samples × joints (one row per sample, like the
+          CSV) and are transposed; a 1-D array is one joint.
+        Time stamps may jitter (a real logger's): the server stores them as measured and an
+        identification resamples them (Dataset.uniform is then False).
+        name: stored with the dataset. idempotency_key: a retry with the same key returns the
+        first dataset.
         """
+        query: Dict[str, Any] = {}
         if isinstance(path_or_arrays, (str, os.PathLike)):
-            if name is None:
-                with open(path_or_arrays, "rb") as stream:
-                    body: Union[bytes, dict] = stream.read()
-                content_type = "text/csv"
-            else:
-                body, content_type = _csv_to_json(path_or_arrays), "application/json"
+            with open(path_or_arrays, "rb") as stream:
+                body: Union[bytes, dict] = stream.read()
+            content_type = "text/csv"
+            if name is not None:
+                query["name"] = name
         elif isinstance(path_or_arrays, Mapping):
             body, content_type = _arrays_to_json(path_or_arrays), "application/json"
+            if name is not None:
+                body["name"] = name
         else:
-            raise TypeError("upload_dataset takes a CSV path or a dict of arrays (t or dt, q, tau, ref), "
+            raise TypeError("upload_dataset takes a CSV path or a dict of arrays (t or dt, q, qd, qdd, tau, ref), "
                             f"not {type(path_or_arrays).__name__}")
-        if isinstance(body, dict) and name is not None:
-            body["name"] = name
-        data = self._request("POST", "/v1/datasets", body, content_type=content_type,
+        data = self._request("POST", "/v1/datasets", body, query=query, content_type=content_type,
                              headers=_idempotency(idempotency_key))
         return Dataset(self, data)
 
@@ -316,6 +383,130 @@ class Client:
     def delete_dataset(self, dataset_id: Union[str, Dataset]) -> None:
         self._request("DELETE", f"/v1/datasets/{_quote(_dataset_id(dataset_id))}")
 
+    # --- robots ------------------------------------------------------------------------
+    def upload_robot(self, path_or_text: Union[PathLike, bytes], name: Optional[str] = None,
+                     base: Optional[str] = None, tip: Optional[str] = None,
+                     idempotency_key: Optional[str] = None, form: str = "xml") -> Robot:
+        """Stores a robot's URDF (POST /v1/robots) and returns its Robot (id "rb_…").
+
+        path_or_text: a URDF file's path (str or os.PathLike), or the document itself (a str
+        starting with "<", or bytes). name: the robot's name (default: the URDF's robot name);
+        base / tip: the links the chain runs between (default: the root and its only leaf).
+        idempotency_key: a retry with the same key and document returns the first robot; a key
+        derived from the file (e.g. "arm-" + its SHA-256) makes a script safe to re-run.
+        form: "xml" sends the document as the body, as it is (name, base and tip as query
+        parameters); "json" sends {"urdf": text, "name", "base", "tip"}. The server keeps the
+        document byte for byte either way (robot_urdf gives it back). A URDF the server cannot
+        use is refused: ManipidError 422 INVALID_FIELD with field "urdf" (or "base"/"tip").
+        """
+        document = _urdf_bytes(path_or_text)
+        options = {key: value for key, value in (("name", name), ("base", base), ("tip", tip)) if value is not None}
+        headers = _idempotency(idempotency_key)
+        if form == "xml":
+            data = self._request("POST", "/v1/robots", document, query=options, content_type="application/xml",
+                                 headers=headers)
+        elif form == "json":
+            try:
+                text = document.decode("utf-8")
+            except UnicodeDecodeError as error:
+                raise ValueError(f"form='json' needs a UTF-8 document ({error}); send it with form='xml'") from None
+            data = self._request("POST", "/v1/robots", {"urdf": text, **options}, headers=headers)
+        else:
+            raise ValueError(f"form must be 'xml' or 'json', not {form!r}")
+        return Robot(self, data)
+
+    def robot(self, robot_id: Union[str, Robot, Mapping[str, Any]]) -> Robot:
+        """A robot's description (404 NOT_FOUND when there is none)."""
+        return Robot(self, self._request("GET", f"/v1/robots/{_quote(_robot_id(robot_id))}"))
+
+    def robots(self, page_size: int = 50) -> Iterator[Robot]:
+        """Every stored robot, newest first (fetched page by page as you iterate)."""
+        for item in self._pages("/v1/robots", {"page_size": page_size}):
+            yield Robot(self, item)
+
+    def robot_urdf(self, robot_id: Union[str, Robot, Mapping[str, Any]]) -> str:
+        """A robot's URDF document exactly as uploaded (GET /v1/robots/{id}?format=urdf), as text
+        (UTF-8; the bytes themselves: robot_urdf_bytes)."""
+        return self.robot_urdf_bytes(robot_id).decode("utf-8")
+
+    def robot_urdf_bytes(self, robot_id: Union[str, Robot, Mapping[str, Any]]) -> bytes:
+        """A robot's URDF document exactly as uploaded, byte for byte."""
+        return self._request("GET", f"/v1/robots/{_quote(_robot_id(robot_id))}", query={"format": "urdf"},
+                             accept="application/xml", raw=True)
+
+    def delete_robot(self, robot_id: Union[str, Robot, Mapping[str, Any]]) -> None:
+        """Deletes a robot: 404 NOT_FOUND if there is none, 409 CONFLICT while a queued or running
+        job uses it (its finished jobs keep their results; their /fit and /urdf then answer 409)."""
+        self._request("DELETE", f"/v1/robots/{_quote(_robot_id(robot_id))}")
+
+    def design_excitation(self, robot: Union[str, Robot, Mapping[str, Any]], period: Optional[float] = None,
+                          harmonics: Optional[int] = None, duration: Optional[float] = None,
+                          criterion: Optional[str] = None, idempotency_key: Optional[str] = None,
+                          **options: Any) -> Job:
+        """Queues an excitation design for a robot (POST /v1/excitations); returns its Job.
+
+        Per joint a Fourier series of `period` s (server default 10) with `harmonics` (5),
+        at rest at both ends, within the URDF's position and velocity limits, minimising the
+        condition number of the base regressor (criterion "condition") or maximising log det
+        ("logdet"); sampled every `dt` (0.001 s) over `duration` (whole periods; default one).
+        Other keyword options are the request's fields: name (of the dataset it makes),
+        max_acceleration, position_margin, dt, friction, armature, seed, max_seconds (30).
+        Options left at None are not sent (the server's default applies).
+
+        The job's result names the dataset it made (job.dataset_id; t, q, qd, qdd) and carries
+        the coefficients; excitation_trajectory(job) fetches the samples.
+        """
+        body = _drop_none({"robot_id": _robot_id(robot), "period": period, "harmonics": harmonics,
+                           "duration": duration, "criterion": criterion, **options})
+        if "friction" in body:
+            body["friction"] = _friction(body["friction"])
+        return Job(self, self._request("POST", "/v1/excitations", body, headers=_idempotency(idempotency_key)))
+
+    def excitation_trajectory(self, job: Union[str, Job, Mapping[str, Any]], path: Optional[PathLike] = None,
+                              max_points: Optional[int] = None, timeout: Optional[float] = None) -> dict:
+        """An excitation job's trajectory, waiting for the job if it has not ended: {"t", "q",
+        "qd", "qdd"}, each of q, qd, qdd one list per joint (q[j][i] is joint j+1 at sample i),
+        all the samples or about max_points for plotting. With `path`, also writes the whole
+        trajectory there as CSV (t,q1..qn,qd1..qdn,qdd1..qddn), for the robot's controller.
+        """
+        job = job if isinstance(job, Job) else self.job(_job_id(job))
+        result = job.result(timeout=timeout)
+        dataset_id = result.get("dataset_id")
+        if not dataset_id:
+            raise ValueError(f"job {job.id} ({job.kind}) made no dataset: not an excitation")
+        if path is not None:
+            with open(path, "w", encoding="utf-8", newline="") as stream:
+                stream.write(self.dataset_csv(dataset_id))
+        return self.dataset_data(dataset_id, max_points=max_points)
+
+    # --- results of robot identifications ------------------------------------------------
+    def fit(self, job: Union[str, Job], max_points: int = 2000) -> dict:
+        """GET /v1/jobs/{id}/fit: a finished identification's filtered measured torque beside the
+        model torque at the estimate, with the residual, per joint ({"t", "joints": [{"measured",
+        "model", "residual", "rms_measured", "rms_residual", ...}], ...}), thinned to max_points
+        for plotting. 409 CONFLICT for jobs without an estimate."""
+        return self._request("GET", f"/v1/jobs/{_quote(_job_id(job))}/fit", query={"max_points": max_points})
+
+    def validation(self, job: Union[str, Job], max_points: int = 2000) -> dict:
+        """GET /v1/jobs/{id}/validation: the validation run's filtered torque beside what the
+        estimate predicts, per joint, with the error ({"t", "joints": [{"measured", "model",
+        "residual", "relative_error", ...}], "overall_relative_error", "prior": the URDF's own
+        values' errors}). 409 CONFLICT unless the job is a succeeded robot identification that
+        was given validate=."""
+        return self._request("GET", f"/v1/jobs/{_quote(_job_id(job))}/validation", query={"max_points": max_points})
+
+    def to_urdf(self, job: Union[str, Job], path: Optional[PathLike] = None) -> str:
+        """The identified URDF: GET /v1/jobs/{id}/urdf, the robot's document with the estimate
+        (each body's <inertial>, each joint's <dynamics>) written in by the server. Returns the
+        text; with `path`, also writes it there (byte for byte). 409 CONFLICT for a job that is
+        not a succeeded robot identification, or whose estimate no URDF can hold (a body with a
+        negative mass: identify with physical=True)."""
+        document = self._request("GET", f"/v1/jobs/{_quote(_job_id(job))}/urdf", accept="application/xml", raw=True)
+        if path is not None:
+            with open(path, "wb") as stream:
+                stream.write(document)
+        return document.decode("utf-8")
+
     # --- jobs --------------------------------------------------------------------------
     def simulate(self, idempotency_key: Optional[str] = None, **options: Any) -> Job:
         """Queues a closed-loop simulation (POST /v1/simulations); returns its Job.
@@ -327,24 +518,58 @@ class Client:
         return Job(self, self._request("POST", "/v1/simulations", options, headers=_idempotency(idempotency_key)))
 
     def identify(self, dataset: Union[str, Dataset, Mapping[str, Any], None] = None,
-                 idempotency_key: Optional[str] = None, **options: Any) -> Job:
+                 idempotency_key: Optional[str] = None, *,
+                 robot: Union[str, Robot, Mapping[str, Any], None] = None,
+                 validate: Union[str, Dataset, Mapping[str, Any], None] = None,
+                 friction: Union[Sequence[str], str, None] = None, armature: Optional[bool] = None,
+                 physical: Optional[bool] = None, trim: Optional[Sequence[float]] = None,
+                 dt: Optional[float] = None, weights: Optional[str] = None, **options: Any) -> Job:
         """Queues an identification (POST /v1/identifications); returns its Job.
 
-        dataset: a Dataset, a dataset id, or None with simulation={...} (simulate, then
-        identify). Keyword options are the request's JSON fields: preset, method, algorithm,
-        free, initial, lower, upper, kp, kd, half_length, band, torque_source, weights,
-        max_evaluations, max_seconds, ... (unknown ones are refused by the server, 422).
+        dataset: a Dataset, a dataset id (or the dict of one), or None with simulation={...}
+        (simulate, then identify).
+
+        Without robot: the paper's preset model. Keyword options are the request's JSON fields:
+        preset, method, algorithm, free, initial, lower, upper, kp, kd, half_length, band,
+        torque_source, weights, max_evaluations, max_seconds, ... (unknown ones are refused by
+        the server, 422).
+
+        With robot (a Robot, its id, or its dict): that URDF robot's base parameters by linear
+        input-error (a RobotIdentificationRequest). The dataset needs q and tau for the robot's
+        joints (422 naming dataset_id otherwise); its time stamps may jitter.
+        - validate: a second run (Dataset or id) the estimate then predicts (result's
+          "validation", Client.validation(job));
+        - friction: any of "viscous", "coulomb", "offset" (a list, or "viscous,coulomb"; [] or
+          "none" for no friction; server default viscous and Coulomb);
+        - armature: each joint's rotor inertia Ia; physical: a physically consistent estimate;
+        - trim: (start, end) seconds dropped at each end; dt: the resampling period (default the
+          median step); weights: "unit" or "per-joint";
+        - options: half_length, band, comparison_half_length, comparison_band.
+        job.robot_result() gives the result by name (RobotResult); to_urdf(job) the URDF.
+        Arguments left at None are not sent (the server's default applies).
         """
-        body = dict(options)
+        body = _drop_none(dict(options))
+        robot_fields = _drop_none({"friction": _friction(friction) if friction is not None else None,
+                                   "armature": armature, "physical": physical,
+                                   "trim": list(trim) if trim is not None else None, "dt": dt, "weights": weights})
         if dataset is not None:
             if "dataset_id" in body:
                 raise TypeError("give the dataset either positionally or as dataset_id=, not both")
             body["dataset_id"] = _dataset_id(dataset)
+        if robot is not None:
+            if "robot_id" in body:
+                raise TypeError("give the robot either as robot= or as robot_id=, not both")
+            body["robot_id"] = _robot_id(robot)
+        if validate is not None:
+            if "robot_id" not in body:
+                raise TypeError("validate= needs robot=: only robot identifications predict a validation run")
+            body["validation_dataset_id"] = _dataset_id(validate)
+        body.update(robot_fields)
         return Job(self, self._request("POST", "/v1/identifications", body, headers=_idempotency(idempotency_key)))
 
-    def job(self, job_id: str) -> Job:
-        """A job by id (e.g. one submitted by another script)."""
-        return Job(self, self._request("GET", f"/v1/jobs/{_quote(job_id)}"))
+    def job(self, job_id: Union[str, Job, Mapping[str, Any]]) -> Job:
+        """A job by id (e.g. one submitted by another script), fetched anew."""
+        return Job(self, self._request("GET", f"/v1/jobs/{_quote(_job_id(job_id))}"))
 
     def jobs(self, state: Optional[str] = None, kind: Optional[str] = None, page_size: int = 50) -> Iterator[Job]:
         """Every job, newest first, optionally of one state and/or kind (paged as you iterate).
@@ -374,8 +599,9 @@ class Client:
     def _request(self, method: str, path: str, body: Union[bytes, Mapping, None] = None, *,
                  query: Optional[Mapping[str, Any]] = None, content_type: Optional[str] = None,
                  accept: str = "application/json", headers: Optional[Mapping[str, str]] = None,
-                 timeout: Optional[float] = None) -> Any:
-        """One request; returns parsed JSON (or text for non-JSON answers, None for 204)."""
+                 timeout: Optional[float] = None, raw: bool = False) -> Any:
+        """One request; returns parsed JSON (or text for non-JSON answers, None for 204; with
+        raw=True the body's bytes as they came)."""
         all_headers = {"Accept": accept, "User-Agent": "manipid-client-python"}
         if self.token:
             all_headers["Authorization"] = f"Bearer {self.token}"
@@ -422,6 +648,8 @@ class Client:
             message = None if problem.get("detail") or problem.get("title") else \
                 f"{method} {path}: HTTP {status} {data[:200].decode(errors='replace')}".strip()
             raise ManipidError(message, status=status, problem=problem, retry_after=_seconds(retry_after))
+        if raw:
+            return data
         if status == 204 or not data:
             return None
         if parsed is not None:
@@ -493,6 +721,50 @@ def _seconds(value: Optional[str]) -> Optional[float]:
         return None
 
 
+def _robot_id(robot: Union[str, Robot, Mapping[str, Any]]) -> str:
+    if isinstance(robot, Robot):
+        return robot.id
+    if isinstance(robot, Mapping):
+        return str(robot["id"])
+    if isinstance(robot, str):
+        return robot
+    raise TypeError(f"expected a Robot or a robot id, not {type(robot).__name__}")
+
+
+def _job_id(job: Union[str, Job, Mapping[str, Any]]) -> str:
+    if isinstance(job, Job):
+        return job.id
+    if isinstance(job, Mapping):
+        return str(job["id"])
+    if isinstance(job, str):
+        return job
+    raise TypeError(f"expected a Job or a job id, not {type(job).__name__}")
+
+
+def _drop_none(fields: Mapping[str, Any]) -> Dict[str, Any]:
+    return {key: value for key, value in fields.items() if value is not None}
+
+
+def _friction(terms: Union[Sequence[str], str]) -> List[str]:
+    """["viscous", "coulomb"] from a list or from "viscous,coulomb"; "none" or "" is []."""
+    if isinstance(terms, str):
+        terms = [term.strip() for term in terms.split(",") if term.strip()]
+    terms = list(terms)
+    return [] if terms == ["none"] else terms
+
+
+def _urdf_bytes(path_or_text: Union[PathLike, bytes]) -> bytes:
+    """The URDF document: bytes as they are, a str that starts with '<' as UTF-8, else a file's bytes."""
+    if isinstance(path_or_text, (bytes, bytearray)):
+        return bytes(path_or_text)
+    if isinstance(path_or_text, str) and path_or_text.lstrip("\ufeff \t\r\n").startswith("<"):
+        return path_or_text.encode("utf-8")
+    if isinstance(path_or_text, (str, os.PathLike)):
+        with open(path_or_text, "rb") as stream:
+            return stream.read()
+    raise TypeError(f"upload_robot takes a URDF file path or the document (str or bytes), not {type(path_or_text).__name__}")
+
+
 def _dataset_id(dataset: Union[str, Dataset, Mapping[str, Any]]) -> str:
     if isinstance(dataset, Dataset):
         return dataset.id
@@ -517,37 +789,10 @@ def _per_joint(value: Any) -> Any:
 def _arrays_to_json(arrays: Mapping[str, Any]) -> dict:
     body: Dict[str, Any] = {}
     for key, value in arrays.items():
-        if key in ("q", "tau", "ref"):
+        if key in ("q", "qd", "qdd", "tau", "ref"):
             body[key] = _per_joint(value)
         elif hasattr(value, "tolist"):
             body[key] = value.tolist()  # numpy t, or numpy scalars for dt/t0
         else:
             body[key] = value
-    return body
-
-
-def _csv_to_json(path: PathLike) -> dict:
-    """Reads a t,q1..qn,tau1..taun,ref1..refn CSV into the JSON upload (for a named upload);
-    the server still validates everything."""
-    with open(path, newline="") as stream:
-        rows = [row for row in csv.reader(stream) if row]
-    if not rows:
-        raise ValueError(f"{os.fspath(path)}: empty file")
-    columns: Dict[str, List[float]] = {name.strip(): [] for name in rows[0]}
-    names = list(columns)
-    for number, row in enumerate(rows[1:], start=2):
-        if len(row) != len(names):
-            raise ValueError(f"{os.fspath(path)}:{number}: {len(row)} fields, the header has {len(names)}")
-        for name, text in zip(names, row):
-            columns[name].append(float(text))
-    body: Dict[str, Any] = {"t": columns.pop("t", None)}
-    for block in ("q", "tau", "ref"):
-        count = 0
-        while f"{block}{count + 1}" in columns:
-            count += 1
-        if count:
-            body[block] = [columns.pop(f"{block}{j}") for j in range(1, count + 1)]
-    if body["t"] is None or columns:
-        raise ValueError(f"{os.fspath(path)}: expected columns t,q1..qn[,tau1..taun][,ref1..refn], "
-                         f"got {','.join(names)}")
     return body
