@@ -6,7 +6,9 @@
 #include "manipid/api/csv.h"
 #include "manipid/api/robot_json.h"
 #include "manipid/core/dynamics.h"
+#include "manipid/core/robot/consistency.h"
 #include "manipid/core/robot/data.h"
+#include "manipid/core/robot/identification.h"
 #include "manipid/core/robot/rnea.h"
 #include "manipid/core/simulation.h"
 
@@ -95,6 +97,10 @@ int run_urdf_torque(const TorqueOptions& options) {
     }
     parameters = api::parameters_from_json(model, json, input_name(options.parameters));
   }
+  // Torques of a body no matter could make (a lighter link whose inertia was not changed with it) are
+  // still computed, but the user hears why they may look odd.
+  const robot::ConsistencyReport consistency =
+      robot::check_consistency(robot::parameter_structure(model, parameters.layout), parameters.values);
   const int joint_count = model.joint_count();
   const api::CsvTable states = read_table(options.input);
   const std::string last = std::to_string(joint_count);
@@ -110,6 +116,10 @@ int run_urdf_torque(const TorqueOptions& options) {
   }
   // The URDF's warnings once the call is known to work: a refused call prints one line.
   print_urdf_warnings(options.urdf, parsed_urdf);
+  for (const std::string& finding : consistency.findings) {
+    std::fprintf(stderr, "manipid: warning: %s: not a physical robot: %s\n", input_name(options.parameters).c_str(),
+                 finding.c_str());
+  }
   const int time_column = states.column_index("t");
   api::CsvTable torques;
   if (time_column >= 0) torques.columns.emplace_back("t");

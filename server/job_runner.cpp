@@ -224,6 +224,13 @@ JobOutcome run_excitation_job(const api::JobInfo& job, Store& store, LiveJob& li
   };
   const robot::ExcitationLimits limits = robot::excitation_limits(parsed.model, design_options);
   const robot::ExcitationDesign design = robot::design_excitation(parsed.model, design_options);
+  // The design has no history to stream; its progress is stored once, so a finished job still says how
+  // much work it took (the live counters vanish with the run).
+  live.evaluations.store(design.summary.evaluations, std::memory_order_relaxed);
+  store.record_progress(job.id, design.summary.evaluations,
+                        std::isfinite(design.summary.final_value) ? std::optional<double>(design.summary.final_value)
+                                                                  : std::nullopt,
+                        {});
   JobOutcome outcome;
   if (design.summary.termination == robot::ExcitationTermination::cancelled) {
     if (live.shutdown.load()) {

@@ -161,7 +161,8 @@ RobotIdentificationSpec robot_identification_from_json(const nlohmann::json& bod
 ExcitationSpec excitation_from_json(const nlohmann::json& body) {
   const fields::ObjectFields object(body, "",
                                     {"robot_id", "name", "period", "harmonics", "criterion", "max_acceleration",
-                                     "position_margin", "duration", "dt", "friction", "armature", "seed", "max_seconds"});
+                                     "position_margin", "duration", "dt", "friction", "armature", "seed", "max_seconds",
+                                     "max_evaluations"});
   ExcitationSpec spec;
   const Json* robot_id = object.find("robot_id");
   if (!robot_id) throw InputError("robot_id", "missing robot_id: the robot to design the excitation for");
@@ -215,6 +216,10 @@ ExcitationSpec excitation_from_json(const nlohmann::json& body) {
   }
   if (const Json* seed = object.find("seed")) options.seed = fields::read_unsigned(*seed, "seed");
   if (const Json* seconds = object.find("max_seconds")) options.max_seconds = fields::read_positive(*seconds, "max_seconds", 600.0, " s");
+  // The budget that makes a design reproducible (max_seconds depends on the machine).
+  if (const Json* evaluations = object.find("max_evaluations")) {
+    options.max_evaluations = static_cast<int>(fields::read_integer(*evaluations, "max_evaluations", 1, 1'000'000));
+  }
   robot::check_sampling(options.period, options.harmonics, spec.dt, spec.periods);
   const double samples = options.period * spec.periods / spec.dt + 1.0;
   if (samples > fields::max_samples) {

@@ -58,7 +58,6 @@ Json rows_json(const Eigen::MatrixXd& m) {
 
 nlohmann::ordered_json robot_description(const robot::Model& model, const std::vector<std::string>& warnings) {
   Json joints = Json::array();
-  Json links = Json::array();
   for (std::size_t k = 0; k < model.joints.size(); ++k) {
     const robot::Joint& joint = model.joints[k];
     joints.push_back({{"name", joint.name},
@@ -71,8 +70,10 @@ nlohmann::ordered_json robot_description(const robot::Model& model, const std::v
                         {"velocity", number(joint.limits.velocity)},
                         {"effort", number(joint.limits.effort)}}},
                       {"damping", joint.damping},
-                      {"friction", joint.friction}});
-    links.push_back(model.bodies[k].links);
+                      {"friction", joint.friction},
+                      // The URDF links whose inertia this body holds (fixed joints merged); not the
+                      // top-level "links", which in a resource are its addresses.
+                      {"body_links", model.bodies[k].links}});
   }
   const robot::ParameterLayout layout;  // viscous and Coulomb: what a URDF's <dynamics> holds
   const std::vector<std::string> names = robot::standard_parameter_names(model, layout);
@@ -80,7 +81,6 @@ nlohmann::ordered_json robot_description(const robot::Model& model, const std::v
           {"base_link", model.base_link},
           {"tip_link", model.tip_link},
           {"joints", joints},
-          {"links", links},
           {"gravity", {model.gravity.x(), model.gravity.y(), model.gravity.z()}},
           {"parameters", {{"names", names}, {"urdf_values", by_name(names, robot::standard_parameters(model, layout))}}},
           {"options", {{"friction", {"viscous", "coulomb", "offset"}}, {"armature", true}}},
@@ -125,7 +125,14 @@ nlohmann::ordered_json robot_result_to_json(const robot::Model& model, const rob
   Json base = Json::array();
   for (int i = 0; i < result.base.size(); ++i) {
     const double estimate = result.estimate[i], error = result.std_errors[i];
+    // The combination in full precision, for scripts (the name rounds coefficients to 6 digits).
+    Json combination = Json::object();
+    for (Eigen::Index j = 0; j < result.base.combination.cols(); ++j) {
+      const double coefficient = result.base.combination(i, j);
+      if (coefficient != 0.0) combination[result.standard_names[static_cast<std::size_t>(j)]] = coefficient;
+    }
     base.push_back({{"name", result.base.names[static_cast<std::size_t>(i)]},
+                    {"combination", combination},
                     {"estimate", number(estimate)},
                     {"std_error", number(error)},
                     {"relative_std_error", number(estimate != 0.0 ? std::abs(error / estimate) : NAN)}});
@@ -215,16 +222,20 @@ ParameterValues parameters_from_json(const robot::Model& model, const nlohmann::
   if (!values->is_object()) {
     throw InputError(field, field + " must be an identify result (with \"point\") or an object of parameter values by name");
   }
+  // A result's point is exactly what was identified: its names say the layout (friction "none" has no
+  // fv). A flat object overrides the URDF's values: everything it does not name, the URDF's damping and
+  // friction included, stays as the URDF has it ({"fv2": 0.4} does not drop the Coulomb friction).
+  const bool result_point = values != &json;
   ParameterValues result;
-  result.layout.viscous = result.layout.coulomb = false;
+  if (result_point) result.layout.viscous = result.layout.coulomb = false;
   const auto has_prefix = [&](const char* prefix) {
     return std::any_of(values->items().begin(), values->items().end(), [&](const auto& item) {
       return item.key().rfind(prefix, 0) == 0 && item.key().size() > std::string(prefix).size() &&
              std::isdigit(static_cast<unsigned char>(item.key()[std::string(prefix).size()]));
     });
   };
-  result.layout.viscous = has_prefix("fv");
-  result.layout.coulomb = has_prefix("fc");
+  result.layout.viscous = result.layout.viscous || has_prefix("fv");
+  result.layout.coulomb = result.layout.coulomb || has_prefix("fc");
   result.layout.offset = has_prefix("fo");
   result.layout.armature = has_prefix("Ia");
   const std::vector<std::string> names = robot::standard_parameter_names(n, result.layout);

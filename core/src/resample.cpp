@@ -82,6 +82,13 @@ Eigen::MatrixXd interpolate(const Eigen::VectorXd& t, const Eigen::MatrixXd& val
 std::string TimingReport::warning() const {
   if (!resampled) return "";
   std::ostringstream text;
+  if (repeats_dropped == 0 && max_step - min_step <= 1e-6 * median_step) {
+    // Uniform data asked onto another period (a second run onto the identification's grid).
+    text.precision(6);
+    text << "resampled from its uniform " << median_step * 1e3 << " ms steps onto a " << dt * 1e3
+         << " ms grid by cubic interpolation, " << samples_out << " samples";
+    return text.str();
+  }
   text << "time steps are not uniform (" << milliseconds(min_step) << " to " << milliseconds(max_step)
        << " ms around a median of " << milliseconds(median_step) << " ms";
   if (repeats_dropped > 0) text << "; " << repeats_dropped << " repeated rows dropped";

@@ -1056,6 +1056,7 @@ TEST_F(Routes, ARobotUploadsAsXmlOrJsonAndComesBackByteForByte) {
   EXPECT_EQ(robot["tip_link"], "l2");
   ASSERT_EQ(robot["joints"].size(), 2u);
   EXPECT_EQ(robot["joints"][1]["axis"], Json::array({0.0, 1.0, 0.0}));
+  EXPECT_EQ(robot["joints"][1]["body_links"], Json::array({"l2"}));
   EXPECT_EQ(robot["parameters"]["names"].size(), 24u);  // 2 × 10 inertial + viscous and Coulomb per joint
   EXPECT_EQ(robot["parameters"]["urdf_values"]["m2"], 1.0);
   EXPECT_GT(robot["base_parameters"]["count"], 0);

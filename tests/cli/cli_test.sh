@@ -422,6 +422,18 @@ expect_error "identify --robot: --trim needs two numbers" 2 "--trim needs START,
   "$manipid" identify robot_run.csv --robot "$robots/ur5_like.urdf" --trim 1
 expect_error "torque --robot: unknown parameter in --params" 2 "'Iww3' is not a parameter" \
   "$manipid" torque --robot "$robots/ur5_like.urdf" --params <(echo '{"Iww3": 1}') --in states.csv
+# A flat --params object overrides the URDF: the friction it does not name stays (fv2 as the URDF has it:
+# the same torques as no --params at all).
+"$manipid" torque --robot "$robots/ur5_like.urdf" --in states.csv --out urdf_own_tau.csv 2>/dev/null
+"$manipid" torque --robot "$robots/ur5_like.urdf" --params <(echo '{"fv2": 0.5}') --in states.csv \
+  --out override_tau.csv 2>/dev/null
+check "torque --robot --params: a flat override keeps the URDF's other friction" cmp -s urdf_own_tau.csv override_tau.csv
+# A lighter link whose first moments were not changed with it is no rigid body: computed, but said.
+"$manipid" torque --robot "$robots/ur5_like.urdf" --params <(echo '{"m3": 0.001}') --in states.csv \
+  --out light_tau.csv 2>light.err
+check "torque --robot --params: an unphysical body still gives torques" test -s light_tau.csv
+check "torque --robot --params: an unphysical body is named in a warning" \
+  grep -q "not a physical robot: forearm_link" light.err
 expect_error "identify: --friction needs --robot" 2 "--friction requires --robot" \
   "$manipid" identify paper.csv --friction viscous
 

@@ -48,6 +48,18 @@ TEST(MakeUniform, UniformDataPassesThroughUnchanged) {
   EXPECT_NEAR(report.dt, 1e-3, 1e-15);
 }
 
+TEST(MakeUniform, UniformDataOntoAnotherPeriodSaysSoWithoutCallingItJittery) {
+  const Trajectory data = sampled(Eigen::VectorXd::LinSpaced(501, 0.0, 0.5));
+  TimingReport report;
+  UniformOptions options;
+  options.dt = 1.25e-3;
+  const Trajectory coarser = make_uniform(data, options, &report);
+  ASSERT_TRUE(report.resampled);
+  EXPECT_EQ(coarser.samples(), 401);
+  EXPECT_EQ(report.warning(),
+            "resampled from its uniform 1 ms steps onto a 1.25 ms grid by cubic interpolation, 401 samples");
+}
+
 TEST(MakeUniform, JitteryQuadraticsAreInterpolatedExactly) {
   // Cubic Hermite with three-point slopes reproduces a quadratic on any spacing.
   std::mt19937_64 engine(7);

@@ -74,9 +74,14 @@ class RobotThroughTheService(unittest.TestCase):
     def excitation_csv(self, robot, dt, seed, name):
         """Designed by the service, downloaded as CSV (t, q, qd, qdd), resampled to `dt` by the CLI."""
         job = self.post("/v1/excitations", {"robot_id": robot["id"], "period": 10, "harmonics": 5, "duration": 10,
-                                            "dt": dt, "seed": seed, "max_seconds": 10})
+                                            "dt": dt, "seed": seed, "max_evaluations": 1500, "max_seconds": 120})
         job = self.server.wait_job(job["id"])
         self.assertEqual(job["state"], "succeeded", job)
+        # The budget is evaluations, not seconds: the same design on any machine; the finished job says how many.
+        coefficients = job["result"]["coefficients"]
+        self.assertEqual(coefficients["termination"], "max_evaluations", coefficients["message"])
+        self.assertEqual(coefficients["evaluations"], 1500)
+        self.assertEqual(job["progress"]["evaluations"], 1500)
         status, _, text = self.server.request("GET", f"/v1/datasets/{job['result']['dataset_id']}?format=csv")
         self.assertEqual(status, 200)
         with open(self.path(name), "w") as stream:
@@ -87,6 +92,8 @@ class RobotThroughTheService(unittest.TestCase):
         robot, document = self.upload_robot(PANDA, "panda")
         self.assertTrue(robot["id"].startswith("rb_"))
         self.assertEqual(len(robot["joints"]), 7)
+        self.assertEqual(robot["joints"][6]["body_links"], ["panda_link7", "panda_link8"])  # the flange merged
+        self.assertEqual(robot["links"]["self"], f"/v1/robots/{robot['id']}")
         self.assertEqual(robot["base_parameters"]["count"], 57)
         status, headers, back = self.server.request("GET", f"/v1/robots/{robot['id']}?format=urdf")
         self.assertEqual(status, 200)
@@ -141,6 +148,10 @@ class RobotThroughTheService(unittest.TestCase):
         self.assertEqual(job["state"], "succeeded", job)
         result = job["result"]
         self.assertEqual(len(result["base_parameters"]), 57)  # 43 inertial + 14 friction (viscous, Coulomb)
+        # Each base parameter is its combination of the point's standard parameters, in full precision.
+        for base in result["base_parameters"]:
+            value = sum(coefficient * result["point"][name] for name, coefficient in base["combination"].items())
+            self.assertLess(abs(value - base["estimate"]), 1e-9 * (1 + abs(base["estimate"])), base["name"])
         self.assertTrue(any("repeated rows dropped" in warning for warning in result["warnings"]), result["warnings"])
         self.assertTrue(result["consistency"]["consistent"], result["consistency"]["findings"])
         self.assertTrue(result["physical"]["converged"], result["physical"])

@@ -142,8 +142,9 @@ void job_fit(RouteState& state, const httplib::Request& request, httplib::Respon
   const auto job = state.service.job(id);
   if (!job) throw ApiError(ProblemKind::not_found, "no job " + id, "id");
   if (job->kind != JobKind::identification) {
-    throw ApiError(ProblemKind::conflict, "job " + id + " is a " + std::string(to_string(job->kind)) +
-                                              "; only identifications have a fit", "id");
+    const std::string kind = to_string(job->kind);
+    const char* article = kind.front() == 'e' ? "an " : "a ";
+    throw ApiError(ProblemKind::conflict, "job " + id + " is " + article + kind + "; only identifications have a fit", "id");
   }
   if (job->result.empty()) {
     throw ApiError(ProblemKind::conflict,

@@ -114,7 +114,8 @@ FilterPair filters_for(const Trajectory& data, const IdentificationOptions& opti
   return filters;
 }
 
-/// Where the links and the non-negative entries are in π, with their names.
+}  // namespace
+
 ParameterStructure parameter_structure(const Model& model, const ParameterLayout& layout) {
   const int n = model.joint_count();
   ParameterStructure structure;
@@ -130,8 +131,6 @@ ParameterStructure parameter_structure(const Model& model, const ParameterLayout
   std::sort(structure.non_negative.begin(), structure.non_negative.end());
   return structure;
 }
-
-}  // namespace
 
 double motion_band(const Trajectory& data, double tail) {
   const Eigen::Index N = data.samples();

@@ -63,10 +63,10 @@ nlohmann::ordered_json robot_result_to_json(const robot::Model& model, const rob
                                             const robot::TorquePrediction& fit,
                                             const std::optional<robot::ValidationReport>& validation);
 
-/// A standard parameter vector for `model` from JSON: an identify result (its "point") or a flat
-/// {"name": value} object. The layout follows the names given (fv*/fc*/fo*/Ia* present → that block);
-/// parameters not given keep the URDF's values. Throws InputError(field) for unknown names or values
-/// that are not finite numbers.
+/// A standard parameter vector for `model` from JSON: an identify result (its "point": the layout is
+/// exactly its names') or a flat {"name": value} object (overrides on the URDF: its viscous and Coulomb
+/// friction always, offsets fo* and rotor inertias Ia* when named; everything not named keeps the URDF's
+/// value). Throws InputError(field) for unknown names or values that are not finite numbers.
 struct ParameterValues {
   robot::ParameterLayout layout;
   Eigen::VectorXd values;

@@ -127,6 +127,10 @@ ValidationReport validate(const Model& model, const ParameterLayout& layout, con
 /// InputError for unusable input (joint counts, no torque, too short for the filter, a bad prior).
 IdentificationResult identify(const Model& model, const Trajectory& data, const IdentificationOptions& options);
 
+/// Where the links and the non-negative entries (fv, fc, Ia) are in π of `layout`, with their names: what
+/// check_consistency() and fit_consistent() (robot/consistency.h, robot/consistent_fit.h) need to know.
+ParameterStructure parameter_structure(const Model& model, const ParameterLayout& layout);
+
 /// The motion's band f_m, Hz: the frequency below which all but `tail` of the power of the angles lies
 /// (each joint detrended by its end-point line, Hann window, zero-padded FFT; joints summed). Uniform data.
 double motion_band(const Trajectory& data, double tail = 1e-6);
