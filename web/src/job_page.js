@@ -6,7 +6,7 @@
 // for every job with data, the measured angles (with the reference) and torques (Fig. 2).
 import { api } from "./api.js";
 import { lineChart, positive, PALETTE } from "./charts.js";
-import { h, number, stateBadge, when } from "./dom.js";
+import { h, number, section, stateBadge, when } from "./dom.js";
 
 const MAX_POINTS = 2000;  // per series, for drawing; the server keeps every sample and evaluation
 const TERMINAL = ["succeeded", "failed", "cancelled"];
@@ -29,10 +29,6 @@ async function trueValues(job) {
   const energy = simulation.kinetic_energy || "complete";
   const preset = await api(`/v1/presets/${simulation.preset || "cedro2009"}?kinetic_energy=${energy}`);
   return { ...preset.true_parameters, ...(simulation.parameters || {}) };
-}
-
-function section(id, title, ...children) {
-  return h("section", { id, class: "card", "aria-labelledby": `${id}-title` }, h("h2", { id: `${id}-title` }, title), ...children);
 }
 
 function summaryList(job) {

@@ -143,6 +143,7 @@ export async function jobsListView(main, navigate) {
   kindFilter.addEventListener("change", () => load(false));
   more.addEventListener("click", () => load(true));
   await load(false);
+  document.body.dataset.ready = "true";
 
   // Refresh the first page while anything on it is still queued or running.
   const timer = setInterval(async () => {
