@@ -1,12 +1,13 @@
-// app.js — the dashboard's entry point: routes / (jobs and the paper's form) and /jobs/{id}
-// (one job) with the History API, so every page has an address to bookmark and Back works.
-// Views may also live in the fragment (/#/…, paths.js).
+// app.js — the dashboard's entry point: routes / (jobs and the paper's form), /jobs/{id} (one
+// job), /#/robots (the robots) and /#/robots/{id} (one robot) with the History API, so every
+// page has an address to bookmark and Back works (paths.js says why robots are fragments).
 import { onTokenNeeded, setToken } from "./api.js";
 import { forgetDetachedCharts } from "./charts.js";
 import { h } from "./dom.js";
 import { jobView } from "./job_page.js";
 import { jobsListView } from "./jobs_list.js";
 import { isView, viewOf } from "./paths.js";
+import { robotView, robotsListView } from "./robots.js";
 
 const main = document.getElementById("main");
 const ID = "([A-Za-z0-9_-]{1,64})";
@@ -17,8 +18,11 @@ async function render() {
   shown = view;
   document.body.dataset.ready = "false";  // each view says "true" when it has drawn everything
   const job = new RegExp(`^/jobs/${ID}$`).exec(view);
+  const robot = new RegExp(`^/robots/${ID}$`).exec(view);
   try {
     if (job) await jobView(main, job[1]);
+    else if (robot) await robotView(main, robot[1], navigate);
+    else if (view === "/robots" || view === "/robots/") await robotsListView(main, navigate);
     else if (view === "/" || view === "/index.html") await jobsListView(main, navigate);
     else main.replaceChildren(h("h1", {}, "Not found"), h("p", {}, h("a", { href: "/" }, "Back to the jobs")));
   } catch (error) {
