@@ -46,6 +46,17 @@ document.addEventListener("click", (event) => {
   if (!link || event.defaultPrevented || event.button !== 0 || event.metaKey || event.ctrlKey || event.shiftKey) return;
   if (link.hasAttribute("download")) return;
   const url = new URL(link.href, location.href);
+  if (url.origin === location.origin && url.pathname === location.pathname && !isView(url)) {
+    // An in-page anchor (#main, #identifiability): go there without touching the address, which
+    // may itself be a view's fragment (/#/robots).
+    const target = document.getElementById(decodeURIComponent(url.hash.slice(1)));
+    if (!target) return;
+    event.preventDefault();
+    if (!target.hasAttribute("tabindex")) target.setAttribute("tabindex", "-1");
+    target.focus({ preventScroll: true });
+    target.scrollIntoView();
+    return;
+  }
   if (url.origin !== location.origin || url.pathname.startsWith("/v1/") || url.pathname.endsWith(".json") || !isView(url)) return;
   event.preventDefault();
   navigate(url.pathname + url.hash);

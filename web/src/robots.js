@@ -5,7 +5,9 @@ import { api, ApiProblem, downloadLink } from "./api.js";
 import { facts, h, number, plural, section, stateBadge, when } from "./dom.js";
 import { jobPath, robotPath } from "./paths.js";
 
-const JOB_SCAN = 1000;  // jobs looked through for a robot's (the API has no robot_id filter)
+// Jobs looked through for a robot's: the API has no robot_id filter, and a list's jobs carry
+// their results (a robot identification's is tens of kB), so only the newest.
+const JOB_SCAN = 100;
 
 function field(label, input, hint) {
   return h("div", { class: "field" }, h("label", { for: input.id }, label), input,
