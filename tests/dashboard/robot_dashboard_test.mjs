@@ -235,6 +235,33 @@ try {
   await page.screenshot({ path: shot("robot-job-390.png"), fullPage: true });
   await page.setViewportSize({ width: 1280, height: 800 });
 
+  // ---- what results will carry: consistency, physical, unexcited ---------------------------------
+  // The service does not write `consistency` and `physical` yet; the page renders them from the
+  // job's JSON, so give it a result that has them (and one unexcited base parameter).
+  const bad = new Set([2, 4]);
+  const withChecks = { ...job, result: { ...result,
+    unexcited: [result.base_parameters[0].name],
+    consistency: { consistent: false, findings: ["2 of 7 links are not physically consistent"],
+                   links: robot.joints.map((joint, k) => ({ link: joint.link, consistent: !bad.has(k),
+                     findings: bad.has(k) ? ["pseudo-inertia not positive definite (smallest eigenvalue -0.01)"] : [] })) },
+    physical: { cost_increase: 0.0123, message: "The consistent estimate was found in 12 iterations." } } };
+  await page.route(`**/v1/jobs/${jobId}`, (route) => route.fulfill({ json: withChecks }));
+  await page.reload();
+  await page.waitForSelector("body[data-ready=true] #consistency-links");
+  check(await page.getAttribute("#consistency-verdict", "data-consistent") === "false" &&
+        (await page.textContent("#consistency-verdict")).includes("2 of 7 links"), "consistent: false — \"Not physically consistent: 2 of 7 links …\"");
+  check(await page.locator("#consistency-links tbody tr").count() === JOINTS &&
+        await page.locator('#consistency-links tr[data-consistent="false"]').count() === 2 &&
+        (await page.textContent(`#consistency-links tr[data-link="${robot.joints[2].link}"]`)).includes("pseudo-inertia"),
+        "... each link's verdict and findings, by link name");
+  check((await page.textContent("#consistency-glance")).includes(`${robot.joints[2].link}, ${robot.joints[4].link}`), "... named at a glance");
+  check((await page.textContent("#physical-summary")).includes("1.23 %") && (await page.textContent("#physical-summary")).includes("12 iterations"),
+        "physical: the cost increase in % and the message");
+  check(await page.getAttribute('#base-table tr[data-index="1"]', "data-quality") === "unexcited" &&
+        (await page.textContent('#base-table tr[data-index="1"]')).includes("unexcited"), "an unexcited base parameter is marked");
+  await page.locator("#consistency").screenshot({ path: shot("robot-job-consistency.png") });
+  await page.unroute(`**/v1/jobs/${jobId}`);
+
   // ---- the robots list, and the robot's page from the job --------------------------------------
   await page.click('header nav a[href="/#/robots"]');
   await page.waitForSelector(`#robots tr[data-robot-id="${robotId}"]`);
