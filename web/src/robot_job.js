@@ -168,8 +168,9 @@ function baseParameterSection(result) {
 
   return section("base-parameters", "Base parameters",
     h("p", { class: "muted" },
-      "The combinations of standard parameters the torques determine. Relative σ is |σ / estimate|: over 100 % the data do not " +
-      "determine the value (often one whose true value is near zero); σ from the least-squares covariance. Estimates sort by magnitude."),
+      "The combinations of standard parameters the torques determine; σ from the least-squares covariance. Relative σ is " +
+      "|σ / estimate|: amber over 10 %, red over 100 % — the data do not determine the value (often one whose true value is near " +
+      "zero). Estimates sort by magnitude."),
     h("div", { class: "filters" },
       h("label", { for: "base-filter" }, "Name contains"), filter,
       h("label", { for: "base-quality" }, "Show"), show),
