@@ -69,9 +69,17 @@ function jointsTable(robot, { id, full }) {
     })));
 }
 
+const FRICTION_NAMES = { viscous: "viscous", coulomb: "Coulomb", offset: "offset" };
+
+/** "with viscous and Coulomb friction", or "" without friction. */
+function frictionNote(robot) {
+  const friction = (robot.base_parameters?.friction || []).map((term) => FRICTION_NAMES[term] || term);
+  return friction.length ? `with ${friction.join(" and ")} friction` : "";
+}
+
 function baseCount(robot) {
-  const friction = robot.base_parameters?.friction || [];
-  return `${robot.base_parameters?.count ?? "–"}${friction.length ? ` (with ${friction.join(" and ")} friction)` : ""}`;
+  const note = frictionNote(robot);
+  return `${robot.base_parameters?.count ?? "–"}${note ? ` (${note})` : ""}`;
 }
 
 // ---- the list ----------------------------------------------------------------------------------
@@ -85,7 +93,8 @@ function robotRow(robot) {
     h("td", { class: "joints-cell" },
       h("details", {}, h("summary", {}, `${plural(joints, "joint")}: ${robot.base_link} → ${robot.tip_link}`),
         h("div", { class: "scroll" }, jointsTable(robot, { id: `joints-${robot.id}`, full: false })))),
-    h("td", { class: "number" }, baseCount(robot)),
+    h("td", { class: "number" }, String(robot.base_parameters?.count ?? "–"),
+      frictionNote(robot) ? h("div", { class: "muted small" }, frictionNote(robot)) : null),
     h("td", {}, when(robot.created_at)));
 }
 
