@@ -8,66 +8,22 @@
 //   node tests/dashboard/dashboard_test.mjs path/to/manipid ARTIFACT_DIR
 //
 // Exit 0: pass; 1: a check failed; 77: skipped (no chromium, or playwright-core not installed).
-import { spawn } from "node:child_process";
-import { existsSync, mkdirSync, mkdtempSync, rmSync } from "node:fs";
-import { createRequire } from "node:module";
+import { mkdirSync, mkdtempSync, rmSync } from "node:fs";
 import { tmpdir } from "node:os";
 import path from "node:path";
-import readline from "node:readline";
-import { fileURLToPath } from "node:url";
+import { check, chromiumOrSkip, failed, json, launch, newPage, startServer, stopServer } from "./support.mjs";
 
-const here = path.dirname(fileURLToPath(import.meta.url));
-const root = path.resolve(here, "../..");
 const [binary, artifacts = path.join(tmpdir(), "manipid-dashboard-artifacts")] = process.argv.slice(2);
-const CHROMIUM = process.env.CHROMIUM || "/usr/bin/chromium";
-
-function skip(why) { console.log(`SKIP: ${why}`); process.exit(77); }
 if (!binary) { console.error("usage: dashboard_test.mjs path/to/manipid [ARTIFACT_DIR]"); process.exit(2); }
-if (!existsSync(CHROMIUM)) skip(`${CHROMIUM} not found (Debian package chromium; scripts/setup.sh installs it)`);
-let chromium;
-try {
-  ({ chromium } = createRequire(path.join(root, "web/package.json"))("playwright-core"));
-} catch {
-  skip("playwright-core is not in web/node_modules (run `npm ci --prefix web`; scripts/setup.sh does)");
-}
-
-let failures = 0;
-function check(condition, what) {
-  console.log(`${condition ? "ok  " : "FAIL"}  ${what}`);
-  if (!condition) failures += 1;
-}
-
-async function startServer(database) {
-  const server = spawn(binary, ["serve", "--port", "0", "--db", database, "--workers", "2"], { stdio: ["ignore", "pipe", "pipe"] });
-  server.stderr.on("data", () => {});  // request log
-  const line = await new Promise((resolve, reject) => {
-    readline.createInterface({ input: server.stdout }).once("line", resolve);
-    server.once("exit", (code) => reject(new Error(`manipid serve exited with ${code} before listening`)));
-  });
-  const url = /listening on (http:\/\/\S+)/.exec(line)?.[1];
-  if (!url) throw new Error(`unexpected first line: ${line}`);
-  return { server, url };
-}
-
-async function json(url) {
-  const response = await fetch(url);
-  if (!response.ok) throw new Error(`${url}: HTTP ${response.status}`);
-  return response.json();
-}
+const chromium = chromiumOrSkip();
 
 const workdir = mkdtempSync(path.join(tmpdir(), "manipid-dashboard-"));
 mkdirSync(artifacts, { recursive: true });
-const { server, url } = await startServer(path.join(workdir, "jobs.db"));
-const browser = await chromium.launch({
-  executablePath: CHROMIUM,
-  args: ["--headless", "--no-sandbox", "--disable-gpu", "--disable-quic", "--no-first-run", "--disable-background-networking",
-         "--disable-component-update", "--disable-sync"],
-});
+const { server, url } = await startServer(binary, path.join(workdir, "jobs.db"));
+const browser = await launch(chromium);
 const consoleErrors = [];
 try {
-  const page = await browser.newPage({ viewport: { width: 1280, height: 800 } });
-  page.on("console", (message) => { if (message.type() === "error") consoleErrors.push(message.text()); });
-  page.on("pageerror", (error) => consoleErrors.push(String(error)));
+  const page = await newPage(browser, consoleErrors);
 
   await page.goto(`${url}/`);
   await page.waitForSelector("#paper-form");
@@ -174,10 +130,8 @@ try {
   check(false, `unexpected: ${error.stack || error}`);
 } finally {
   await browser.close();
-  server.kill("SIGTERM");
-  const code = await new Promise((resolve) => server.once("exit", resolve));
-  check(code === 0, "the server exits 0 on SIGTERM");
+  check(await stopServer(server) === 0, "the server exits 0 on SIGTERM");
   rmSync(workdir, { recursive: true, force: true });
 }
-console.log(failures ? `${failures} check(s) failed; screenshots in ${artifacts}` : `all checks passed; screenshots in ${artifacts}`);
-process.exit(failures ? 1 : 0);
+console.log(failed() ? `${failed()} check(s) failed; screenshots in ${artifacts}` : `all checks passed; screenshots in ${artifacts}`);
+process.exit(failed() ? 1 : 0);

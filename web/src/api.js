@@ -29,3 +29,31 @@ export async function api(path, { method = "GET", body } = {}) {
   if (!response.ok) throw new ApiProblem(typeof payload === "object" ? payload : { detail: payload }, response.status);
   return payload;
 }
+
+/**
+ * A link that downloads `href` (a file from the API). A plain link cannot carry the bearer
+ * token, so with one set the click fetches the file with it and saves what came back.
+ */
+export function downloadLink(href, label, { filename = "", ...attributes } = {}) {
+  const link = document.createElement("a");
+  link.href = href;
+  link.setAttribute("download", filename);
+  for (const [name, value] of Object.entries(attributes)) link.setAttribute(name, value);
+  link.append(label);
+  link.addEventListener("click", async (event) => {
+    const token = sessionStorage.getItem(TOKEN_KEY);
+    if (!token) return;
+    event.preventDefault();
+    const response = await fetch(href, { headers: { Authorization: `Bearer ${token}` } });
+    if (response.status === 401) { askForToken(); return; }
+    if (!response.ok) return;
+    const named = /filename="([^"]+)"/.exec(response.headers.get("Content-Disposition") || "")?.[1];
+    const url = URL.createObjectURL(await response.blob());
+    const save = Object.assign(document.createElement("a"), { href: url, download: filename || named || "" });
+    document.body.append(save);
+    save.click();
+    save.remove();
+    setTimeout(() => URL.revokeObjectURL(url), 10000);
+  });
+  return link;
+}

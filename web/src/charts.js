@@ -42,10 +42,11 @@ function record(container, data) {
 }
 
 /**
- * A line chart in `container`. `series`: [{label, color?, dash?}], `data`: [x, y1, y2, ...].
- * Options: xLabel, yLabel, logY, height, points (draw markers).
+ * A line chart in `container`. `series`: [{label, color?, dash?, width?, show?}], `data`: [x, y1, y2, ...].
+ * Options: xLabel, yLabel, logY, height, sync (charts with the same key share the cursor: small
+ * multiples over the same time axis), legend (false: none, for small multiples with one key).
  */
-export function lineChart(container, { title, xLabel, yLabel, series, data, logY = false, height = 240 }) {
+export function lineChart(container, { title, xLabel, yLabel, series, data, logY = false, height = 240, sync, legend = true }) {
   container.classList.add("chart");
   container.setAttribute("role", "img");
   container.setAttribute("aria-label", `${title}: ${series.map((s) => s.label).join(", ")} against ${xLabel}`);
@@ -67,11 +68,12 @@ export function lineChart(container, { title, xLabel, yLabel, series, data, logY
         stroke: s.color || PALETTE[i % PALETTE.length],
         width: s.width || 1.5,
         dash: s.dash,
+        show: s.show !== false,
         points: { show: false },
       })),
     ],
-    legend: { show: true },
-    cursor: { drag: { x: true, y: false } },
+    legend: { show: legend },
+    cursor: sync ? { drag: { x: true, y: false }, sync: { key: sync } } : { drag: { x: true, y: false } },
   };
   const plot = new uPlot(options, data, container);
   const chart = { container, plot, height };
@@ -82,6 +84,10 @@ export function lineChart(container, { title, xLabel, yLabel, series, data, logY
     update(next) {
       plot.setData(next);
       record(container, next);
+    },
+    /** Shows or hides series i (0-based, as in `series`); the y axis fits what is shown. */
+    showSeries(i, show) {
+      plot.setSeries(i + 1, { show });
     },
   };
 }

@@ -35,3 +35,26 @@ export function when(timestamp) {
 export function stateBadge(state) {
   return h("span", { class: `badge state-${state}`, dataset: { state } }, state);
 }
+
+/** A card with a heading that labels it: section("fit", "Torque fit", ...children). */
+export function section(id, title, ...children) {
+  return h("section", { id, class: "card", "aria-labelledby": `${id}-title` }, h("h2", { id: `${id}-title` }, title), ...children);
+}
+
+/** A definition list of [term, detail] pairs; pairs whose detail is null or undefined are left out. */
+export function facts(pairs, attributes = {}) {
+  return h("dl", { class: "summary", ...attributes },
+    pairs.filter(([, detail]) => detail !== null && detail !== undefined)
+      .map(([term, detail]) => [h("dt", {}, term), h("dd", {}, detail)]));
+}
+
+/** A fraction as a percentage with `digits` significant digits ("0.0632 %"), or "–". */
+export function percent(fraction, digits = 3) {
+  if (fraction === null || fraction === undefined || Number.isNaN(fraction)) return "–";
+  return `${number(100 * fraction, digits)} %`;
+}
+
+/** "1 joint", "7 joints". */
+export function plural(count, noun, nouns = `${noun}s`) {
+  return `${count} ${count === 1 ? noun : nouns}`;
+}

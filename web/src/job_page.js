@@ -4,9 +4,13 @@
 // live while it runs; then the result table, correlation heat map, identifiability findings,
 // and the filtered measured torque beside the model torque at the estimate with the residual;
 // for every job with data, the measured angles (with the reference) and torques (Fig. 2).
+// A job on a URDF robot (robot_id: an identification or an excitation) shares the header, the
+// live state and Cancel; its sections are robot_job.js's.
 import { api } from "./api.js";
 import { lineChart, positive, PALETTE } from "./charts.js";
-import { h, number, stateBadge, when } from "./dom.js";
+import { h, number, section, stateBadge, when } from "./dom.js";
+import { robotPath } from "./paths.js";
+import { excitationSections, robotIdentificationSections } from "./robot_job.js";
 
 const MAX_POINTS = 2000;  // per series, for drawing; the server keeps every sample and evaluation
 const TERMINAL = ["succeeded", "failed", "cancelled"];
@@ -31,17 +35,18 @@ async function trueValues(job) {
   return { ...preset.true_parameters, ...(simulation.parameters || {}) };
 }
 
-function section(id, title, ...children) {
-  return h("section", { id, class: "card", "aria-labelledby": `${id}-title` }, h("h2", { id: `${id}-title` }, title), ...children);
-}
-
 function summaryList(job) {
-  const rows = [["Kind", job.kind], ["Created", when(job.created_at)], ["Started", when(job.started_at)],
+  const kind = job.robot_id && job.kind === "identification" ? "identification of a URDF robot's base parameters" : job.kind;
+  const rows = [["Kind", kind], ["Created", when(job.created_at)], ["Started", when(job.started_at)],
                 ["Finished", when(job.finished_at)]];
-  if (job.kind === "identification") {
+  if (job.robot_id) rows.push(["Robot", h("a", { href: robotPath(job.robot_id) }, job.robot_id)]);
+  if (job.kind === "identification" && !job.robot_id) {
     rows.push(["Evaluations", String(job.progress.evaluations)], ["Best cost", number(job.progress.best_cost, 6)]);
   }
   if (job.dataset_id) rows.push(["Dataset", h("a", { href: `/v1/datasets/${job.dataset_id}/data?format=csv` }, `${job.dataset_id} (CSV)`)]);
+  if (job.validation_dataset_id) {
+    rows.push(["Validation dataset", h("a", { href: `/v1/datasets/${job.validation_dataset_id}/data?format=csv` }, `${job.validation_dataset_id} (CSV)`)]);
+  }
   rows.push(["API", h("a", { href: `/v1/jobs/${job.id}` }, "job JSON")]);
   return h("dl", { class: "summary" }, rows.map(([term, detail]) => [h("dt", {}, term), h("dd", {}, detail)]));
 }
@@ -233,7 +238,8 @@ async function dataSection(parent, datasetId) {
 
 export async function jobView(main, id) {
   let job = await api(`/v1/jobs/${id}`);
-  const truth = await trueValues(job);
+  const onRobot = Boolean(job.robot_id);  // the paper's pictures (history, true values) are the preset's
+  const truth = onRobot ? null : await trueValues(job);
   const badge = h("span", { id: "job-state" }, stateBadge(job.state));
   const summary = h("div", {}, summaryList(job));
   const cancel = h("button", { type: "button", id: "cancel", hidden: TERMINAL.includes(job.state) }, "Cancel");
@@ -251,7 +257,7 @@ export async function jobView(main, id) {
   });
 
   let history = null;
-  if (job.kind === "identification") {
+  if (job.kind === "identification" && !onRobot) {
     const names = job.request.free || Object.keys((await api(`/v1/presets/${job.request.preset || "cedro2009"}`)).true_parameters);
     history = new HistoryCharts(body, names, truth);
     await history.refresh(id);
@@ -286,6 +292,12 @@ export async function jobView(main, id) {
       body.append(section(`missing-${body.children.length}`, title, h("p", { role: "status" }, error.message || String(error))));
     }
   };
+  if (onRobot) {
+    if (job.kind === "identification" && job.result) await robotIdentificationSections(body, job, drawOrExplain);
+    if (job.kind === "excitation" && job.result) await excitationSections(body, job, drawOrExplain);
+    document.body.dataset.ready = "true";
+    return;
+  }
   if (job.kind === "identification" && job.result) {
     body.append(resultSection(job.result, truth));
     await drawOrExplain("Torque fit", () => fitSection(body, id));

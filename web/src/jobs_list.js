@@ -3,6 +3,7 @@
 // state and kind filters, newest first, refreshed while jobs are active.
 import { api, ApiProblem } from "./api.js";
 import { h, number, stateBadge, when } from "./dom.js";
+import { robotPath } from "./paths.js";
 
 const METHODS = ["input-error", "output-error", "two-stage"];
 const ALGORITHMS = ["LN_BOBYQA", "LN_NELDERMEAD", "LN_SBPLX", "LD_LBFGS", "LD_SLSQP"];
@@ -91,24 +92,26 @@ function paperForm(preset, navigate) {
 
 function jobRow(job) {
   const result = job.result || {};
+  const paper = job.kind === "identification" && !job.robot_id;  // cost and evaluations: the paper's method's
   return h("tr", { dataset: { jobId: job.id } },
     h("td", {}, h("a", { href: `/jobs/${job.id}` }, job.id)),
     h("td", {}, job.kind),
+    h("td", {}, job.robot_id ? h("a", { href: robotPath(job.robot_id) }, job.robot_id) : h("span", { class: "muted" }, "preset")),
     h("td", {}, stateBadge(job.state)),
     h("td", {}, when(job.created_at)),
-    h("td", { class: "number" }, job.kind === "identification" ? number(result.final_cost ?? job.progress.best_cost, 4) : "–"),
-    h("td", { class: "number" }, job.kind === "identification" ? String(job.progress.evaluations) : "–"));
+    h("td", { class: "number" }, paper ? number(result.final_cost ?? job.progress.best_cost, 4) : "–"),
+    h("td", { class: "number" }, paper ? String(job.progress.evaluations) : "–"));
 }
 
 export async function jobsListView(main, navigate) {
   const preset = await api("/v1/presets/cedro2009");
   const stateFilter = select("filter-state", "state", ["any", "queued", "running", "succeeded", "failed", "cancelled"], "any");
-  const kindFilter = select("filter-kind", "kind", ["any", "identification", "simulation"], "any");
+  const kindFilter = select("filter-kind", "kind", ["any", "identification", "simulation", "excitation"], "any");
   const body = h("tbody");
   const more = h("button", { type: "button", id: "jobs-more", hidden: true }, "Older jobs");
   const table = h("table", { id: "jobs", class: "data" },
     h("caption", {}, "Jobs, newest first"),
-    h("thead", {}, h("tr", {}, ["Job", "Kind", "State", "Created", "Final cost", "Evaluations"].map((label) => h("th", { scope: "col" }, label)))),
+    h("thead", {}, h("tr", {}, ["Job", "Kind", "Robot", "State", "Created", "Final cost", "Evaluations"].map((label) => h("th", { scope: "col" }, label)))),
     body);
   main.replaceChildren(
     h("h1", {}, "Jobs"),
@@ -134,7 +137,7 @@ export async function jobsListView(main, navigate) {
     const rows = page.items.map(jobRow);
     if (append) body.append(...rows);
     else body.replaceChildren(...rows);
-    if (!body.children.length) body.append(h("tr", {}, h("td", { colspan: 6, class: "muted" }, "No jobs yet.")));
+    if (!body.children.length) body.append(h("tr", {}, h("td", { colspan: 7, class: "muted" }, "No jobs yet.")));
     token = page.next_page_token || null;
     more.hidden = !token;
     return page.items;
@@ -143,6 +146,7 @@ export async function jobsListView(main, navigate) {
   kindFilter.addEventListener("change", () => load(false));
   more.addEventListener("click", () => load(true));
   await load(false);
+  document.body.dataset.ready = "true";
 
   // Refresh the first page while anything on it is still queued or running.
   const timer = setInterval(async () => {

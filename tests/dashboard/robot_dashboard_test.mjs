@@ -1,0 +1,340 @@
+// robot_dashboard_test.mjs — the dashboard's robot pages end to end in headless Chromium:
+// make two runs of a 7-joint arm with the real binary (`manipid excitation`, `manipid torque`
+// with noise, seeds 1 and 2), start `manipid serve --port 0`, upload the URDF with the robots
+// page's form, the runs by the API, identify from the robot's page (keyboard), then check the
+// identification's page against the API: the base-parameter table (rows, numbers, filter,
+// sort), friction, the consistency verdict, one fit chart per joint with the API's point
+// count, the validation errors per joint beside the URDF's, the identified URDF's download;
+// then the robots list and the robot's page from the header, an excitation designed from the
+// robot's page, keyboard reach, a narrow screen, a clean console, and that the binary serves
+// the web/src it was built from. Screenshots go to ARTIFACT_DIR.
+//
+//   node tests/dashboard/robot_dashboard_test.mjs path/to/manipid ARTIFACT_DIR
+//
+// Exit 0: pass; 1: a check failed; 77: skipped (no chromium, or playwright-core not installed).
+import { execFileSync } from "node:child_process";
+import { mkdirSync, mkdtempSync, readFileSync, rmSync } from "node:fs";
+import { tmpdir } from "node:os";
+import path from "node:path";
+import { check, chromiumOrSkip, failed, json, launch, newPage, overflow, root, startServer, stopServer, tabUntil } from "./support.mjs";
+
+const [given, artifacts = path.join(tmpdir(), "manipid-dashboard-artifacts")] = process.argv.slice(2);
+const binary = given && path.resolve(given);
+if (!binary) { console.error("usage: robot_dashboard_test.mjs path/to/manipid [ARTIFACT_DIR]"); process.exit(2); }
+const chromium = chromiumOrSkip();
+
+const URDF = path.join(root, "examples/robots/panda_like.urdf");
+const JOINTS = 7;
+const shot = (name) => path.join(artifacts, name);
+/** The number a cell shows ("0.0632 %", "178 % (not determined)", "-9.94394e-4"), or NaN for "–". */
+const shown = (text) => parseFloat(text);
+const close = (a, b, relative) => Math.abs(a - b) <= relative * Math.abs(b);
+
+const workdir = mkdtempSync(path.join(tmpdir(), "manipid-robot-dashboard-"));
+mkdirSync(artifacts, { recursive: true });
+
+// Two noisy runs of one excitation: the identification's and the validation's.
+const run = (...args) => execFileSync(binary, args, { cwd: workdir, stdio: ["ignore", "ignore", "pipe"] });
+run("excitation", "--robot", URDF, "--period", "10", "--harmonics", "5", "--duration", "20", "--max-seconds", "2", "--out", "exc.csv");
+for (const seed of [1, 2]) {
+  run("torque", "--robot", URDF, "--in", "exc.csv", "--with-states", "--noise-tau-relative", "0.01", "--seed", String(seed),
+      "--out", `run${seed}.csv`);
+}
+
+const { server, url } = await startServer(binary, path.join(workdir, "jobs.db"));
+const browser = await launch(chromium);
+const consoleErrors = [];
+try {
+  const page = await newPage(browser, consoleErrors);
+
+  // First: the binary serves the web/src it was built from. A stale build would test old pages
+  // (api/CMakeLists.txt re-embeds only when a file it lists changes).
+  const sources = JSON.parse(/SOURCES = (\[[^\]]*\])/.exec(readFileSync(path.join(root, "web/tools/embed_web.py"), "utf8"))[1]);
+  const stale = [];
+  for (const name of sources) {
+    const served = await fetch(`${url}${name === "index.html" ? "/" : `/assets/${name}`}`).then((response) => response.text());
+    if (served !== readFileSync(path.join(root, "web/src", name), "utf8")) stale.push(name);
+  }
+  if (!check(stale.length === 0, `the binary embeds today's web/src${stale.length ? `; stale: ${stale.join(", ")}` : ""}`)) {
+    throw new Error("the binary serves an older web/src: touch web/tools/embed_web.py and build again");
+  }
+
+  // ---- the robots page from the header, by keyboard; upload the URDF with its form ----------
+  await page.goto(`${url}/`);
+  await page.waitForSelector("#paper-form");
+  check(await tabUntil(page, () => document.activeElement?.matches?.('header nav a[href="/#/robots"]')),
+        "the header's Robots link is reachable with Tab");
+  await page.keyboard.press("Enter");
+  await page.waitForURL(/\/#\/robots$/);
+  await page.waitForSelector("body[data-ready=true] #robot-upload");
+  check((await page.textContent("#robots tbody")).includes("No robots yet"), "an empty robots list says so");
+  await page.setInputFiles("#u-file", URDF);
+  check(await tabUntil(page, () => document.activeElement?.id === "robot-upload-submit"), "the upload button is reachable with Tab");
+  await page.keyboard.press("Enter");
+  await page.waitForURL(/\/#\/robots\/rb_[0-9a-f]+$/, { timeout: 30000 });
+  const robotId = page.url().split("/").pop();
+  const robot = await json(`${url}/v1/robots/${robotId}`);
+  check(robot.joints.length === JOINTS, `the form uploaded ${robot.name} with ${robot.joints.length} joints`);
+  await page.waitForSelector("body[data-ready=true] #identify-form");
+  check(await page.locator("#robot-joints tbody tr").count() === JOINTS, "the robot's page lists its 7 joints");
+  const firstJoint = robot.joints[0];
+  check((await page.textContent(`#robot-joints tr[data-joint="${firstJoint.name}"]`)).includes(`${firstJoint.limits.velocity} rad/s`),
+        `... with their limits (${firstJoint.name}: ${firstJoint.limits.velocity} rad/s)`);
+
+  // ---- two runs by the API; identify from the robot's page -----------------------------------
+  const upload = (file, name) => json(`${url}/v1/datasets?name=${name}`, { method: "POST", headers: { "Content-Type": "text/csv" },
+                                                                           body: readFileSync(path.join(workdir, file)) });
+  const measured = await upload("run1.csv", "run1");
+  const validationRun = await upload("run2.csv", "run2");
+  await page.reload();  // the fragment address reloads the same view
+  await page.waitForSelector("body[data-ready=true] #identify-form");
+  await page.selectOption("#i-dataset", measured.id);
+  await page.selectOption("#i-validation", validationRun.id);
+  await page.focus("#identify-submit");
+  await page.keyboard.press("Enter");
+  await page.waitForURL(/\/jobs\/job_[0-9a-f]+$/, { timeout: 30000 });
+  const jobId = page.url().split("/").pop();
+  await page.waitForSelector("body[data-ready=true]", { timeout: 240000 });
+  const job = await json(`${url}/v1/jobs/${jobId}`);
+  check(job.request.robot_id === robotId && job.request.dataset_id === measured.id && job.request.validation_dataset_id === validationRun.id &&
+        JSON.stringify(job.request.friction) === JSON.stringify(["viscous", "coulomb"]),
+        "the form asked for robot, run, validation run and viscous + Coulomb friction");
+  check(await page.getAttribute("body", "data-job-state") === "succeeded" && job.state === "succeeded", `job ${jobId} reached succeeded on its page`);
+  check((await page.textContent("#job-state")).trim() === "succeeded", "the state badge says succeeded");
+  const result = job.result;
+
+  // ---- base parameters -----------------------------------------------------------------------
+  const rows = page.locator("#base-table tbody tr");
+  check(await rows.count() === result.base_parameters.length && result.base_parameters.length > 40,
+        `base-parameter table: ${result.base_parameters.length} rows, as many as the result's base_parameters`);
+  const table = await page.$$eval("#base-table tbody tr", (trs) => trs.map((tr) => ({
+    name: tr.dataset.name, estimate: tr.dataset.estimate, stdError: tr.dataset.stdError, relative: tr.dataset.relative,
+    quality: tr.dataset.quality, shown: [...tr.querySelectorAll("td.number")].slice(1).map((td) => td.textContent) })));
+  const same = (attribute, value) => (value === null ? attribute === "" : Number(attribute) === value);
+  const exact = result.base_parameters.every((p, i) => table[i].name === p.name && same(table[i].estimate, p.estimate) &&
+    same(table[i].stdError, p.std_error) && same(table[i].relative, p.relative_std_error));
+  check(exact, "every row holds the result's name, estimate, standard error and relative σ exactly (in order)");
+  const readable = result.base_parameters.every((p, i) => close(shown(table[i].shown[0]), p.estimate, 1e-5) &&
+    close(shown(table[i].shown[1]), p.std_error, 6e-3) && close(shown(table[i].shown[2]) / 100, p.relative_std_error, 6e-3));
+  check(readable, "... and shows them to 6, 3 and 3 significant digits (relative σ in %)");
+  check(table.filter((row) => row.quality === "unexcited").length === (result.unexcited || []).length,
+        `unexcited rows marked: ${(result.unexcited || []).length}`);
+  const long = result.base_parameters.findIndex((p) => p.name.split(/ (?=[+-] )/).length > 4);
+  if (check(long >= 0, "a long base parameter (more than four terms) exists to elide")) {
+    const row = page.locator(`#base-table tbody tr[data-index="${long + 1}"]`);
+    const toggle = row.locator("button.inline");
+    check(await toggle.getAttribute("aria-expanded") === "false" && (await row.locator("th").innerText()).includes("…"),
+          `"${result.base_parameters[long].name.slice(0, 30)}…" shows its first terms`);
+    await toggle.focus();
+    await page.keyboard.press("Enter");
+    const full = (await row.locator("th .expr:not([hidden])").innerText()).replace(/\s+/g, " ").trim();
+    check(await toggle.getAttribute("aria-expanded") === "true" && full === result.base_parameters[long].name, "... and the whole name on Enter");
+  }
+  // Filter by name.
+  await page.fill("#base-filter", "m7");
+  const wanted = result.base_parameters.filter((p) => p.name.toLowerCase().includes("m7")).length;
+  check(await page.locator("#base-table tbody tr:not([hidden])").count() === wanted && wanted > 0 &&
+        (await page.textContent("#base-count")).includes(`Showing ${wanted} of ${result.base_parameters.length}`),
+        `the name filter "m7" leaves the ${wanted} rows that name it`);
+  await page.fill("#base-filter", "");
+  await page.selectOption("#base-quality", "uncertain");
+  const uncertain = result.base_parameters.filter((p) => p.relative_std_error > 0.1 && !(result.unexcited || []).includes(p.name)).length;
+  check(await page.locator("#base-table tbody tr:not([hidden])").count() === uncertain, `"σ over 10 %" shows the ${uncertain} uncertain ones`);
+  await page.selectOption("#base-quality", "all");
+  // Sort by relative σ with the keyboard: ascending, then descending.
+  const relativeSort = page.locator('#base-table button.sort[data-key="relative"]');
+  await relativeSort.focus();
+  await page.keyboard.press("Enter");
+  const order = () => page.$$eval("#base-table tbody tr", (trs) => trs.map((tr) => tr.dataset.relative).filter((v) => v !== "").map(Number));
+  const ascending = await order();
+  check(ascending.every((v, i) => i === 0 || ascending[i - 1] <= v), "Enter on \"Relative σ\" sorts ascending");
+  await page.keyboard.press("Enter");
+  const descending = await order();
+  check(descending.every((v, i) => i === 0 || descending[i - 1] >= v) &&
+        await page.getAttribute('#base-table th:has(button[data-key="relative"])', "aria-sort") === "descending", "... and again descending (aria-sort says so)");
+
+  // ---- friction, consistency, identifiability -------------------------------------------------
+  const friction = await page.$$eval("#friction-table tbody tr", (trs) => trs.map((tr) => ({
+    joint: tr.dataset.joint, values: Object.fromEntries([...tr.querySelectorAll("td[data-key]")].map((td) => [td.dataset.key, Number(td.dataset.value)])) })));
+  check(friction.length === JOINTS && friction.every((row, j) => row.joint === robot.joints[j].name &&
+        row.values.fv === result.friction[j].fv && row.values.fc === result.friction[j].fc),
+        "friction table: fv and fc of the 7 joints, by joint name, as the result");
+  const verdict = await page.getAttribute("#consistency-verdict", "data-consistent");
+  if (result.consistency) {
+    check(verdict === String(result.consistency.consistent), `the consistency verdict is the result's (${verdict})`);
+  } else {
+    check(verdict === "unknown" && (await page.textContent("#consistency-verdict")).includes("Not assessed"),
+          "no consistency in the result: the page says \"not assessed\"");
+  }
+  check(close(shown(await page.textContent("#condition-number")), result.condition_number, 1e-3), "the condition number is the result's");
+  check((await page.textContent("#unidentifiable summary")).startsWith(`${result.unidentifiable.length} standard parameters`),
+        `${result.unidentifiable.length} standard parameters that never enter the torque, listed`);
+
+  // ---- fit: one chart per joint ---------------------------------------------------------------
+  const maxPoints = Number(await page.getAttribute("#robot-fit [data-max-points]", "data-max-points"));
+  const fit = await json(`${url}/v1/jobs/${jobId}/fit?max_points=${maxPoints}`);
+  check(await page.locator("#robot-fit .chart").count() === JOINTS, "7 fit charts, one per joint");
+  for (const joint of fit.joints) {
+    const box = `#chart-robot-fit-${joint.joint}`;
+    check(Number(await page.getAttribute(box, "data-points")) === fit.t.length && await page.getAttribute(box, "data-series") === "3" &&
+          await page.getAttribute(box, "data-joint-name") === joint.name,
+          `fit chart of ${joint.name}: ${fit.t.length} points (the API's at max_points=${maxPoints}), measured, model, residual`);
+  }
+  console.log(`      (the 7 fit charts drew in ${await page.getAttribute("#robot-fit .joint-charts", "data-draw-ms")} ms; ` +
+              `the 7 validation charts in ${await page.getAttribute("#validation .joint-charts", "data-draw-ms")} ms)`);
+  await page.check("#robot-fit input[value=residual]");
+  await page.check("#robot-fit input[value=torque]");
+
+  // ---- validation -----------------------------------------------------------------------------
+  const validation = await json(`${url}/v1/jobs/${jobId}/validation?max_points=${maxPoints}`);
+  const errors = await page.$$eval("#validation-table tbody tr", (trs) => trs.map((tr) => ({
+    joint: tr.dataset.joint, estimate: Number(tr.dataset.estimateError), prior: Number(tr.dataset.priorError),
+    shown: [...tr.querySelectorAll("td.number")].map((td) => td.textContent) })));
+  check(errors.length === JOINTS && errors.every((row, j) => row.joint === validation.joints[j].name &&
+        row.estimate === validation.joints[j].relative_error && row.prior === validation.prior.relative_error[j]),
+        "validation table: each joint's error, the estimate's beside the URDF values', equal to the API's");
+  check(errors.every((row, j) => close(shown(row.shown[0]) / 100, validation.joints[j].relative_error, 6e-3) &&
+        close(shown(row.shown[1]) / 100, validation.prior.relative_error[j], 6e-3)), "... shown in % to 3 significant digits");
+  check(Number(await page.getAttribute("#validation-table tfoot tr", "data-estimate-error")) === validation.overall_relative_error,
+        "... and the overall error");
+  for (const joint of validation.joints) {
+    check(Number(await page.getAttribute(`#chart-validation-${joint.joint}`, "data-points")) === validation.t.length,
+          `validation chart of ${joint.name}: ${validation.t.length} points`);
+  }
+  check((await page.textContent("#validation-verdict")).length > 20, "the validation verdict is in words");
+
+  // ---- the identified URDF --------------------------------------------------------------------
+  check(await page.getAttribute("#urdf-download", "href") === `/v1/jobs/${jobId}/urdf`, "the download link is /v1/jobs/{id}/urdf");
+  const [download] = await Promise.all([page.waitForEvent("download"), page.click("#urdf-download")]);
+  const file = await download.path();
+  check(download.suggestedFilename().endsWith("-identified.urdf") && readFileSync(file, "utf8").includes("<robot"),
+        `it downloads ${download.suggestedFilename()}, a URDF`);
+  await page.screenshot({ path: shot("robot-job-1280x800.png"), fullPage: true });
+
+  // ---- keyboard --------------------------------------------------------------------------------
+  await page.focus("a.skip");  // Tab from the top of the page
+  const reached = new Set();
+  for (let presses = 0; presses < 250 && reached.size < 6; presses += 1) {
+    await page.keyboard.press("Tab");
+    const focus = await page.evaluate(() => {
+      const element = document.activeElement;
+      const outline = getComputedStyle(element).outlineStyle;
+      return { id: element.id || element.dataset?.key || element.getAttribute("value") || "", outline };
+    });
+    if (["robot-link", "urdf-download", "base-filter", "base-quality", "relative", "torque"].includes(focus.id) && focus.outline !== "none") {
+      reached.add(focus.id);
+    }
+  }
+  check(reached.size === 6, `Tab reaches the robot link, the download, the filter, the sort buttons and the plot switch, with a visible focus (${[...reached]})`);
+
+  // ---- a narrow screen --------------------------------------------------------------------------
+  await page.setViewportSize({ width: 390, height: 844 });
+  await page.waitForTimeout(300);  // let the charts follow the resize (not a timing assertion)
+  const narrow = await overflow(page);
+  check(narrow <= 1, `robot job page: no sideways scrolling at 390 px (overflow ${narrow} px; tables scroll in place)`);
+  await page.screenshot({ path: shot("robot-job-390.png"), fullPage: true });
+  await page.setViewportSize({ width: 1280, height: 800 });
+
+  // ---- what results will carry: consistency, physical, unexcited ---------------------------------
+  // The service does not write `consistency` and `physical` yet; the page renders them from the
+  // job's JSON, so give it a result that has them (and one unexcited base parameter).
+  const bad = new Set([2, 4]);
+  const withChecks = { ...job, result: { ...result,
+    unexcited: [result.base_parameters[0].name],
+    consistency: { consistent: false, findings: ["2 of 7 links are not physically consistent"],
+                   links: robot.joints.map((joint, k) => ({ link: joint.link, consistent: !bad.has(k),
+                     findings: bad.has(k) ? ["pseudo-inertia not positive definite (smallest eigenvalue -0.01)"] : [] })) },
+    physical: { cost_increase: 0.0123, message: "The consistent estimate was found in 12 iterations." } } };
+  await page.route(`**/v1/jobs/${jobId}`, (route) => route.fulfill({ json: withChecks }));
+  await page.reload();
+  await page.waitForSelector("body[data-ready=true] #consistency-links");
+  check(await page.getAttribute("#consistency-verdict", "data-consistent") === "false" &&
+        (await page.textContent("#consistency-verdict")).includes("2 of 7 links"), "consistent: false — \"Not physically consistent: 2 of 7 links …\"");
+  check(await page.locator("#consistency-links tbody tr").count() === JOINTS &&
+        await page.locator('#consistency-links tr[data-consistent="false"]').count() === 2 &&
+        (await page.textContent(`#consistency-links tr[data-link="${robot.joints[2].link}"]`)).includes("pseudo-inertia"),
+        "... each link's verdict and findings, by link name");
+  check((await page.textContent("#consistency-glance")).includes(`${robot.joints[2].link}, ${robot.joints[4].link}`), "... named at a glance");
+  check((await page.textContent("#physical-summary")).includes("1.23 %") && (await page.textContent("#physical-summary")).includes("12 iterations"),
+        "physical: the cost increase in % and the message");
+  check(await page.getAttribute('#base-table tr[data-index="1"]', "data-quality") === "unexcited" &&
+        (await page.textContent('#base-table tr[data-index="1"]')).includes("unexcited"), "an unexcited base parameter is marked");
+  await page.locator("#consistency").screenshot({ path: shot("robot-job-consistency.png") });
+  await page.unroute(`**/v1/jobs/${jobId}`);
+
+  // ---- the robots list, and the robot's page from the job --------------------------------------
+  await page.click('header nav a[href="/#/robots"]');
+  await page.waitForSelector(`#robots tr[data-robot-id="${robotId}"]`);
+  const row = `#robots tr[data-robot-id="${robotId}"]`;
+  check(await page.getAttribute(row, "data-joints") === String(JOINTS) &&
+        await page.getAttribute(row, "data-base-parameters") === String(robot.base_parameters.count),
+        `the robots list shows ${robot.name}: 7 joints, ${robot.base_parameters.count} base parameters`);
+  await page.focus(`${row} summary`);
+  await page.keyboard.press("Enter");
+  check(await page.locator(`${row} details table tbody tr`).count() === JOINTS, "... its joints (types, limits) open with Enter");
+  await page.screenshot({ path: shot("robots-1280x800.png"), fullPage: true });
+  await page.setViewportSize({ width: 390, height: 844 });
+  const listNarrow = await overflow(page);
+  check(listNarrow <= 1, `robots list: no sideways scrolling at 390 px (overflow ${listNarrow} px)`);
+  await page.setViewportSize({ width: 1280, height: 800 });
+
+  await page.goBack();
+  await page.waitForURL(new RegExp(`/jobs/${jobId}$`));
+  await page.waitForSelector("body[data-ready=true] #robot-link");
+  check(true, "Back returns to the job page");
+  await page.click("#robot-link");
+  await page.waitForURL(new RegExp(`/#/robots/${robotId}$`));
+  await page.waitForSelector("body[data-ready=true] #robot-jobs-table");
+  check(await page.locator(`#robot-jobs-table tr[data-job-id="${jobId}"]`).count() === 1, "the robot's page lists the identification");
+  await page.screenshot({ path: shot("robot-1280x800.png"), fullPage: true });
+
+  // ---- an excitation, designed from the robot's page --------------------------------------------
+  await page.fill("#e-duration", "10");
+  await page.fill("#e-max-seconds", "1");
+  await page.focus("#excitation-submit");
+  await page.keyboard.press("Enter");
+  await page.waitForURL(/\/jobs\/job_[0-9a-f]+$/, { timeout: 30000 });
+  const excitationId = page.url().split("/").pop();
+  await page.waitForSelector("body[data-ready=true]", { timeout: 240000 });
+  const excitation = await json(`${url}/v1/jobs/${excitationId}`);
+  check(excitation.kind === "excitation" && excitation.state === "succeeded" && excitation.request.duration === 10,
+        `excitation ${excitationId} succeeded (10 s asked from the form)`);
+  check(Number(await page.getAttribute("#excitation-condition", "data-value")) === excitation.result.condition_number,
+        `its page gives the condition number, ${excitation.result.condition_number}`);
+  const excitationPoints = Number(await page.getAttribute("#excitation-angles [data-max-points]", "data-max-points"));
+  const trajectory = await json(`${url}/v1/datasets/${excitation.result.dataset_id}/data?max_points=${excitationPoints}`);
+  check(await page.locator("#excitation-angles .chart").count() === JOINTS, "7 angle charts, one per joint");
+  let anglesRight = true;
+  for (let k = 1; k <= JOINTS; k += 1) {
+    anglesRight &&= Number(await page.getAttribute(`#chart-excitation-q-${k}`, "data-points")) === trajectory.t.length &&
+                    await page.getAttribute(`#chart-excitation-q-${k}`, "data-series") === "3";
+  }
+  check(anglesRight, `each draws the dataset's ${trajectory.t.length} points (the API's) with its lower and upper limits`);
+  await page.screenshot({ path: shot("excitation-job-1280x800.png"), fullPage: true });
+
+  // The job list names the robot of each robot job.
+  await page.click("a.brand");
+  await page.waitForSelector(`#jobs tr[data-job-id="${jobId}"]`);
+  check(await page.locator(`#jobs tr[data-job-id="${jobId}"] a[href="/#/robots/${robotId}"]`).count() === 1, "the job list links the robot");
+
+  check(consoleErrors.length === 0, `no console errors${consoleErrors.length ? ": " + consoleErrors.join(" | ") : ""}`);
+
+  // A URDF the server refuses: the form says why and stays. (After the console check: the
+  // browser logs the 422 it meets as a console error.)
+  await page.goto(`${url}/#/robots`);
+  await page.waitForSelector("body[data-ready=true] #robot-upload");
+  await page.setInputFiles("#u-file", { name: "broken.urdf", mimeType: "application/xml", buffer: Buffer.from("<robot name='x'><link") });
+  await page.click("#robot-upload-submit");
+  await page.waitForSelector('#robot-upload .form-status[role="alert"]');
+  check(page.url().endsWith("/#/robots") && (await page.textContent("#robot-upload .form-status")).length > 10,
+        `a broken URDF: the form shows the server's reason ("${(await page.textContent("#robot-upload .form-status")).slice(0, 60)}…")`);
+
+} catch (error) {
+  check(false, `unexpected: ${error.stack || error}`);
+} finally {
+  await browser.close();
+  check(await stopServer(server) === 0, "the server exits 0 on SIGTERM");
+  rmSync(workdir, { recursive: true, force: true });
+}
+console.log(failed() ? `${failed()} check(s) failed; screenshots in ${artifacts}` : `all checks passed; screenshots in ${artifacts}`);
+process.exit(failed() ? 1 : 0);

@@ -1,0 +1,479 @@
+// robot_job.js — the sections of a job on a URDF robot (/jobs/{id} when the job has robot_id).
+// An identification: what it found at a glance, the base parameters (filterable, sortable),
+// friction per joint, physical consistency and identifiability in words, the filtered measured
+// torque beside the model's per joint (small multiples), and the validation run predicted by
+// the estimate beside the URDF's own values. An excitation: the design's figures and each
+// joint's angle within its limits.
+import { api, downloadLink } from "./api.js";
+import { lineChart, PALETTE } from "./charts.js";
+import { facts, h, number, percent, plural, section } from "./dom.js";
+import { robotPath } from "./paths.js";
+
+// Points per joint chart: a small multiple is 400–700 px wide, so 1000 points draw every pixel.
+export const JOINT_POINTS = 1000;
+// Relative standard error thresholds for the base-parameter table.
+const WELL = 0.1, DETERMINED = 1;
+
+const isPrismatic = (joint) => joint?.type === "prismatic";
+const torqueUnit = (joint) => (isPrismatic(joint) ? "N" : "N·m");
+
+// ---- at a glance ----------------------------------------------------------------------------
+
+function consistencyInWords(result) {
+  const check = result.consistency;
+  if (!check) return "not assessed";
+  if (check.consistent) return "consistent: every link is a possible rigid body";
+  const bad = (check.links || []).filter((link) => !link.consistent);
+  return bad.length
+    ? `not consistent: ${bad.length} of ${plural((check.links || []).length, "link")} (${bad.map((link) => link.link).join(", ")})`
+    : "not consistent";
+}
+
+function glance(job, result) {
+  const joints = result.robot?.joints?.length ?? result.friction?.length ?? 0;
+  const validation = result.validation;
+  const unexcited = result.unexcited || [];
+  return section("glance", "At a glance",
+    facts([
+      ["Robot", [h("a", { href: robotPath(job.robot_id), id: "robot-link" }, result.robot?.name || job.robot_id),
+                 ` — ${plural(joints, "joint")}, ${result.robot?.base_link ?? "?"} → ${result.robot?.tip_link ?? "?"}`]],
+      ["Base parameters", [`${result.base_parameters.length} estimated`,
+                           unexcited.length ? `, ${unexcited.length} not excited (kept at the URDF's values)` : ", every one excited"]],
+      ["Condition number", h("span", { id: "condition-number" }, number(result.condition_number, 4))],
+      ["Fit error", [h("span", { id: "fit-overall" }, percent(result.fit?.overall_relative_error)),
+                     " of the filtered measured torque (‖τ̂ − τ‖ / ‖τ‖ over every joint)"]],
+      ["Validation error", validation
+        ? [h("span", { id: "validation-overall" }, percent(validation.overall_relative_error)),
+           ` on the validation run; the URDF's own values: ${percent(validation.prior?.overall_relative_error)}`]
+        : "no validation run"],
+      ["Physical consistency", h("span", { id: "consistency-glance" }, consistencyInWords(result))],
+      ["Warnings", result.warnings?.length ? h("a", { href: "#identifiability" }, plural(result.warnings.length, "warning")) : "none"],
+    ]),
+    h("p", { class: "actions" },
+      downloadLink(`/v1/jobs/${job.id}/urdf`, "Download the identified URDF", { id: "urdf-download", class: "button" }),
+      h("span", { class: "muted" }, "The robot's document with the estimate in its <inertial> and <dynamics> elements.")));
+}
+
+// ---- base parameters ------------------------------------------------------------------------
+
+/** "a + b - c" → ["a", "+ b", "- c"]: the terms of a base parameter's name. */
+function terms(name) {
+  return name.split(/ (?=[+-] )/);
+}
+
+/** A base parameter's name, wrapping between terms; past four terms, the first three and a toggle. */
+function expression(name) {
+  const parts = terms(name);
+  const spans = (list) => list.map((term, i) => [i ? " " : "", h("span", { class: "term" }, term)]);
+  if (parts.length <= 4) return h("span", { class: "expr" }, spans(parts));
+  const short = h("span", { class: "expr" }, spans(parts.slice(0, 3)), " …");
+  const full = h("span", { class: "expr", hidden: true }, spans(parts));
+  const more = `+${parts.length - 3} terms`;
+  const toggle = h("button", { type: "button", class: "inline", "aria-expanded": "false",
+                               "aria-label": `show all ${parts.length} terms` }, more);
+  toggle.addEventListener("click", () => {
+    const open = toggle.getAttribute("aria-expanded") !== "true";
+    short.hidden = open;
+    full.hidden = !open;
+    toggle.setAttribute("aria-expanded", String(open));
+    toggle.setAttribute("aria-label", open ? "show fewer terms" : `show all ${parts.length} terms`);
+    toggle.textContent = open ? "fewer" : more;
+  });
+  return [short, full, " ", toggle];
+}
+
+function quality(parameter, unexcited) {
+  if (unexcited) return "unexcited";
+  const relative = parameter.relative_std_error;
+  if (relative === null || relative === undefined) return "unknown";
+  return relative <= WELL ? "well" : relative <= DETERMINED ? "weak" : "poor";
+}
+
+const QUALITY_TEXT = { well: "", weak: "weakly determined", poor: "not determined", unexcited: "", unknown: "" };
+
+function baseParameterRow(parameter, index, unexcited) {
+  const kind = quality(parameter, unexcited);
+  const value = (x) => (x === null || x === undefined ? "" : String(x));
+  return h("tr", { class: `quality-${kind}`, dataset: { index: String(index + 1), name: parameter.name, quality: kind,
+                                                         estimate: value(parameter.estimate), stdError: value(parameter.std_error),
+                                                         relative: value(parameter.relative_std_error) } },
+    h("td", { class: "number" }, String(index + 1)),
+    h("th", { scope: "row", class: "name", title: parameter.name }, expression(parameter.name),
+      unexcited ? [" ", h("span", { class: "badge unexcited" }, "unexcited: URDF value")] : null),
+    h("td", { class: "number", dataset: { estimate: value(parameter.estimate) } }, number(parameter.estimate, 6)),
+    h("td", { class: "number", dataset: { stdError: value(parameter.std_error) } }, number(parameter.std_error, 3)),
+    h("td", { class: `number relative ${kind}`, dataset: { relative: value(parameter.relative_std_error) } },
+      percent(parameter.relative_std_error, 3),
+      QUALITY_TEXT[kind] ? h("span", { class: "visually-hidden" }, ` (${QUALITY_TEXT[kind]})`) : null));
+}
+
+const COLUMNS = [
+  { key: "index", label: "#", numeric: true },
+  { key: "name", label: "Base parameter", numeric: false },
+  { key: "estimate", label: "Estimate", numeric: true },
+  { key: "stdError", label: "Std error σ", numeric: true },
+  { key: "relative", label: "Relative σ", numeric: true },
+];
+
+function baseParameterSection(result) {
+  const unexcited = new Set(result.unexcited || []);
+  const rows = result.base_parameters.map((parameter, i) => baseParameterRow(parameter, i, unexcited.has(parameter.name)));
+  const tbody = h("tbody", {}, rows);
+  const filter = h("input", { type: "search", id: "base-filter", autocomplete: "off", spellcheck: "false",
+                              placeholder: "e.g. Izz or m7", "aria-controls": "base-table" });
+  const show = h("select", { id: "base-quality", "aria-controls": "base-table" },
+    [["all", "all"], ["uncertain", "σ over 10 % of the estimate"], ["well", "σ within 10 %"], ["unexcited", "not excited"]]
+      .map(([value, label]) => h("option", { value }, label)));
+  const status = h("p", { id: "base-count", class: "muted", role: "status", "aria-live": "polite" });
+
+  const apply = () => {
+    const text = filter.value.trim().toLowerCase();
+    let visible = 0;
+    for (const row of rows) {
+      const kind = row.dataset.quality;
+      const wanted = show.value === "all" || show.value === kind ||
+                     (show.value === "uncertain" && (kind === "weak" || kind === "poor"));
+      row.hidden = !(wanted && (!text || row.dataset.name.toLowerCase().includes(text)));
+      if (!row.hidden) visible += 1;
+    }
+    status.textContent = visible === rows.length ? `${rows.length} base parameters.` : `Showing ${visible} of ${rows.length} base parameters.`;
+  };
+  filter.addEventListener("input", apply);
+  show.addEventListener("change", apply);
+
+  // Sorting: a button in each header; absent values (null) last whichever the direction.
+  const headers = COLUMNS.map((column) => {
+    const button = h("button", { type: "button", class: "sort", dataset: { key: column.key } }, column.label);
+    const th = h("th", { scope: "col", class: column.numeric ? "number" : null }, button);
+    button.addEventListener("click", () => {
+      const ascending = th.getAttribute("aria-sort") !== "ascending";
+      for (const other of headers) other.removeAttribute("aria-sort");
+      th.setAttribute("aria-sort", ascending ? "ascending" : "descending");
+      const key = (row) => {
+        const raw = row.dataset[column.key];
+        return column.numeric ? (raw === "" ? null : column.key === "estimate" ? Math.abs(Number(raw)) : Number(raw)) : raw;
+      };
+      const sorted = [...rows].sort((a, b) => {
+        const x = key(a), y = key(b);
+        if (x === null || y === null) return x === null ? (y === null ? 0 : 1) : -1;
+        const order = column.numeric ? x - y : x.localeCompare(y);
+        return ascending ? order : -order;
+      });
+      tbody.replaceChildren(...sorted);
+    });
+    return th;
+  });
+  headers[0].setAttribute("aria-sort", "ascending");
+  apply();
+
+  return section("base-parameters", "Base parameters",
+    h("p", { class: "muted" },
+      "The combinations of standard parameters the torques determine; σ from the least-squares covariance. Relative σ is " +
+      "|σ / estimate|: amber over 10 %, red over 100 % — the data do not determine the value (often one whose true value is near " +
+      "zero). Estimates sort by magnitude."),
+    h("div", { class: "filters" },
+      h("label", { for: "base-filter" }, "Name contains"), filter,
+      h("label", { for: "base-quality" }, "Show"), show),
+    status,
+    h("div", { class: "scroll" }, h("table", { id: "base-table", class: "data base" },
+      h("caption", {}, "Base parameters (SI units: kg, kg·m, kg·m², and friction's units)"),
+      h("thead", {}, h("tr", {}, headers)),
+      tbody)));
+}
+
+// ---- friction -------------------------------------------------------------------------------
+
+const FRICTION = {
+  fv: { label: "Viscous fv", unit: "N·m·s/rad", prismaticUnit: "N·s/m" },
+  fc: { label: "Coulomb fc", unit: "N·m", prismaticUnit: "N" },
+  fo: { label: "Offset fo", unit: "N·m", prismaticUnit: "N" },
+  Ia: { label: "Armature Ia", unit: "kg·m²", prismaticUnit: "kg" },
+};
+
+function frictionSection(result) {
+  const entries = result.friction || [];
+  const keys = Object.keys(FRICTION).filter((key) => entries.some((entry) => key in entry));
+  if (!entries.length || !keys.length) {
+    return section("friction", "Friction", h("p", {}, "No friction or armature terms were estimated (the request's friction was [])."));
+  }
+  const joints = result.robot?.joints || [];
+  const base = new Map(result.base_parameters.map((parameter) => [parameter.name, parameter]));
+  const prismatic = joints.some(isPrismatic);
+  const head1 = h("tr", {}, h("th", { scope: "col", rowspan: 2 }, "Joint"),
+    keys.map((key) => h("th", { scope: "colgroup", colspan: 3, class: "group" }, `${FRICTION[key].label}, ${FRICTION[key].unit}`)));
+  const head2 = h("tr", {}, keys.map(() => [h("th", { scope: "col", class: "number" }, "estimate"),
+                                            h("th", { scope: "col", class: "number" }, "σ"),
+                                            h("th", { scope: "col", class: "number" }, "URDF")]));
+  const rows = entries.map((entry, j) => h("tr", { dataset: { joint: entry.joint } },
+    h("th", { scope: "row" }, entry.joint),
+    keys.map((key) => {
+      const name = `${key}${j + 1}`;
+      const value = entry[key];
+      const negative = key !== "fo" && typeof value === "number" && value < 0;
+      const alone = base.get(name);
+      return [
+        h("td", { class: `number${negative ? " unphysical" : ""}`, dataset: { key, value: String(value) } }, number(value, 4),
+          negative ? h("span", { class: "flag", title: "negative: not a physical friction" }, " (negative)") : null),
+        h("td", { class: "number" }, alone ? number(alone.std_error, 2) : h("span", { class: "muted", title: `${name} is not a base parameter on its own` }, "in a sum")),
+        h("td", { class: "number muted" }, number(result.prior?.[name], 4)),
+      ];
+    })));
+  return section("friction", "Friction per joint",
+    h("p", { class: "muted" }, "τ += fv·q̇ + fc·sign(q̇)" + (keys.includes("fo") ? " + fo" : "") + (keys.includes("Ia") ? " + Ia·q̈" : "") +
+      ". URDF: the robot's <dynamics> damping and friction." + (prismatic ? " Prismatic joints: N·s/m, N and kg." : "")),
+    h("div", { class: "scroll" }, h("table", { id: "friction-table", class: "data" }, h("thead", {}, head1, head2), h("tbody", {}, rows))));
+}
+
+// ---- consistency and identifiability --------------------------------------------------------
+
+function scalarFacts(object, skip) {
+  return Object.entries(object)
+    .filter(([key, value]) => !skip.includes(key) && ["number", "string", "boolean"].includes(typeof value))
+    .map(([key, value]) => [key.replaceAll("_", " "), typeof value === "number" ? number(value, 4) : String(value)]);
+}
+
+function consistencySection(result) {
+  const check = result.consistency;
+  const parts = [];
+  if (!check) {
+    parts.push(h("p", { id: "consistency-verdict", dataset: { consistent: "unknown" } },
+      h("strong", {}, "Not assessed: "), "this result carries no physical-consistency check of the estimate."));
+  } else {
+    const links = check.links || [];
+    const bad = links.filter((link) => !link.consistent);
+    parts.push(h("p", { id: "consistency-verdict", dataset: { consistent: String(Boolean(check.consistent)) } },
+      check.consistent
+        ? [h("strong", {}, "Physically consistent: "), "every link's estimate is a possible rigid body."]
+        : [h("strong", {}, "Not physically consistent: "),
+           bad.length ? `${bad.length} of ${plural(links.length, "link")} cannot be rigid bodies with these values.` : "see the findings."]));
+    if (check.findings?.length) parts.push(h("ul", { id: "consistency-findings" }, check.findings.map((text) => h("li", {}, text))));
+    if (links.length) {
+      parts.push(h("div", { class: "scroll" }, h("table", { id: "consistency-links", class: "data" },
+        h("thead", {}, h("tr", {}, ["Link", "Verdict", "Findings"].map((label) => h("th", { scope: "col" }, label)))),
+        h("tbody", {}, links.map((link) => h("tr", { dataset: { link: link.link, consistent: String(Boolean(link.consistent)) } },
+          h("th", { scope: "row" }, link.link),
+          h("td", { class: link.consistent ? "ok" : "bad" }, link.consistent ? "✓ consistent" : "✗ not consistent"),
+          h("td", { class: "findings" }, link.findings?.length ? h("ul", {}, link.findings.map((text) => h("li", {}, text))) : "–")))))));
+    }
+  }
+  if (result.physical) {
+    const physical = result.physical;
+    parts.push(h("h3", {}, "Constrained to physical values"),
+      h("p", { id: "physical-summary" },
+        typeof physical.cost_increase === "number"
+          ? `Asked for a physically consistent estimate: its cost is ${percent(physical.cost_increase)} above the unconstrained least squares.`
+          : "Asked for a physically consistent estimate.",
+        physical.message ? ` ${physical.message}` : ""),
+      facts(scalarFacts(physical, ["cost_increase", "message"])));
+  }
+  return section("consistency", "Physical consistency", parts);
+}
+
+function identifiabilitySection(result) {
+  const unidentifiable = result.unidentifiable || [];
+  const unexcited = result.unexcited || [];
+  const filters = result.filters || {};
+  const filter = (f) => (f ? `M = ${f.half_length}, Ωg = ${number(f.band, 3)} rad/sample (${number(f.cutoff_hz, 3)} Hz)` : "–");
+  return section("identifiability", "Identifiability and data",
+    facts([
+      ["Condition number", `${number(result.condition_number, 4)} (the column-scaled base regressor's σmax/σmin: how well the data excite it)`],
+      ["Not excited", unexcited.length ? h("ul", { id: "unexcited", class: "names" }, unexcited.map((name) => h("li", {}, h("code", {}, name)))) : "none"],
+      ["Never in the torque", unidentifiable.length
+        ? h("details", { id: "unidentifiable" },
+            h("summary", {}, `${plural(unidentifiable.length, "standard parameter")}: kept at the URDF's values`),
+            h("ul", { class: "names" }, unidentifiable.map((name) => h("li", {}, h("code", {}, name)))))
+        : "none"],
+      ["Differentiation filter", filter(filters.differentiation)],
+      ["Comparison low-pass", filter(filters.comparison)],
+      ["Motion band", filters.motion_band_hz !== undefined ? `${number(filters.motion_band_hz, 3)} Hz${filters.automatic ? " (filters chosen from it)" : ""}` : null],
+      ["Rows", result.rows !== undefined ? `${result.rows} regressor rows (every ${result.decimation}th filtered sample)` : null],
+      ["Method", `${result.method}, ${number(result.wall_seconds, 3)} s`],
+    ]),
+    h("h3", {}, "Warnings"),
+    result.warnings?.length
+      ? h("ul", { class: "warnings", id: "warnings" }, result.warnings.map((warning) => h("li", {}, warning)))
+      : h("p", { id: "warnings" }, "None."));
+}
+
+// ---- per-joint charts -------------------------------------------------------------------------
+
+/**
+ * Small multiples: one chart per joint over a shared time axis (the cursor follows across them),
+ * and a switch between the torques and the residual. Returns the element.
+ */
+function jointTorqueCharts(id, fit, joints, { measuredLabel, modelLabel }) {
+  const boxes = fit.joints.map((joint) => h("div", { id: `chart-${id}-${joint.joint}`, dataset: { jointName: joint.name } }));
+  const choice = (value, label, checked) => h("label", {},
+    h("input", { type: "radio", name: `${id}-plot`, value, checked }), ` ${label}`);
+  const toggle = h("fieldset", { class: "toggle" }, h("legend", {}, "Plot"),
+    choice("torque", `${measuredLabel} and ${modelLabel}`, true), choice("residual", `residual (${modelLabel} − measured)`, false));
+  // One key for every chart (a legend under each would repeat it n times).
+  const key = h("p", { class: "key", "aria-hidden": "true" },
+    h("span", {}, h("span", { class: "swatch measured" }), ` ${measuredLabel}`),
+    h("span", {}, h("span", { class: "swatch model" }), ` ${modelLabel} (dashed, a colour per joint)`),
+    h("span", {}, h("span", { class: "swatch residual" }), " residual"));
+  const element = h("div", { class: "joint-charts" }, toggle, key, h("div", { class: "grid joints" }, boxes));
+  const charts = [];
+  // Drawn once the boxes are on the page (they take their width from it); data-draw-ms says how
+  // long the n charts took (for people reading the DOM and the end-to-end test's log).
+  element.draw = () => {
+    const started = performance.now();
+    fit.joints.forEach((joint, i) => drawJoint(joint, i));
+    element.dataset.drawMs = String(Math.round(performance.now() - started));
+  };
+  const drawJoint = (joint, i) => {
+    const meta = joints[i];
+    charts.push(lineChart(boxes[i], {
+      title: `${joint.name}: error ${percent(joint.relative_error)}`,
+      xLabel: "t, s", yLabel: torqueUnit(meta), height: 200, sync: id, legend: false,
+      series: [{ label: measuredLabel, color: "#333" }, { label: modelLabel, color: PALETTE[i % PALETTE.length], dash: [5, 3] },
+               { label: "residual", color: "#b42318", show: false }],
+      data: [fit.t, joint.measured, joint.model, joint.residual] }));
+  };
+  toggle.addEventListener("change", () => {
+    const torque = toggle.querySelector("input:checked").value === "torque";
+    for (const chart of charts) { chart.showSeries(0, torque); chart.showSeries(1, torque); chart.showSeries(2, !torque); }
+  });
+  return element;
+}
+
+async function fitSection(body, job, result) {
+  const fit = await api(`/v1/jobs/${job.id}/fit?max_points=${JOINT_POINTS}`);
+  const charts = jointTorqueCharts("robot-fit", fit, result.robot?.joints || [], { measuredLabel: "measured (filtered)", modelLabel: "model" });
+  body.append(section("robot-fit", "Torque fit per joint",
+    h("p", { class: "muted", dataset: { maxPoints: String(JOINT_POINTS) } },
+      `The filtered measured torque beside the model's at the estimate: ${fit.samples} filtered samples, drawn ${fit.t.length}. ` +
+      `Overall error ‖τ̂ − τ‖ / ‖τ‖ ${percent(fit.overall_relative_error)}; each chart's title gives its joint's.`),
+    charts));
+  charts.draw();
+}
+
+function ratioInWords(estimate, prior) {
+  if (!(estimate > 0) || !(prior > 0)) return "–";
+  const ratio = estimate / prior;
+  if (Math.abs(ratio - 1) < 0.005) return "the same";
+  return ratio < 1 ? `${number(1 / ratio, 3)}× smaller` : `${number(ratio, 3)}× larger`;
+}
+
+function validationVerdict(estimate, prior) {
+  if (!(estimate >= 0) || !(prior >= 0)) return "";
+  const ratio = prior > 0 ? estimate / prior : Infinity;
+  if (Math.abs(ratio - 1) < 0.005) return "The estimate predicts the validation run as well as the URDF's own values.";
+  return ratio < 1
+    ? `The estimate predicts the validation run ${number(1 / ratio, 3)}× better than the URDF's own values (${percent(estimate)} against ${percent(prior)}).`
+    : `The URDF's own values predict the validation run better than the estimate (${percent(prior)} against ${percent(estimate)}).`;
+}
+
+async function validationSection(body, job, result) {
+  if (!job.validation_dataset_id) {
+    body.append(section("validation", "Validation",
+      h("p", { id: "validation-none" }, "No validation run: give the identification a validation_dataset_id (a second run) " +
+        "to see how the estimate predicts data it was not fitted to.")));
+    return;
+  }
+  const validation = await api(`/v1/jobs/${job.id}/validation?max_points=${JOINT_POINTS}`);
+  const prior = validation.prior?.relative_error || [];
+  const widest = Math.max(...validation.joints.map((joint) => joint.relative_error || 0), ...prior.map((value) => value || 0),
+                          validation.overall_relative_error || 0) || 1;
+  const bar = (value, kind) => h("span", { class: `bar ${kind}`, style: `width:${Math.max(0.5, (100 * (value || 0)) / widest)}%` });
+  const bars = (estimate, urdf) => h("td", { class: "bars", "aria-hidden": "true" }, bar(estimate, "estimate"), bar(urdf, "prior"));
+  const rows = validation.joints.map((joint, i) => h("tr", {
+    dataset: { joint: joint.name, estimateError: String(joint.relative_error), priorError: String(prior[i]) } },
+    h("th", { scope: "row" }, joint.name),
+    h("td", { class: "number" }, percent(joint.relative_error)),
+    h("td", { class: "number" }, percent(prior[i])),
+    bars(joint.relative_error, prior[i]),
+    h("td", { class: "number" }, ratioInWords(joint.relative_error, prior[i]))));
+  const overall = validation.overall_relative_error, overallPrior = validation.prior?.overall_relative_error;
+  const charts = jointTorqueCharts("validation", validation, result.robot?.joints || [],
+                                   { measuredLabel: "measured (filtered)", modelLabel: "predicted" });
+  body.append(section("validation", "Validation: predicting a second run",
+    h("p", { id: "validation-verdict" }, validationVerdict(overall, overallPrior)),
+    h("p", { class: "muted", dataset: { maxPoints: String(JOINT_POINTS) } },
+      `Dataset ${job.validation_dataset_id}, through the identification's filters: ${validation.samples} filtered samples. ` +
+      "Error per joint: ‖τ̂ − τ‖ / ‖τ‖, predicted by the estimate and by the URDF's own inertial and friction values."),
+    h("div", { class: "scroll" }, h("table", { id: "validation-table", class: "data" },
+      h("thead", {}, h("tr", {},
+        h("th", { scope: "col" }, "Joint"),
+        h("th", { scope: "col", class: "number" }, h("span", { class: "swatch-box estimate" }), " Estimate's error"),
+        h("th", { scope: "col", class: "number" }, h("span", { class: "swatch-box prior" }), " URDF values' error"),
+        h("th", { scope: "col", class: "bars" }, h("span", { class: "visually-hidden" }, "Bars")),
+        h("th", { scope: "col", class: "number" }, "Estimate's error is"))),
+      h("tbody", {}, rows),
+      h("tfoot", {}, h("tr", { dataset: { estimateError: String(overall), priorError: String(overallPrior) } },
+        h("th", { scope: "row" }, "all joints"), h("td", { class: "number" }, percent(overall)),
+        h("td", { class: "number" }, percent(overallPrior)), bars(overall, overallPrior),
+        h("td", { class: "number" }, ratioInWords(overall, overallPrior)))))),
+    h("h3", {}, "Per joint: measured and predicted"),
+    charts));
+  charts.draw();
+}
+
+/** The sections of a robot identification's page. */
+export async function robotIdentificationSections(body, job, drawOrExplain) {
+  const result = job.result;
+  body.append(glance(job, result), baseParameterSection(result), frictionSection(result),
+              consistencySection(result), identifiabilitySection(result));
+  await drawOrExplain("Torque fit per joint", () => fitSection(body, job, result));
+  if (job.state === "succeeded") await drawOrExplain("Validation", () => validationSection(body, job, result));
+}
+
+// ---- excitation -------------------------------------------------------------------------------
+
+export async function excitationSections(body, job, drawOrExplain) {
+  const result = job.result;
+  const design = result.coefficients || {};
+  const robot = await api(`/v1/robots/${job.robot_id}`).catch(() => null);
+  const names = design.joints || robot?.joints.map((joint) => joint.name) || [];
+  const condition = design.criterion === "condition" || !design.criterion;
+  body.append(section("excitation", "Excitation design",
+    facts([
+      ["Robot", h("a", { href: robotPath(job.robot_id), id: "robot-link" }, design.robot || robot?.name || job.robot_id)],
+      ["Condition number", h("span", { id: "excitation-condition", dataset: { value: String(result.condition_number) } },
+        condition && design.initial_criterion_value !== undefined
+          ? `${number(design.initial_criterion_value, 4)} → ${number(result.condition_number, 4)}`
+          : number(result.condition_number, 4))],
+      ["Criterion", design.criterion ? `${design.criterion === "logdet" ? "maximise log det" : "minimise the condition number"} of the base regressor` +
+                                       (design.log_det !== undefined ? ` (log det ${number(design.log_det, 4)})` : "") : null],
+      ["Base parameters excited", design.base_parameters !== undefined ? String(design.base_parameters) : null],
+      ["Trajectory", `${number(design.period, 4)} s period, ${plural(design.harmonics, "harmonic")}, ` +
+                     `${result.periods !== undefined ? plural(result.periods, "period") + ", " : ""}${result.samples} samples every ${number(result.dt, 3)} s`],
+      ["Search", design.evaluations !== undefined
+        ? `${design.evaluations} evaluations in ${number(design.wall_seconds, 3)} s, stopped: ${design.message || design.termination}` : null],
+      ["Seed", design.seed !== undefined ? String(design.seed) : null],
+      ["Trajectory to run", result.dataset_id
+        ? downloadLink(`/v1/datasets/${result.dataset_id}?format=csv`, `${result.dataset_id} as CSV (t, q, qd, qdd)`, { id: "excitation-csv" })
+        : null],
+    ]),
+    h("p", { class: "muted" }, "Next: run it on the robot, log t, q and τ, upload the log as a dataset and identify it with this robot_id."),
+    design.active_limits?.length
+      ? [h("h3", {}, "Limits it reaches"),
+         h("div", { class: "scroll" }, h("table", { id: "active-limits", class: "data" },
+           h("thead", {}, h("tr", {}, ["Joint", "Limit", "Peak", "Limit value"].map((label, i) => h("th", { scope: "col", class: i > 1 ? "number" : null }, label)))),
+           h("tbody", {}, design.active_limits.map((limit) => h("tr", {},
+             h("th", { scope: "row" }, limit.joint), h("td", {}, limit.kind),
+             h("td", { class: "number" }, number(limit.peak, 4)), h("td", { class: "number" }, number(limit.limit, 4)))))))]
+      : null));
+  if (result.dataset_id) await drawOrExplain("Joint angles", () => excitationCharts(body, result, design, names, robot));
+}
+
+async function excitationCharts(body, result, design, names, robot) {
+  const data = await api(`/v1/datasets/${result.dataset_id}/data?max_points=${JOINT_POINTS}`);
+  const boxes = data.q.map((_, j) => h("div", { id: `chart-excitation-q-${j + 1}`, dataset: { jointName: names[j] || `q${j + 1}` } }));
+  body.append(section("excitation-angles", "Joint angles",
+    h("p", { class: "muted", dataset: { maxPoints: String(JOINT_POINTS) } },
+      `Each joint's angle over the trajectory (drawn: ${data.t.length} points); dashed: the design's limits (the URDF's, less a margin).`),
+    h("div", { class: "grid joints" }, boxes)));
+  const lower = design.limits?.lower || [], upper = design.limits?.upper || [];
+  data.q.forEach((q, j) => {
+    const series = [{ label: `q${j + 1}`, color: PALETTE[j % PALETTE.length] }];
+    const columns = [data.t, q];
+    for (const [label, limit] of [["lower", lower[j]], ["upper", upper[j]]]) {
+      if (typeof limit !== "number") continue;  // null: no limit (a continuous joint)
+      series.push({ label, color: "#777", dash: [4, 4], width: 1 });
+      columns.push(data.t.map(() => limit));
+    }
+    lineChart(boxes[j], { title: names[j] || `joint ${j + 1}`, xLabel: "t, s", yLabel: isPrismatic(robot?.joints[j]) ? "m" : "rad",
+                          height: 200, sync: "excitation", legend: false, series, data: columns });
+  });
+}

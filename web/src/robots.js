@@ -1,0 +1,303 @@
+// robots.js — the URDF robots: the list (/#/robots) with an upload form, and one robot
+// (/#/robots/{id}) with its joints and limits, the jobs that used it, and forms that design an
+// excitation for it and identify it from uploaded runs.
+import { api, ApiProblem, downloadLink } from "./api.js";
+import { facts, h, number, plural, section, stateBadge, when } from "./dom.js";
+import { jobPath, robotPath } from "./paths.js";
+
+// Jobs looked through for a robot's: the API has no robot_id filter, and a list's jobs carry
+// their results (a robot identification's is tens of kB), so only the newest.
+const JOB_SCAN = 100;
+
+function field(label, input, hint) {
+  return h("div", { class: "field" }, h("label", { for: input.id }, label), input,
+    hint ? h("small", { id: `${input.id}-hint` }, hint) : null);
+}
+
+function textInput(id, name, value = "", extra = {}) {
+  return h("input", { id, name, type: "text", value: String(value), autocomplete: "off", ...extra });
+}
+
+/** Shows an API error in `status` and marks the field at fault (by its name attribute). */
+function showProblem(form, status, error) {
+  status.textContent = error instanceof ApiProblem ? `${error.field ? error.field + ": " : ""}${error.message}` : String(error);
+  status.setAttribute("role", "alert");
+  const culprit = error.field && form.querySelector(`[name="${CSS.escape(error.field)}"]`);
+  if (culprit) { culprit.setAttribute("aria-invalid", "true"); culprit.focus(); }
+}
+
+function clearProblems(form, status) {
+  form.querySelectorAll("[aria-invalid]").forEach((element) => element.removeAttribute("aria-invalid"));
+  status.setAttribute("role", "status");
+}
+
+// ---- joints -----------------------------------------------------------------------------------
+
+const UNITS = { revolute: ["rad", "rad/s", "N·m"], continuous: ["rad", "rad/s", "N·m"], prismatic: ["m", "m/s", "N"] };
+
+function range(joint) {
+  const [unit] = UNITS[joint.type] || ["", ""];
+  const { lower, upper } = joint.limits || {};
+  if (joint.type === "continuous" || (lower == null && upper == null)) return "no limits";
+  return `${number(lower, 4)} … ${number(upper, 4)} ${unit}`;
+}
+
+function limit(value, unit) {
+  return value === null || value === undefined ? "none" : `${number(value, 4)} ${unit}`;
+}
+
+function jointsTable(robot, { id, full }) {
+  const head = full
+    ? ["#", "Joint", "Link", "Type", "Axis", "Position", "Velocity", "Effort", "Damping", "Friction"]
+    : ["Joint", "Type", "Position", "Velocity", "Effort"];
+  return h("table", { id, class: `data${full ? "" : " compact"}` },
+    full ? h("caption", {}, "The moving joints from the base; parameter names end in their number (m1, fv1, …)") : null,
+    h("thead", {}, h("tr", {}, head.map((label) => h("th", { scope: "col", class: ["#", "Damping", "Friction"].includes(label) ? "number" : null }, label)))),
+    h("tbody", {}, robot.joints.map((joint, k) => {
+      const [, rate, force] = UNITS[joint.type] || ["", "", ""];
+      return h("tr", { dataset: { joint: joint.name } },
+        full ? h("td", { class: "number" }, String(k + 1)) : null,
+        h("th", { scope: "row" }, joint.name),
+        full ? h("td", {}, joint.link) : null,
+        h("td", {}, joint.type),
+        full ? h("td", {}, `(${(joint.axis || []).map((value) => number(value, 3)).join(", ")})`) : null,
+        h("td", {}, range(joint)),
+        h("td", {}, limit(joint.limits?.velocity, rate)),
+        h("td", {}, limit(joint.limits?.effort, force)),
+        full ? h("td", { class: "number" }, number(joint.damping, 4)) : null,
+        full ? h("td", { class: "number" }, number(joint.friction, 4)) : null);
+    })));
+}
+
+const FRICTION_NAMES = { viscous: "viscous", coulomb: "Coulomb", offset: "offset" };
+
+/** "with viscous and Coulomb friction", or "" without friction. */
+function frictionNote(robot) {
+  const friction = (robot.base_parameters?.friction || []).map((term) => FRICTION_NAMES[term] || term);
+  return friction.length ? `with ${friction.join(" and ")} friction` : "";
+}
+
+function baseCount(robot) {
+  const note = frictionNote(robot);
+  return `${robot.base_parameters?.count ?? "–"}${note ? ` (${note})` : ""}`;
+}
+
+// ---- the list ----------------------------------------------------------------------------------
+
+function robotRow(robot) {
+  const joints = robot.joints.length;
+  return h("tr", { dataset: { robotId: robot.id, joints: String(joints), baseParameters: String(robot.base_parameters?.count) } },
+    h("th", { scope: "row" }, h("a", { href: robotPath(robot.id) }, robot.name),
+      robot.robot_name && robot.robot_name !== robot.name ? h("div", { class: "muted" }, `URDF: ${robot.robot_name}`) : null),
+    h("td", {}, h("code", {}, robot.id)),
+    h("td", { class: "joints-cell" },
+      h("details", {}, h("summary", {}, `${plural(joints, "joint")}: ${robot.base_link} → ${robot.tip_link}`),
+        h("div", { class: "scroll" }, jointsTable(robot, { id: `joints-${robot.id}`, full: false })))),
+    h("td", { class: "number" }, String(robot.base_parameters?.count ?? "–"),
+      frictionNote(robot) ? h("div", { class: "muted small" }, frictionNote(robot)) : null),
+    h("td", {}, when(robot.created_at)));
+}
+
+function uploadForm(navigate) {
+  const file = h("input", { id: "u-file", name: "urdf", type: "file", accept: ".urdf,.xml,application/xml,text/xml", required: true });
+  const status = h("p", { class: "form-status", role: "status", "aria-live": "polite" });
+  const form = h("form", { id: "robot-upload", class: "card", "aria-labelledby": "robot-upload-title", novalidate: true },
+    h("h2", { id: "robot-upload-title" }, "Upload a URDF"),
+    h("p", { class: "muted" }, "A serial arm: the chain runs from the base link (default the root) to the tip (default the only leaf); " +
+      "fixed joints are merged. At most 4 MiB."),
+    h("div", { class: "fields" },
+      field("URDF file", file),
+      field("Name", textInput("u-name", "name", "", { placeholder: "the URDF's robot name" })),
+      field("Base link", textInput("u-base", "base", "", { placeholder: "the root" })),
+      field("Tip link", textInput("u-tip", "tip", "", { placeholder: "the only leaf" }))),
+    h("div", { class: "actions" }, h("button", { type: "submit", id: "robot-upload-submit" }, "Upload"), status));
+  form.addEventListener("submit", async (event) => {
+    event.preventDefault();
+    clearProblems(form, status);
+    const chosen = file.files[0];
+    if (!chosen) {
+      status.textContent = "Choose a URDF file first.";
+      file.setAttribute("aria-invalid", "true");
+      file.focus();
+      return;
+    }
+    const body = { urdf: await chosen.text() };
+    for (const name of ["name", "base", "tip"]) {
+      const value = form.querySelector(`[name=${name}]`).value.trim();
+      if (value) body[name] = value;
+    }
+    status.textContent = "Uploading…";
+    try {
+      const robot = await api("/v1/robots", { method: "POST", body });
+      navigate(robotPath(robot.id));
+    } catch (error) {
+      showProblem(form, status, error);
+    }
+  });
+  return form;
+}
+
+export async function robotsListView(main, navigate) {
+  const body = h("tbody");
+  const more = h("button", { type: "button", id: "robots-more", hidden: true }, "Older robots");
+  main.replaceChildren(
+    h("h1", {}, "Robots"),
+    section("robots-section", "URDF robots",
+      h("div", { class: "scroll" }, h("table", { id: "robots", class: "data" },
+        h("caption", {}, "Newest first; open a robot for its limits, jobs and forms"),
+        h("thead", {}, h("tr", {}, ["Robot", "ID", "Joints", "Base parameters", "Created"].map((label) => h("th", { scope: "col" }, label)))),
+        body)),
+      more),
+    uploadForm(navigate));
+  document.title = "Robots · manipid";
+  document.body.dataset.ready = "false";
+  let token = null;
+  const load = async () => {
+    const page = await api(`/v1/robots${token ? `?page_token=${encodeURIComponent(token)}` : ""}`);
+    body.append(...page.items.map(robotRow));
+    if (!body.children.length) body.append(h("tr", {}, h("td", { colspan: 5, class: "muted" }, "No robots yet: upload a URDF below.")));
+    token = page.next_page_token || null;
+    more.hidden = !token;
+  };
+  more.addEventListener("click", load);
+  await load();
+  document.body.dataset.ready = "true";
+}
+
+// ---- one robot ----------------------------------------------------------------------------------
+
+async function robotJobs(id) {
+  const page = await api(`/v1/jobs?page_size=${JOB_SCAN}`);
+  return { jobs: page.items.filter((job) => job.robot_id === id), complete: !page.next_page_token };
+}
+
+function jobsSection({ jobs, complete }) {
+  const rows = jobs.map((job) => {
+    const result = job.result || {};
+    const figure = job.kind === "excitation" ? `condition number ${number(result.condition_number, 4)}`
+      : result.fit ? `fit error ${number(100 * result.fit.overall_relative_error, 3)} %` : "–";
+    return h("tr", { dataset: { jobId: job.id } },
+      h("td", {}, h("a", { href: jobPath(job.id) }, job.id)), h("td", {}, job.kind), h("td", {}, stateBadge(job.state)),
+      h("td", {}, when(job.created_at)), h("td", {}, job.state === "succeeded" ? figure : "–"));
+  });
+  return section("robot-jobs", "Jobs on this robot",
+    complete ? null : h("p", { class: "muted" }, `Among the ${JOB_SCAN} newest jobs.`),
+    rows.length
+      ? h("div", { class: "scroll" }, h("table", { id: "robot-jobs-table", class: "data" },
+          h("thead", {}, h("tr", {}, ["Job", "Kind", "State", "Created", "Result"].map((label) => h("th", { scope: "col" }, label)))),
+          h("tbody", {}, rows)))
+      : h("p", {}, "None yet: design an excitation below, or identify from a run."));
+}
+
+function checkbox(id, name, value, label, checked) {
+  return h("span", { class: "check" }, h("input", { id, name, value, type: "checkbox", checked }), h("label", { for: id }, ` ${label}`));
+}
+
+function excitationForm(robot, navigate) {
+  const status = h("p", { class: "form-status", role: "status", "aria-live": "polite" });
+  const form = h("form", { id: "excitation-form", class: "card", "aria-labelledby": "excitation-form-title", novalidate: true },
+    h("h2", { id: "excitation-form-title" }, "Design an excitation"),
+    h("p", { class: "muted" }, "Fourier-series joint trajectories that start and end at rest, stay within the URDF's limits, " +
+      "and make the base regressor as well conditioned as the time budget allows."),
+    h("div", { class: "fields" },
+      field("Period, s", textInput("e-period", "period", 10, { inputmode: "decimal" })),
+      field("Harmonics", textInput("e-harmonics", "harmonics", 5, { inputmode: "numeric" })),
+      field("Duration, s", textInput("e-duration", "duration", "", { inputmode: "decimal", placeholder: "one period" })),
+      field("Max acceleration, rad/s²", textInput("e-max-acceleration", "max_acceleration", "", { inputmode: "decimal", placeholder: "the default" })),
+      field("Criterion", h("select", { id: "e-criterion", name: "criterion" },
+        h("option", { value: "condition" }, "condition number"), h("option", { value: "logdet" }, "log det"))),
+      field("Time budget, s", textInput("e-max-seconds", "max_seconds", 30, { inputmode: "decimal" })),
+      field("Seed", textInput("e-seed", "seed", 1, { inputmode: "numeric" }))),
+    h("div", { class: "actions" }, h("button", { type: "submit", id: "excitation-submit" }, "Design"), status));
+  form.addEventListener("submit", async (event) => {
+    event.preventDefault();
+    clearProblems(form, status);
+    const body = { robot_id: robot.id, criterion: form.querySelector("[name=criterion]").value };
+    for (const name of ["period", "harmonics", "duration", "max_acceleration", "max_seconds", "seed"]) {
+      const value = form.querySelector(`[name=${name}]`).value.trim();
+      if (value) body[name] = Number(value);
+    }
+    status.textContent = "Submitting…";
+    try {
+      const job = await api("/v1/excitations", { method: "POST", body });
+      navigate(jobPath(job.id));
+    } catch (error) {
+      showProblem(form, status, error);
+    }
+  });
+  return form;
+}
+
+async function identifyForm(robot, navigate) {
+  const n = robot.joints.length;
+  const page = await api("/v1/datasets?page_size=1000");
+  const runs = page.items.filter((dataset) => dataset.joints === n && dataset.has_torque);
+  const status = h("p", { class: "form-status", role: "status", "aria-live": "polite" });
+  const option = (dataset) => h("option", { value: dataset.id }, `${dataset.name || dataset.id} — ${dataset.samples} samples, ${when(dataset.created_at)}`);
+  const form = h("form", { id: "identify-form", class: "card", "aria-labelledby": "identify-form-title", novalidate: true },
+    h("h2", { id: "identify-form-title" }, "Identify"),
+    runs.length
+      ? h("p", { class: "muted" }, `The base parameters from a measured run: datasets with ${n} joints and torque (upload one with POST /v1/datasets).`)
+      : h("p", {}, `No dataset with ${n} joints and torque yet. Run an excitation on the robot, log t, q1..q${n} and tau1..tau${n}, ` +
+          "and upload the log (POST /v1/datasets, text/csv)."),
+    h("div", { class: "fields wide" },
+      field("Run", h("select", { id: "i-dataset", name: "dataset_id", disabled: !runs.length }, runs.map(option))),
+      field("Validation run", h("select", { id: "i-validation", name: "validation_dataset_id", disabled: !runs.length },
+        h("option", { value: "" }, "none"), runs.map(option)), "a second run the estimate should predict")),
+    h("fieldset", {}, h("legend", {}, "Estimate also"),
+      checkbox("i-viscous", "friction", "viscous", "viscous friction fv", true),
+      checkbox("i-coulomb", "friction", "coulomb", "Coulomb friction fc", true),
+      checkbox("i-offset", "friction", "offset", "torque offset fo", false),
+      checkbox("i-armature", "armature", "true", "rotor inertia Ia", false),
+      checkbox("i-physical", "physical", "true", "physically consistent (every link a rigid body, friction ≥ 0)", false)),
+    h("div", { class: "actions" }, h("button", { type: "submit", id: "identify-submit", disabled: !runs.length }, "Identify"), status));
+  if (runs.length > 1) form.querySelector("#i-validation").value = runs[1].id;
+  form.addEventListener("submit", async (event) => {
+    event.preventDefault();
+    clearProblems(form, status);
+    const body = {
+      robot_id: robot.id,
+      dataset_id: form.querySelector("[name=dataset_id]").value,
+      friction: [...form.querySelectorAll("input[name=friction]:checked")].map((box) => box.value),
+    };
+    const validation = form.querySelector("[name=validation_dataset_id]").value;
+    if (validation) body.validation_dataset_id = validation;
+    if (form.querySelector("[name=armature]").checked) body.armature = true;
+    if (form.querySelector("[name=physical]").checked) body.physical = true;
+    status.textContent = "Submitting…";
+    try {
+      const job = await api("/v1/identifications", { method: "POST", body });
+      navigate(jobPath(job.id));
+    } catch (error) {
+      showProblem(form, status, error);
+    }
+  });
+  return form;
+}
+
+export async function robotView(main, id, navigate) {
+  const robot = await api(`/v1/robots/${id}`);
+  document.title = `${robot.name} · manipid`;
+  document.body.dataset.ready = "false";
+  const names = robot.parameters?.names || [];
+  main.replaceChildren(h("article", { id: "robot", dataset: { robotId: robot.id } },
+    h("p", { class: "crumbs" }, h("a", { href: "/#/robots" }, "Robots"), " / "),
+    h("h1", {}, robot.name),
+    h("div", { class: "card" },
+      facts([
+        ["ID", h("code", {}, robot.id)],
+        ["URDF robot", robot.robot_name],
+        ["Chain", `${robot.base_link} → ${robot.tip_link}, ${plural(robot.joints.length, "moving joint")}`],
+        ["Gravity", `(${(robot.gravity || []).map((value) => number(value, 4)).join(", ")}) m/s² in ${robot.base_link}'s frame`],
+        ["Parameters", `${names.length} standard (10 per body, then friction per joint); base: ${baseCount(robot)}`],
+        ["Created", when(robot.created_at)],
+        ["URDF", downloadLink(`/v1/robots/${robot.id}?format=urdf`, "the document as uploaded", { id: "robot-urdf" })],
+        ["API", h("a", { href: `/v1/robots/${robot.id}` }, "robot JSON")],
+      ]),
+      robot.warnings?.length ? [h("h3", {}, "Warnings"), h("ul", { class: "warnings" }, robot.warnings.map((text) => h("li", {}, text)))] : null),
+    section("robot-joints-section", "Joints", h("div", { class: "scroll" }, jointsTable(robot, { id: "robot-joints", full: true })))));
+  const article = main.querySelector("#robot");
+  const [jobs, identify] = await Promise.all([robotJobs(robot.id), identifyForm(robot, navigate)]);
+  article.append(jobsSection(jobs), excitationForm(robot, navigate), identify);
+  document.body.dataset.ready = "true";
+}
