@@ -347,7 +347,8 @@ class SqliteStore final : public Store {
     const int size = sqlite::effective_page_size(page.page_size);
     // The token is bound to the filter: a token from another filter would skip or repeat jobs.
     const std::string context = std::string("state=") + (filter.state ? sqlite::state_text(*filter.state) : "") +
-                                ";kind=" + (filter.kind ? sqlite::kind_text(*filter.kind) : "");
+                                ";kind=" + (filter.kind ? sqlite::kind_text(*filter.kind) : "") +
+                                ";robot=" + filter.robot_id;
     const std::int64_t before =
         page.page_token.empty() ? INT64_MAX : sqlite::decode_page_token(page.page_token, "j1", context);
     // Fixed SQL fragments per filter combination (no values in the text), so each variant is
@@ -355,6 +356,7 @@ class SqliteStore final : public Store {
     std::string sql = "SELECT " + kJobColumns + " FROM jobs WHERE seq < ?1";
     if (filter.state) sql += " AND state = ?2";
     if (filter.kind) sql += " AND kind = ?3";
+    if (!filter.robot_id.empty()) sql += " AND robot_id = ?5";
     sql += " ORDER BY seq DESC LIMIT ?4";
 
     auto connection = pool_.checkout();
@@ -363,6 +365,7 @@ class SqliteStore final : public Store {
       rows.bind_integer(1, before).bind_integer(4, size + 1);
       if (filter.state) rows.bind_text(2, sqlite::state_text(*filter.state));
       if (filter.kind) rows.bind_text(3, sqlite::kind_text(*filter.kind));
+      if (!filter.robot_id.empty()) rows.bind_text(5, filter.robot_id);
       api::Page<api::JobInfo> result;
       std::int64_t last_seq = 0;
       while (rows.step()) {

@@ -57,7 +57,10 @@ nlohmann::ordered_json job_to_json(const JobInfo& job) {
                {"request", embedded(job.request)}};
   if (!job.result.empty()) json["result"] = embedded(job.result);
   if (!job.error.empty()) json["error"] = embedded(job.error);
-  Json links = {{"self", self}, {"history", self + "/history"}, {"cancel", self + "/cancel"}};
+  Json links = {{"self", self}, {"cancel", self + "/cancel"}};
+  // Only the paper model's identifications evaluate a cost step by step; the other jobs' history is empty.
+  const bool robot_job = !job.robot_id.empty();
+  if (job.kind == JobKind::identification && !robot_job) links["history"] = self + "/history";
   if (!job.dataset_id.empty()) links["dataset"] = "/v1/datasets/" + job.dataset_id;
   if (!job.robot_id.empty()) links["robot"] = "/v1/robots/" + job.robot_id;
   if (!job.validation_dataset_id.empty()) {
@@ -65,6 +68,7 @@ nlohmann::ordered_json job_to_json(const JobInfo& job) {
     links["validation"] = self + "/validation";
   }
   if (job.kind == JobKind::identification) links["fit"] = self + "/fit";
+  if (job.kind == JobKind::identification && robot_job) links["urdf"] = self + "/urdf";
   json["links"] = links;
   return json;
 }

@@ -230,6 +230,7 @@ class FakeService : public Service {
     Page<JobInfo> answer;
     for (const auto& [id, job] : jobs_) {
       if ((!filter.state || job.state == *filter.state) && (!filter.kind || job.kind == *filter.kind) &&
+          (filter.robot_id.empty() || job.robot_id == filter.robot_id) &&
           static_cast<int>(answer.items.size()) < page.page_size) {
         answer.items.push_back(job);
       }

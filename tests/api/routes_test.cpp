@@ -664,7 +664,19 @@ TEST_F(Routes, JobListFiltersAndLeavesTheRequestOut) {
   expect_problem(get("/v1/jobs?state=done"), 422, "INVALID_FIELD", "state");
   expect_problem(get("/v1/jobs?kind=robot"), 422, "INVALID_FIELD", "kind");
   expect_problem(get("/v1/jobs?page_size=-1"), 422, "INVALID_FIELD", "page_size");
+  expect_problem(get("/v1/jobs?robot_id="), 422, "INVALID_FIELD", "robot_id");
   EXPECT_EQ(fake_.filters().size(), 2u);
+
+  JobInfo on_robot = job_info("job_c", JobKind::excitation, JobState::succeeded);
+  on_robot.robot_id = "rb_1";
+  fake_.add_job(on_robot);
+  fake_.script([](Script&) {});
+  result = get("/v1/jobs?robot_id=rb_1&kind=excitation");
+  ASSERT_TRUE(result);
+  body = json_of(result);
+  ASSERT_EQ(body["items"].size(), 1u);
+  EXPECT_EQ(body["items"][0]["id"], "job_c");
+  EXPECT_EQ(fake_.filters().back().robot_id, "rb_1");
 }
 
 TEST_F(Routes, JobHistoryInPagesAsCsvAndThinned) {
@@ -1195,7 +1207,7 @@ TEST_F(RoutesWithToken, TheApiNeedsTheBearerToken) {
 }
 
 TEST_F(RoutesWithToken, StaticFilesAreNotBehindTheToken) {
-  for (const char* path : {"/", "/jobs/job_0123456789abcdef", "/healthz", "/metrics", "/openapi.json"}) {
+  for (const char* path : {"/", "/jobs/job_0123456789abcdef", "/robots", "/robots/rb_1", "/healthz", "/metrics", "/openapi.json"}) {
     const auto result = get(path);
     ASSERT_TRUE(result) << path;
     EXPECT_EQ(result->status, 200) << path;

@@ -301,6 +301,14 @@ TEST_F(StoreTest, RobotsAreIdempotentPagedAndNotDeletedWhileInUse) {
   job.robot_id = first.robot.id;
   const std::string id = submit(job);
   EXPECT_EQ(store_->find_job(id)->robot_id, first.robot.id);
+  submit(identification_job());  // a job on no robot: not in the robot's list
+  api::JobFilter on_robot;
+  on_robot.robot_id = first.robot.id;
+  const auto robot_jobs = store_->list_jobs(on_robot, {});
+  ASSERT_EQ(robot_jobs.items.size(), 1u);
+  EXPECT_EQ(robot_jobs.items[0].id, id);
+  on_robot.robot_id = "rb_none";
+  EXPECT_TRUE(store_->list_jobs(on_robot, {}).items.empty());
   EXPECT_EQ(store_->delete_robot(first.robot.id), DeleteResult::in_use);
   ASSERT_TRUE(store_->claim_next_job());
   EXPECT_EQ(store_->delete_robot(first.robot.id), DeleteResult::in_use);
@@ -790,18 +798,18 @@ TEST_F(StoreTest, ListJobsNewestFirstWithFilters) {
   }
   EXPECT_EQ(seen, std::vector<std::string>(ids.rbegin(), ids.rend()));
 
-  const auto simulations = store_->list_jobs({std::nullopt, api::JobKind::simulation}, {});
+  const auto simulations = store_->list_jobs({.kind = api::JobKind::simulation}, {});
   ASSERT_EQ(simulations.items.size(), 4u);
   EXPECT_EQ(simulations.items[0].id, ids[6]);
-  const auto queued_simulations = store_->list_jobs({JobState::queued, api::JobKind::simulation}, {});
+  const auto queued_simulations = store_->list_jobs({.state = JobState::queued, .kind = api::JobKind::simulation}, {});
   EXPECT_EQ(queued_simulations.items.size(), 3u);
-  const auto running = store_->list_jobs({JobState::running, std::nullopt}, {});
+  const auto running = store_->list_jobs({.state = JobState::running}, {});
   ASSERT_EQ(running.items.size(), 1u);
   EXPECT_EQ(running.items[0].id, ids[0]);
 
-  const auto first = store_->list_jobs({JobState::queued, std::nullopt}, {2, ""});
+  const auto first = store_->list_jobs({.state = JobState::queued}, {2, ""});
   ASSERT_FALSE(first.next_page_token.empty());
-  EXPECT_EQ(store_->list_jobs({JobState::queued, std::nullopt}, {2, first.next_page_token}).items.size(), 2u);
+  EXPECT_EQ(store_->list_jobs({.state = JobState::queued}, {2, first.next_page_token}).items.size(), 2u);
   // The token belongs to its filter.
   expect_invalid_field([&] { store_->list_jobs({}, {2, first.next_page_token}); }, "page_token");
   expect_invalid_field([&] { store_->list_jobs({}, {2, "j1.zz.00000000"}); }, "page_token");

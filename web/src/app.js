@@ -1,6 +1,6 @@
 // app.js — the dashboard's entry point: routes / (jobs and the paper's form), /jobs/{id} (one
-// job), /#/robots (the robots) and /#/robots/{id} (one robot) with the History API, so every
-// page has an address to bookmark and Back works (paths.js says why robots are fragments).
+// job), /robots (the robots) and /robots/{id} (one robot) with the History API, so every
+// page has an address to bookmark and Back works.
 import { onTokenNeeded, setToken } from "./api.js";
 import { forgetDetachedCharts } from "./charts.js";
 import { h } from "./dom.js";
@@ -48,7 +48,7 @@ document.addEventListener("click", (event) => {
   const url = new URL(link.href, location.href);
   if (url.origin === location.origin && url.pathname === location.pathname && !isView(url)) {
     // An in-page anchor (#main, #identifiability): go there without touching the address, which
-    // may itself be a view's fragment (/#/robots).
+    // may itself be an old fragment address (/#/robots).
     const target = document.getElementById(decodeURIComponent(url.hash.slice(1)));
     if (!target) return;
     event.preventDefault();
@@ -61,7 +61,7 @@ document.addEventListener("click", (event) => {
   event.preventDefault();
   navigate(url.pathname + url.hash);
 });
-// Back, Forward, and an address edited by hand (/#/robots): redraw when the view changed.
+// Back, Forward, and an address edited by hand (/robots): redraw when the view changed.
 const follow = () => { if (viewOf(location) !== shown) render(); };
 window.addEventListener("popstate", follow);
 window.addEventListener("hashchange", follow);

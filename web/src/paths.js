@@ -1,9 +1,8 @@
-// paths.js — the dashboard's addresses. The server hands the page out at / and /jobs/{id}
-// only, so the robot views live in the fragment (/#/robots, /#/robots/{id}): bookmarkable and
-// reloadable without a server change. viewOf() also accepts /robots and /robots/{id} as paths,
-// so the day the server routes them to the page, only ROBOTS below changes.
+// paths.js — the dashboard's addresses: /, /jobs/{id}, /robots and /robots/{id}, each handed
+// the page by the server (api/src/http/route_table.cpp). Older fragment addresses
+// (/#/robots, /#/robots/{id}) still open their view.
 
-export const ROBOTS = "/#/robots";
+export const ROBOTS = "/robots";
 export const robotPath = (id) => `${ROBOTS}/${encodeURIComponent(id)}`;
 export const jobPath = (id) => `/jobs/${encodeURIComponent(id)}`;
 

@@ -1,5 +1,5 @@
-// robots.js — the URDF robots: the list (/#/robots) with an upload form, and one robot
-// (/#/robots/{id}) with its joints and limits, the jobs that used it, and forms that design an
+// robots.js — the URDF robots: the list (/robots) with an upload form, and one robot
+// (/robots/{id}) with its joints and limits, the jobs that used it, and forms that design an
 // excitation for it and identify it from uploaded runs.
 import { api, ApiProblem, downloadLink } from "./api.js";
 import { facts, h, number, plural, section, stateBadge, when } from "./dom.js";
@@ -167,8 +167,8 @@ export async function robotsListView(main, navigate) {
 // ---- one robot ----------------------------------------------------------------------------------
 
 async function robotJobs(id) {
-  const page = await api(`/v1/jobs?page_size=${JOB_SCAN}`);
-  return { jobs: page.items.filter((job) => job.robot_id === id), complete: !page.next_page_token };
+  const page = await api(`/v1/jobs?robot_id=${encodeURIComponent(id)}&page_size=${JOB_SCAN}`);
+  return { jobs: page.items, complete: !page.next_page_token };
 }
 
 function jobsSection({ jobs, complete }) {
@@ -181,7 +181,7 @@ function jobsSection({ jobs, complete }) {
       h("td", {}, when(job.created_at)), h("td", {}, job.state === "succeeded" ? figure : "–"));
   });
   return section("robot-jobs", "Jobs on this robot",
-    complete ? null : h("p", { class: "muted" }, `Among the ${JOB_SCAN} newest jobs.`),
+    complete ? null : h("p", { class: "muted" }, `The ${JOB_SCAN} newest of them.`),
     rows.length
       ? h("div", { class: "scroll" }, h("table", { id: "robot-jobs-table", class: "data" },
           h("thead", {}, h("tr", {}, ["Job", "Kind", "State", "Created", "Result"].map((label) => h("th", { scope: "col" }, label)))),
@@ -281,7 +281,7 @@ export async function robotView(main, id, navigate) {
   document.body.dataset.ready = "false";
   const names = robot.parameters?.names || [];
   main.replaceChildren(h("article", { id: "robot", dataset: { robotId: robot.id } },
-    h("p", { class: "crumbs" }, h("a", { href: "/#/robots" }, "Robots"), " / "),
+    h("p", { class: "crumbs" }, h("a", { href: "/robots" }, "Robots"), " / "),
     h("h1", {}, robot.name),
     h("div", { class: "card" },
       facts([

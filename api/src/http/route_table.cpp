@@ -85,6 +85,8 @@ void register_routes(httplib::Server& server, Service& service, RouteOptions opt
   routes.Get("/openapi.json", openapi_document);
   routes.Get("/", dashboard_page);
   routes.Get("/jobs/" + id, dashboard_page);
+  routes.Get("/robots", dashboard_page);
+  routes.Get("/robots/" + id, dashboard_page);
   routes.Get("/assets/([A-Za-z0-9._-]{1,64})", dashboard_asset);
 
   // ---- Datasets (routes/datasets.cpp) ----

@@ -66,7 +66,14 @@ void list_jobs(RouteState& state, const httplib::Request& request, httplib::Resp
     filter.kind = parse_job_kind(request.get_param_value("kind"));
     if (!filter.kind) {
       throw ApiError(ProblemKind::invalid_field,
-                     "kind must be simulation or identification, got '" + request.get_param_value("kind") + "'", "kind");
+                     "kind must be simulation, identification or excitation, got '" + request.get_param_value("kind") + "'",
+                     "kind");
+    }
+  }
+  if (request.has_param("robot_id")) {
+    filter.robot_id = request.get_param_value("robot_id");
+    if (filter.robot_id.empty() || filter.robot_id.size() > 64) {
+      throw ApiError(ProblemKind::invalid_field, "robot_id must be a robot's id (1 to 64 characters)", "robot_id");
     }
   }
   const Page<JobInfo> page = state.service.jobs(filter, page_request(request, 50));

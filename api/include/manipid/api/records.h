@@ -91,6 +91,7 @@ struct Page {
 struct JobFilter {
   std::optional<JobState> state;
   std::optional<JobKind> kind;
+  std::string robot_id;  ///< empty: any job; else only the jobs on this robot
 };
 
 /// An Idempotency-Key header with the fingerprint (SHA-256 hex) of the request it came with.
