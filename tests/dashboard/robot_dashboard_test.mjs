@@ -65,13 +65,13 @@ try {
   check(await tabUntil(page, () => document.activeElement?.matches?.('header nav a[href="/robots"]')),
         "the header's Robots link is reachable with Tab");
   await page.keyboard.press("Enter");
-  await page.waitForURL(/\/#\/robots$/);
+  await page.waitForURL(/\/robots$/);
   await page.waitForSelector("body[data-ready=true] #robot-upload");
   check((await page.textContent("#robots tbody")).includes("No robots yet"), "an empty robots list says so");
   await page.setInputFiles("#u-file", URDF);
   check(await tabUntil(page, () => document.activeElement?.id === "robot-upload-submit"), "the upload button is reachable with Tab");
   await page.keyboard.press("Enter");
-  await page.waitForURL(/\/#\/robots\/rb_[0-9a-f]+$/, { timeout: 30000 });
+  await page.waitForURL(/\/robots\/rb_[0-9a-f]+$/, { timeout: 30000 });
   const robotId = page.url().split("/").pop();
   const robot = await json(`${url}/v1/robots/${robotId}`);
   check(robot.joints.length === JOINTS, `the form uploaded ${robot.name} with ${robot.joints.length} joints`);
