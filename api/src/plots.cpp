@@ -1,6 +1,7 @@
 // plots.cpp — series for drawing (plots.h).
 #include "manipid/api/plots.h"
 
+#include "manipid/api/records.h"
 #include "manipid/api/requests.h"
 #include "manipid/api/robot_requests.h"
 #include "manipid/core/robot/filtered_regressor.h"
@@ -45,14 +46,10 @@ double stored_number(const nlohmann::json& object, const char* key, const std::s
 
 }  // namespace
 
-long plot_stride(long count, long max_points) {
-  return max_points <= 0 || count <= max_points ? 1 : (count + max_points - 1) / max_points;
-}
-
 std::vector<long> plot_indices(long count, long max_points) {
   std::vector<long> indices;
   if (count <= 0) return indices;
-  const long stride = plot_stride(count, max_points);
+  const long stride = thinning_stride(count, max_points);
   indices.reserve(static_cast<std::size_t>(count / stride + 2));
   for (long i = 0; i < count; i += stride) indices.push_back(i);
   if (indices.back() != count - 1) indices.push_back(count - 1);
@@ -60,7 +57,7 @@ std::vector<long> plot_indices(long count, long max_points) {
 }
 
 Trajectory thin(const Trajectory& data, long max_points) {
-  if (plot_stride(data.samples(), max_points) == 1) return data;
+  if (thinning_stride(data.samples(), max_points) == 1) return data;
   const std::vector<long> rows = plot_indices(data.samples(), max_points);
   const auto pick_rows = [&rows](const Eigen::MatrixXd& matrix) {
     if (matrix.cols() == 0) return Eigen::MatrixXd();  // an absent block stays absent

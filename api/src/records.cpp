@@ -1,5 +1,6 @@
 // records.cpp — the names of job states and kinds as they appear in JSON, query strings and
-// the store (records.h). Parsing is exact (lower case, no trimming): these are API tokens.
+// the store, and the thinning stride of long series (records.h). Parsing is exact (lower case,
+// no trimming): these are API tokens.
 #include "manipid/api/records.h"
 
 namespace manipid::api {
@@ -36,6 +37,10 @@ std::optional<JobKind> parse_job_kind(std::string_view text) {
   if (text == "identification") return JobKind::identification;
   if (text == "excitation") return JobKind::excitation;
   return std::nullopt;
+}
+
+long thinning_stride(long count, long max_points) {
+  return max_points <= 0 || count <= max_points ? 1 : (count + max_points - 1) / max_points;
 }
 
 }  // namespace manipid::api

@@ -4,8 +4,8 @@
 // tests/server/data/manipid-0.1.0.db was made by that release's own binary
 // (tests/server/data/make_release_0.1.0_db.sh); this test reads the file's rows with plain SQL first, opens a
 // copy with today's store (which migrates it), and compares.
-#include "sqlite_schema.h"
-#include "store.h"
+#include "store/sqlite/schema.h"
+#include "store/sqlite/store.h"
 
 #include <gtest/gtest.h>
 #include <sqlite3.h>
@@ -16,7 +16,7 @@
 #include <string>
 #include <vector>
 
-namespace manipid::server {
+namespace manipid::server::store {
 namespace {
 
 namespace fs = std::filesystem;
@@ -67,7 +67,7 @@ TEST_F(ReleaseDatabase, OpensMigratedWithEveryRowKept) {
   ASSERT_GT(history_before.size(), 200u);
 
   {
-    const auto store = open_sqlite_store(path_);
+    const auto store = sqlite::open_store(path_);
     for (const auto& row : jobs_before) {
       const auto job = store->find_job(row[0]);
       ASSERT_TRUE(job) << row[0];
@@ -121,4 +121,4 @@ TEST_F(ReleaseDatabase, OpensMigratedWithEveryRowKept) {
 }
 
 }  // namespace
-}  // namespace manipid::server
+}  // namespace manipid::server::store

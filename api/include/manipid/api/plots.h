@@ -16,11 +16,7 @@
 
 namespace manipid::api {
 
-/// The stride s = ceil(count / max_points) that thins `count` samples to about max_points;
-/// 1 when count ≤ max_points or max_points ≤ 0. The store thins histories by the same rule.
-long plot_stride(long count, long max_points);
-
-/// Indices 0, s, 2s, … of `count` samples (s = plot_stride), and always the last: at most
+/// Indices 0, s, 2s, … of `count` samples (s = thinning_stride, records.h), and always the last: at most
 /// max_points + 1 of them, all of them when count ≤ max_points (or max_points ≤ 0).
 std::vector<long> plot_indices(long count, long max_points);
 

@@ -77,6 +77,10 @@ struct HistoryOverview {
   std::vector<HistoryEntry> items;
 };
 
+/// The stride s = ceil(count / max_points) that thins `count` samples to about max_points;
+/// 1 when count ≤ max_points or max_points ≤ 0. Stores thin histories by it, plots their series.
+long thinning_stride(long count, long max_points);
+
 struct PageRequest {
   int page_size = 50;        ///< 1..1000 (0 means 50)
   std::string page_token;    ///< opaque; empty = first page

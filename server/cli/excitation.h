@@ -1,0 +1,38 @@
+// excitation.h — `manipid excitation`: an optimal excitation trajectory for a URDF robot.
+#pragma once
+
+#include "cli/common.h"
+
+#include <CLI/CLI.hpp>
+
+#include <cstdint>
+#include <optional>
+#include <string>
+#include <vector>
+
+namespace manipid::server::cli {
+
+/// `manipid excitation`: an optimal excitation trajectory for a URDF robot (core/robot/excitation.h).
+/// Not robot::ExcitationOptions (the core's design options), which run_excitation builds from these;
+/// add_excitation_command sets the design's defaults from the core's, so they are stated once.
+struct ExcitationOptions {
+  UrdfRobotOptions urdf;            ///< --robot (required), --base, --tip, --gravity
+  double period = 0.0;
+  int harmonics = 0;
+  std::string criterion;
+  std::string max_acceleration;     ///< "A" or "A1,...,An" (rad/s^2)
+  double position_margin = 0.0;
+  std::string friction;             ///< comma list of viscous, coulomb, offset; or "none"
+  bool armature = false;
+  double dt = 0.001;
+  std::optional<double> duration;   ///< a whole number of periods; default one period
+  std::uint64_t seed = 0;
+  double max_seconds = 0.0;
+  int max_evaluations = 0;
+  std::string output = "-";
+  std::string coefficients;         ///< JSON path, empty = none
+};
+CLI::App* add_excitation_command(CLI::App& app, ExcitationOptions& options);
+int run_excitation(const ExcitationOptions& options);
+
+}  // namespace manipid::server::cli

@@ -1,0 +1,49 @@
+// identify.h — `manipid identify`: the paper's preset or a URDF robot identified from a measured run.
+#pragma once
+
+#include "cli/common.h"
+
+#include <CLI/CLI.hpp>
+
+#include <cstdint>
+#include <optional>
+#include <string>
+#include <vector>
+
+namespace manipid::server::cli {
+
+struct IdentifyOptions {
+  std::string input;
+  std::string preset = "cedro2009";
+  std::string kinetic_energy = "complete";
+  std::vector<std::string> free;     ///< comma lists of names
+  std::vector<std::string> initial;  ///< comma lists of NAME=VALUE
+  std::string method = "input-error";
+  std::string algorithm = "LN_BOBYQA";
+  std::string kp, kd;                ///< comma lists; empty = the preset's
+  std::string half_length = "auto";
+  std::string band = "auto";
+  std::string torque_source = "auto";
+  std::string weights = "unit";
+  int max_evaluations = 20000;
+  double max_seconds = 120.0;
+  std::string history;               ///< CSV path, empty = none
+  bool json = false;
+  // A URDF robot (--robot): linear input-error identification of its base parameters.
+  UrdfRobotOptions urdf;
+  std::string friction = "viscous,coulomb";
+  bool armature = false;
+  bool physical = false;
+  std::string validate;              ///< a second run's CSV, empty = none
+  std::string trim;                  ///< "START,END" seconds dropped, empty = none
+  double dt = 0.0;                   ///< resampling period, 0 = the median step
+  std::string comparison_half_length = "auto";
+  std::string comparison_band = "auto";
+  std::string write_urdf;            ///< write the estimate into a copy of the URDF, empty = none
+};
+CLI::App* add_identify_command(CLI::App& app, IdentifyOptions& options);
+int run_identify(const IdentifyOptions& options);
+/// identify --robot: a URDF robot's base parameters (identify_robot.cpp).
+int run_identify_robot(const IdentifyOptions& options);
+
+}  // namespace manipid::server::cli

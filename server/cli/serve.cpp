@@ -1,0 +1,195 @@
+// serve.cpp — `manipid serve`: the HTTP/JSON identification service. Owns the
+// process: opens the store (recovering jobs a dead process left behind), starts the worker
+// pool and the HTTP server, prints "listening on http://HOST:PORT" as its first line on
+// stdout (so scripts and tests can start it on --port 0), and on SIGINT/SIGTERM stops
+// accepting, lets running jobs reach a safe point (they are queued again) and exits 0.
+#include "cli/serve.h"
+#include "jobs/job_service.h"
+#include "store/store.h"
+#include "jobs/worker_pool.h"
+
+#include "manipid/api/problem.h"
+#include "manipid/api/routes.h"
+
+#include <httplib.h>  // after the manipid headers: see api/src/http/route_state.h
+
+#include <pthread.h>
+#include <signal.h>
+
+#include <algorithm>
+#include <atomic>
+#include <chrono>
+#include <cstdio>
+#include <ctime>
+#include <mutex>
+#include <thread>
+
+namespace manipid::server::cli {
+namespace {
+
+std::mutex log_mutex;
+
+void log_line(const std::string& line) {
+  const auto now = std::chrono::system_clock::now();
+  const std::time_t seconds = std::chrono::system_clock::to_time_t(now);
+  const auto millis = std::chrono::duration_cast<std::chrono::milliseconds>(now.time_since_epoch()).count() % 1000;
+  std::tm utc{};
+  gmtime_r(&seconds, &utc);
+  char stamp[40];
+  std::strftime(stamp, sizeof stamp, "%Y-%m-%dT%H:%M:%S", &utc);
+  std::lock_guard lock(log_mutex);
+  std::fprintf(stderr, "%s.%03dZ %s\n", stamp, static_cast<int>(millis), line.c_str());
+}
+
+/// "64MiB", "1M", "500k", "1048576" → bytes.
+std::size_t parse_size(const std::string& text) {
+  std::size_t digits = 0;
+  while (digits < text.size() && std::isdigit(static_cast<unsigned char>(text[digits]))) ++digits;
+  std::string unit = text.substr(digits);
+  std::transform(unit.begin(), unit.end(), unit.begin(), [](unsigned char c) { return std::tolower(c); });
+  std::size_t scale = 0;
+  if (unit.empty() || unit == "b") scale = 1;
+  else if (unit == "k" || unit == "kib" || unit == "kb") scale = 1u << 10;
+  else if (unit == "m" || unit == "mib" || unit == "mb") scale = 1u << 20;
+  else if (unit == "g" || unit == "gib" || unit == "gb") scale = 1u << 30;
+  if (digits == 0 || digits > 12 || scale == 0) {
+    throw UsageError("--max-body: expected a size such as 64MiB, 500k or 1048576, got '" + text + "'");
+  }
+  const std::size_t size = std::stoull(text.substr(0, digits)) * scale;
+  if (size < 1024) throw UsageError("--max-body: at least 1k, got '" + text + "'");
+  return size;
+}
+
+}  // namespace
+
+CLI::App* add_serve_command(CLI::App& app, ServeOptions& options) {
+  CLI::App* command = app.add_subcommand(
+      "serve",
+      "Run the HTTP/JSON identification service: upload datasets, submit simulations and "
+      "identifications, poll jobs. Prints 'listening on http://HOST:PORT' first on stdout.");
+  command->add_option("--host", options.host, "Address to listen on (127.0.0.1: this machine only)")->capture_default_str();
+  command->add_option("--port", options.port, "TCP port; 0 picks a free one")
+      ->check(integer_between(0, 65535))
+      ->capture_default_str();
+  command->add_option("--db", options.database, "Store: a SQLite file, PATH or sqlite:PATH (created with its schema if missing)")
+      ->capture_default_str();
+  command->add_option("--workers", options.workers, "Identification worker threads (default: hardware threads)")
+      ->check(integer_between(1, 256));
+  command->add_option("--queue-limit", options.queue_limit, "Queued jobs at most; more get 429 (0: no limit)")
+      ->check(integer_between(0, 100'000'000))
+      ->capture_default_str();
+  command->add_option("--max-body", options.max_body, "Largest request body (e.g. 64MiB, 500k)")->capture_default_str();
+  command->add_option("--token", options.token, "Bearer token every /v1 request must carry (or MANIPID_TOKEN)")
+      ->envname("MANIPID_TOKEN");
+  command->add_option("--job-timeout", options.job_timeout, "Longest an identification may run, s")
+      ->check(positive_number())
+      ->capture_default_str();
+  command->add_option("--http-threads", options.http_threads, "Connections served at once")
+      ->check(integer_between(2, 1024))
+      ->capture_default_str();
+  command->add_option("--max-attempts", options.max_attempts,
+                      "A job whose worker died this many times (the process crashed or was killed while "
+                      "running it) is failed at start-up instead of run again")
+      ->check(integer_between(1, 1000))
+      ->capture_default_str();
+  return command;
+}
+
+int run_serve(const ServeOptions& options) {
+  const std::size_t max_body = parse_size(options.max_body);
+  const int workers = options.workers > 0 ? options.workers : std::max(1u, std::thread::hardware_concurrency());
+
+  // Signals go to one thread that waits for them; every thread started from here on
+  // inherits the blocked mask, so no worker is interrupted mid-transaction.
+  sigset_t signals;
+  sigemptyset(&signals);
+  sigaddset(&signals, SIGINT);
+  sigaddset(&signals, SIGTERM);
+  pthread_sigmask(SIG_BLOCK, &signals, nullptr);
+
+  std::unique_ptr<store::Store> store;
+  try {
+    store = store::open_store(options.database);
+  } catch (const store::StoreError& error) {
+    throw UsageError("--db " + options.database + ": " + error.what());
+  }
+  const store::RecoveryOutcome recovered = store->recover_interrupted_jobs(options.max_attempts, [](int losses) {
+    return api::problem_to_json({api::ProblemKind::worker_lost,
+                                 "the worker stopped while running this job " + std::to_string(losses) +
+                                     " times (the process crashed or was killed); it will not be run again",
+                                 ""})
+        .dump();
+  });
+  if (recovered.requeued > 0) log_line("manipid: " + std::to_string(recovered.requeued) + " interrupted job(s) queued again");
+  if (recovered.cancelled > 0) log_line("manipid: " + std::to_string(recovered.cancelled) + " interrupted job(s) cancelled as asked");
+  for (const std::string& id : recovered.failed) {
+    log_line("manipid: job " + id + " failed: its worker died " + std::to_string(options.max_attempts) +
+             " or more times while running it");
+  }
+
+  jobs::WorkerPoolOptions pool_options;
+  pool_options.workers = workers;
+  pool_options.runner.job_time_limit_seconds = options.job_timeout;
+  jobs::WorkerPool pool(*store, pool_options, log_line);
+  jobs::JobService service(*store, pool, jobs::JobServiceOptions{options.queue_limit, log_line});
+
+  httplib::Server server;
+  const int http_threads = options.http_threads;
+  server.new_task_queue = [http_threads] { return new httplib::ThreadPool(static_cast<std::size_t>(http_threads)); };
+  // Without TCP_NODELAY, Nagle plus delayed ACKs hold each keep-alive answer (headers and
+  // body are two writes) for ~40 ms: 360 status requests/s instead of thousands.
+  server.set_tcp_nodelay(true);
+  server.set_keep_alive_max_count(1000);
+  server.set_keep_alive_timeout(2);
+  server.set_read_timeout(30);
+  server.set_write_timeout(30);
+  api::RouteOptions routes;
+  routes.max_body = max_body;
+  routes.token = options.token;
+  routes.log = log_line;
+  api::register_routes(server, service, routes);
+
+  int port = options.port;
+  if (port == 0) {
+    port = server.bind_to_any_port(options.host);
+  } else if (!server.bind_to_port(options.host, port)) {
+    port = -1;
+  }
+  if (port <= 0) {
+    throw OutputError("cannot listen on " + options.host + ":" + std::to_string(options.port) +
+                      " (address in use, or not an address of this machine)");
+  }
+
+  pool.start();
+  std::printf("listening on http://%s:%d\n", options.host.c_str(), port);
+  std::fflush(stdout);
+  log_line("manipid " MANIPID_VERSION ": listening on http://" + options.host + ":" + std::to_string(port) + ", " +
+           std::to_string(workers) + " worker(s), database " + options.database +
+           (options.token.empty() ? "" : ", bearer token required"));
+
+  std::atomic<bool> listen_returned{false};
+  std::thread signal_thread([&] {
+    int signal_number = 0;
+    sigwait(&signals, &signal_number);
+    if (!listen_returned) {
+      log_line(std::string("manipid: ") + (signal_number == SIGINT ? "SIGINT" : "SIGTERM") +
+               ": shutting down (running jobs will be queued again)");
+    }
+    service.stop_accepting();
+    pool.notify_changed();  // long-polls return now
+    // cpp-httplib 0.11.4's stop() does nothing until listen has started.
+    while (!server.is_running() && !listen_returned) std::this_thread::sleep_for(std::chrono::milliseconds(1));
+    server.stop();
+  });
+
+  const bool listened = server.listen_after_bind();
+  listen_returned = true;
+  service.stop_accepting();
+  pthread_kill(signal_thread.native_handle(), SIGTERM);  // wakes sigwait if no signal came
+  signal_thread.join();
+  pool.stop();
+  log_line("manipid: stopped");
+  return listened ? exit_success : exit_failure;
+}
+
+}  // namespace manipid::server::cli

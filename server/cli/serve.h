@@ -1,0 +1,30 @@
+// serve.h — `manipid serve`: the HTTP service (store, worker pool, routes).
+#pragma once
+
+#include "cli/common.h"
+
+#include <CLI/CLI.hpp>
+
+#include <cstdint>
+#include <optional>
+#include <string>
+#include <vector>
+
+namespace manipid::server::cli {
+
+struct ServeOptions {
+  std::string host = "127.0.0.1";
+  int port = 8080;
+  std::string database = "./manipid.db";
+  int workers = 0;            ///< 0 = hardware threads
+  int queue_limit = 10000;
+  std::string max_body = "64MiB";
+  std::string token;
+  double job_timeout = 3600.0;
+  int http_threads = 32;
+  int max_attempts = 3;       ///< worker deaths a job may cause before it is failed for good
+};
+CLI::App* add_serve_command(CLI::App& app, ServeOptions& options);
+int run_serve(const ServeOptions& options);
+
+}  // namespace manipid::server::cli

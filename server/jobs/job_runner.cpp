@@ -1,0 +1,291 @@
+// job_runner.cpp — one job from its stored request to its outcome (job_runner.h).
+#include "jobs/job_runner.h"
+
+#include "manipid/api/problem.h"
+#include "manipid/api/requests.h"
+#include "manipid/api/result_json.h"
+#include "manipid/api/robot_json.h"
+#include "manipid/api/robot_requests.h"
+#include "manipid/core/robot/excitation.h"
+#include "manipid/core/robot/identification.h"
+#include "manipid/core/identification.h"
+
+#include <nlohmann/json.hpp>
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <exception>
+#include <new>
+
+namespace manipid::server::jobs {
+namespace {
+
+using Clock = std::chrono::steady_clock;
+
+std::string job_failed(const std::string& detail) {
+  // A computation that could not finish (a diverging simulation, a store failure): the
+  // request was valid, so this is not one of the request's problem kinds.
+  return api::problem_to_json({api::ProblemKind::job_failed, detail, ""}).dump();
+}
+
+JobOutcome failed(std::string error) {
+  JobOutcome outcome;
+  outcome.state = api::JobState::failed;
+  outcome.error = std::move(error);
+  return outcome;
+}
+
+/// The dataset a simulation makes, stored idempotently under the job's id so a job re-run
+/// after a crash finds the dataset its first run stored instead of making a second one.
+api::DatasetInfo store_simulated(store::Store& store, const api::JobInfo& job, const api::SimulationSpec& spec) {
+  const Trajectory data = api::run_simulation(spec);
+  const api::IdempotencyKey key{"job-output:" + job.id, job.id};
+  const std::string name = spec.name.empty() ? "simulation " + spec.preset.name + " (" + job.id + ")" : spec.name;
+  return store.insert_dataset(name, data, job.id, key).dataset;
+}
+
+JobOutcome run_simulation_job(const api::JobInfo& job, store::Store& store) {
+  const auto started = Clock::now();
+  const api::SimulationSpec spec = api::simulation_from_json(nlohmann::json::parse(job.request));
+  const api::DatasetInfo dataset = store_simulated(store, job, spec);
+  JobOutcome outcome;
+  outcome.state = api::JobState::succeeded;
+  outcome.dataset_id = dataset.id;
+  outcome.result = nlohmann::ordered_json{
+      {"dataset_id", dataset.id},
+      {"joints", dataset.joints},
+      {"samples", dataset.samples},
+      {"dt", dataset.dt},
+      {"has_torque", dataset.has_torque},
+      {"has_reference", dataset.has_reference},
+      {"wall_seconds", std::chrono::duration<double>(Clock::now() - started).count()},
+  }.dump();
+  return outcome;
+}
+
+/// Collects every evaluation and writes them to the store in batches.
+class HistoryWriter {
+ public:
+  HistoryWriter(store::Store& store, const api::JobInfo& job, LiveJob& live, const RunnerOptions& options)
+      : store_(store), job_(job), live_(live), options_(options), last_flush_(Clock::now()) {}
+
+  void add(long index, double cost, const Eigen::VectorXd& theta) {
+    batch_.push_back({index, cost, std::vector<double>(theta.data(), theta.data() + theta.size())});
+    live_.evaluations.store(index + 1, std::memory_order_relaxed);
+    if (std::isfinite(cost) && cost < live_.best_cost.load(std::memory_order_relaxed)) {
+      live_.best_cost.store(cost, std::memory_order_relaxed);
+    }
+    if (static_cast<int>(batch_.size()) >= options_.history_batch ||
+        std::chrono::duration<double>(Clock::now() - last_flush_).count() >= options_.history_flush_seconds) {
+      flush();
+    }
+  }
+
+  void flush() {
+    const double best = live_.best_cost.load(std::memory_order_relaxed);
+    store_.record_progress(job_.id, live_.evaluations.load(std::memory_order_relaxed),
+                           std::isfinite(best) ? std::optional<double>(best) : std::nullopt, batch_);
+    batch_.clear();
+    last_flush_ = Clock::now();
+  }
+
+ private:
+  store::Store& store_;
+  const api::JobInfo& job_;
+  LiveJob& live_;
+  const RunnerOptions& options_;
+  std::vector<api::HistoryEntry> batch_;
+  Clock::time_point last_flush_;
+};
+
+JobOutcome run_identification_job(const api::JobInfo& job, store::Store& store, LiveJob& live, const RunnerOptions& options) {
+  api::IdentificationSpec spec = api::identification_from_json(nlohmann::json::parse(job.request));
+  std::string dataset_id = spec.dataset_id;
+  std::optional<Trajectory> data;
+  if (spec.simulation) {
+    dataset_id = store_simulated(store, job, *spec.simulation).id;
+  }
+  data = store.load_dataset(dataset_id);
+  if (!data) {
+    JobOutcome outcome = failed(api::problem_to_json({api::ProblemKind::not_found,
+                                                      "dataset " + dataset_id + " was deleted before the job ran",
+                                                      "dataset_id"})
+                                    .dump());
+    outcome.dataset_id = dataset_id;
+    return outcome;
+  }
+  api::check_against_data(spec, data->joint_count(), data->samples(), data->has_torque(), data->has_reference());
+
+  HistoryWriter history(store, job, live, options);
+  IdentificationOptions& identification = spec.options;
+  identification.max_seconds = std::min(identification.max_seconds, options.job_time_limit_seconds);
+  identification.cancel = &live.cancel;
+  identification.on_evaluation = [&history](long index, double cost, const Eigen::VectorXd& theta) {
+    history.add(index, cost, theta);
+  };
+  const IdentificationResult result = identify(spec.preset.model, *data, identification);
+  history.flush();
+
+  JobOutcome outcome;
+  outcome.dataset_id = dataset_id;
+  if (result.cancelled && live.shutdown.load()) {
+    outcome.requeue = true;
+    return outcome;
+  }
+  outcome.state = result.cancelled ? api::JobState::cancelled : api::JobState::succeeded;
+  nlohmann::ordered_json json = api::result_to_json(result);
+  json["dataset_id"] = dataset_id;
+  outcome.result = json.dump();
+  for (std::size_t i = 0; i < result.names.size(); ++i) {
+    // Stored estimates are what the data determine, as in the result's "estimates".
+    if (!result.free[i] || !result.identifiability.determines_alone(result.names[i])) continue;
+    const double error = result.std_errors[static_cast<Eigen::Index>(i)];
+    outcome.estimates.push_back({result.names[i], result.estimate[static_cast<Eigen::Index>(i)],
+                                 std::isfinite(error) ? std::optional<double>(error) : std::nullopt});
+  }
+  return outcome;
+}
+
+/// A URDF robot's identification: one least-squares solve on its dataset, validated on a second one if
+/// asked. No evaluations to stream: the job's progress is its state.
+JobOutcome run_robot_identification_job(const api::JobInfo& job, store::Store& store, LiveJob& live) {
+  api::RobotIdentificationSpec spec = api::robot_identification_from_json(nlohmann::json::parse(job.request));
+  const auto fail_missing = [&](const std::string& what, const std::string& field) {
+    JobOutcome outcome = failed(api::problem_to_json({api::ProblemKind::not_found, what + " was deleted before the job ran", field}).dump());
+    outcome.dataset_id = spec.dataset_id;
+    return outcome;
+  };
+  const auto robot = store.find_robot(spec.robot_id);
+  const auto urdf = store.load_robot_urdf(spec.robot_id);
+  if (!robot || !urdf) return fail_missing("robot " + spec.robot_id, "robot_id");
+  const api::ParsedRobot parsed = api::parse_robot({robot->name, *urdf, robot->base, robot->tip});
+  const auto data = store.load_dataset(spec.dataset_id);
+  if (!data) return fail_missing("dataset " + spec.dataset_id, "dataset_id");
+  api::check_robot_data(parsed.model.joint_count(), parsed.model.name, data->joint_count(), data->has_torque(), "dataset_id");
+  std::optional<Trajectory> second;
+  if (!spec.validation_dataset_id.empty()) {
+    second = store.load_dataset(spec.validation_dataset_id);
+    if (!second) return fail_missing("dataset " + spec.validation_dataset_id, "validation_dataset_id");
+    api::check_robot_data(parsed.model.joint_count(), parsed.model.name, second->joint_count(), second->has_torque(),
+                          "validation_dataset_id");
+  }
+
+  spec.options.cancel = &live.cancel;
+  const robot::IdentificationResult result = robot::identify(parsed.model, *data, spec.options);
+  JobOutcome outcome;
+  outcome.dataset_id = spec.dataset_id;
+  if (result.cancelled) {
+    if (live.shutdown.load()) {
+      outcome.requeue = true;
+      return outcome;
+    }
+    outcome.state = api::JobState::cancelled;
+    outcome.result = nlohmann::ordered_json{{"cancelled", true}, {"dataset_id", spec.dataset_id}}.dump();
+    return outcome;
+  }
+  const Trajectory prepared = prepare_data(*data, spec.options.preparation);
+  const robot::TorquePrediction fit = robot::predict_torque(parsed.model, spec.options.layout, result.point, prepared, result.filters);
+  std::optional<robot::ValidationReport> validation;
+  if (second) validation = robot::validate(parsed.model, spec.options.layout, result, *second, spec.options.preparation);
+  nlohmann::ordered_json json = api::robot_result_to_json(parsed.model, spec.options.layout, result, fit, validation);
+  json["robot_id"] = spec.robot_id;
+  json["dataset_id"] = spec.dataset_id;
+  if (!spec.validation_dataset_id.empty()) json["validation_dataset_id"] = spec.validation_dataset_id;
+  outcome.state = api::JobState::succeeded;
+  outcome.result = json.dump();
+  for (int i = 0; i < result.base.size(); ++i) {
+    const double error = result.std_errors[i];
+    outcome.estimates.push_back({result.base.names[static_cast<std::size_t>(i)], result.estimate[i],
+                                 std::isfinite(error) ? std::optional<double>(error) : std::nullopt});
+  }
+  return outcome;
+}
+
+/// An excitation design: the trajectory sampled into a dataset (stored idempotently under the job's id,
+/// like a simulation's) and the coefficients in the result.
+JobOutcome run_excitation_job(const api::JobInfo& job, store::Store& store, LiveJob& live, const RunnerOptions& options) {
+  const auto started = Clock::now();
+  api::ExcitationSpec spec = api::excitation_from_json(nlohmann::json::parse(job.request));
+  const auto robot = store.find_robot(spec.robot_id);
+  const auto urdf = store.load_robot_urdf(spec.robot_id);
+  if (!robot || !urdf) {
+    return failed(api::problem_to_json({api::ProblemKind::not_found, "robot " + spec.robot_id + " was deleted before the job ran",
+                                        "robot_id"})
+                      .dump());
+  }
+  const api::ParsedRobot parsed = api::parse_robot({robot->name, *urdf, robot->base, robot->tip});
+  robot::ExcitationOptions& design_options = spec.options;
+  design_options.max_seconds = std::min(design_options.max_seconds, options.job_time_limit_seconds);
+  design_options.cancel = &live.cancel;
+  design_options.progress = [&live](const robot::ExcitationProgress& progress) {
+    live.evaluations.store(progress.evaluation + 1, std::memory_order_relaxed);
+    if (std::isfinite(progress.best_value)) live.best_cost.store(progress.best_value, std::memory_order_relaxed);
+  };
+  const robot::ExcitationLimits limits = robot::excitation_limits(parsed.model, design_options);
+  const robot::ExcitationDesign design = robot::design_excitation(parsed.model, design_options);
+  // The design has no history to stream; its progress is stored once, so a finished job still says how
+  // much work it took (the live counters vanish with the run).
+  live.evaluations.store(design.summary.evaluations, std::memory_order_relaxed);
+  store.record_progress(job.id, design.summary.evaluations,
+                        std::isfinite(design.summary.final_value) ? std::optional<double>(design.summary.final_value)
+                                                                  : std::nullopt,
+                        {});
+  JobOutcome outcome;
+  if (design.summary.termination == robot::ExcitationTermination::cancelled) {
+    if (live.shutdown.load()) {
+      outcome.requeue = true;
+      return outcome;
+    }
+    outcome.state = api::JobState::cancelled;
+    return outcome;
+  }
+  const robot::SampledExcitation sampled = robot::sample_excitation(design.trajectory, spec.dt, spec.periods);
+  if (const auto violation = robot::first_limit_violation(limits, sampled)) {
+    return failed(job_failed("the designed trajectory leaves a limit of joint " + std::to_string(violation->joint) +
+                             " at t = " + std::to_string(violation->t) + " s"));
+  }
+  const std::string name = spec.name.empty() ? "excitation " + robot->name + " (" + job.id + ")" : spec.name;
+  const api::IdempotencyKey key{"job-output:" + job.id, job.id};
+  const api::DatasetInfo dataset = store.insert_dataset(name, robot::to_trajectory(sampled), job.id, key).dataset;
+  outcome.state = api::JobState::succeeded;
+  outcome.dataset_id = dataset.id;
+  outcome.result = nlohmann::ordered_json{
+      {"dataset_id", dataset.id},
+      {"robot_id", spec.robot_id},
+      {"samples", dataset.samples},
+      {"dt", dataset.dt},
+      {"periods", spec.periods},
+      {"condition_number", design.summary.condition_number},
+      {"coefficients", api::excitation_to_json(parsed.model, design_options, limits, design)},
+      {"wall_seconds", std::chrono::duration<double>(Clock::now() - started).count()},
+  }.dump();
+  return outcome;
+}
+
+}  // namespace
+
+JobOutcome run_job(const api::JobInfo& job, store::Store& store, LiveJob& live, const RunnerOptions& options) {
+  try {
+    if (job.kind == api::JobKind::simulation) return run_simulation_job(job, store);
+    if (job.kind == api::JobKind::excitation) return run_excitation_job(job, store, live, options);
+    if (!job.robot_id.empty()) return run_robot_identification_job(job, store, live);
+    return run_identification_job(job, store, live, options);
+  } catch (const InputError& error) {
+    // Submission validated the request against the data it knew; this catches what only the
+    // run can see (a dataset replaced in between, a model that rejects the data).
+    return failed(api::problem_to_json(api::problem_from(error)).dump());
+  } catch (const api::ApiError& error) {
+    return failed(api::problem_to_json(error.problem()).dump());
+  } catch (const IdentificationError& error) {
+    return failed(api::problem_to_json({api::ProblemKind::not_computable, error.what(), ""}).dump());
+  } catch (const std::bad_alloc&) {
+    return failed(job_failed("out of memory"));
+  } catch (const std::exception& error) {
+    return failed(job_failed(error.what()));
+  } catch (...) {
+    return failed(job_failed("unknown error"));
+  }
+}
+
+}  // namespace manipid::server::jobs

@@ -1,0 +1,45 @@
+// job_runner.h — runs one claimed job to its end: parses the stored request (validated at
+// submission, parsed again here so a job survives a restart with nothing but its row), runs
+// the simulation or identification on the core, streams progress and cost history to the
+// store in batches, and says how the job ended. The worker pool owns the threads; this file
+// owns what happens on one of them.
+#pragma once
+
+#include "manipid/api/records.h"
+#include "store/store.h"
+
+#include <atomic>
+#include <limits>
+#include <string>
+#include <vector>
+
+namespace manipid::server::jobs {
+
+/// What other threads may see of, or do to, a running job.
+struct LiveJob {
+  std::atomic<bool> cancel{false};    ///< checked at every cost evaluation
+  std::atomic<bool> shutdown{false};  ///< the cancel came from a shutdown: requeue, don't cancel
+  std::atomic<long> evaluations{0};
+  std::atomic<double> best_cost{std::numeric_limits<double>::infinity()};
+};
+
+struct RunnerOptions {
+  double job_time_limit_seconds = 3600.0;  ///< caps every identification's max_seconds
+  int history_batch = 512;                  ///< entries per store write
+  double history_flush_seconds = 0.5;       ///< or sooner than a full batch, while running
+};
+
+struct JobOutcome {
+  api::JobState state = api::JobState::failed;  ///< succeeded, failed or cancelled
+  bool requeue = false;                          ///< interrupted by shutdown: run again later
+  std::string result;                            ///< JSON text
+  std::string error;                             ///< problem JSON text
+  std::vector<store::EstimateRow> estimates;
+  std::string dataset_id;                        ///< the dataset used or made
+};
+
+/// Runs `job` (state running, claimed by this thread). Never throws: every failure becomes a
+/// failed outcome with a problem JSON that says what went wrong.
+JobOutcome run_job(const api::JobInfo& job, store::Store& store, LiveJob& live, const RunnerOptions& options);
+
+}  // namespace manipid::server::jobs

@@ -1,0 +1,169 @@
+// worker_pool.cpp — the job threads (worker_pool.h).
+#include "jobs/worker_pool.h"
+
+#include <cmath>
+#include <cstdio>
+
+namespace manipid::server::jobs {
+
+WorkerPool::WorkerPool(store::Store& store, WorkerPoolOptions options, Log log)
+    : store_(store), options_(std::move(options)), log_(std::move(log)) {
+  statistics_.duration_bucket_bounds = {0.05, 0.1, 0.25, 0.5, 1, 2.5, 5, 10, 30, 60, 300, 3600};
+  statistics_.duration_buckets.assign(statistics_.duration_bucket_bounds.size(), 0);
+}
+
+WorkerPool::~WorkerPool() { stop(); }
+
+void WorkerPool::start() {
+  for (int i = 0; i < options_.workers; ++i) threads_.emplace_back([this] { work(); });
+}
+
+void WorkerPool::stop() {
+  {
+    std::lock_guard lock(mutex_);
+    if (stopping_ && threads_.empty()) return;
+    stopping_ = true;
+    for (auto& [id, live] : live_) {
+      live->shutdown = true;
+      live->cancel = true;
+    }
+  }
+  work_available_.notify_all();
+  for (std::thread& thread : threads_) thread.join();
+  threads_.clear();
+  changed_.notify_all();
+}
+
+void WorkerPool::notify_submitted() {
+  {
+    std::lock_guard lock(mutex_);
+    ++submissions_;
+  }
+  work_available_.notify_one();
+}
+
+void WorkerPool::cancel(const std::string& id) {
+  std::lock_guard lock(mutex_);
+  if (auto found = live_.find(id); found != live_.end()) {
+    found->second->cancel = true;
+  } else {
+    pending_cancels_.insert(id);
+  }
+}
+
+std::optional<LiveProgress> WorkerPool::progress(const std::string& id) const {
+  std::lock_guard lock(mutex_);
+  const auto found = live_.find(id);
+  if (found == live_.end()) return std::nullopt;
+  LiveProgress progress;
+  progress.evaluations = found->second->evaluations.load();
+  const double best = found->second->best_cost.load();
+  if (std::isfinite(best)) progress.best_cost = best;
+  return progress;
+}
+
+unsigned long WorkerPool::generation() const {
+  std::lock_guard lock(mutex_);
+  return generation_;
+}
+
+void WorkerPool::wait_for_change(unsigned long generation, std::chrono::steady_clock::time_point deadline) const {
+  std::unique_lock lock(mutex_);
+  changed_.wait_until(lock, deadline, [&] { return generation_ != generation || stopping_; });
+}
+
+void WorkerPool::notify_changed() {
+  {
+    std::lock_guard lock(mutex_);
+    ++generation_;
+  }
+  changed_.notify_all();
+}
+
+PoolStatistics WorkerPool::statistics() const {
+  std::lock_guard lock(mutex_);
+  PoolStatistics copy = statistics_;
+  copy.running = static_cast<long>(live_.size());
+  return copy;
+}
+
+void WorkerPool::work() {
+  unsigned long seen = 0;
+  for (;;) {
+    {
+      std::unique_lock lock(mutex_);
+      if (stopping_) return;
+      seen = submissions_;
+    }
+    std::optional<api::JobInfo> job;
+    try {
+      job = store_.claim_next_job();
+    } catch (const std::exception& error) {
+      log_(std::string("worker: cannot claim a job: ") + error.what());
+    }
+    if (job) {
+      run_one(*job);
+      continue;
+    }
+    std::unique_lock lock(mutex_);
+    work_available_.wait_for(lock, options_.idle_poll, [&] { return stopping_ || submissions_ != seen; });
+  }
+}
+
+void WorkerPool::run_one(const api::JobInfo& job) {
+  auto live = std::make_shared<LiveJob>();
+  bool registered = false;
+  {
+    std::lock_guard lock(mutex_);
+    if (pending_cancels_.erase(job.id) > 0 || job.cancel_requested) live->cancel = true;
+    if (!stopping_) {
+      live_[job.id] = live;
+      registered = true;
+    }
+  }
+  if (!registered) {
+    // Claimed while the pool was stopping: back to the queue untouched, for the next start.
+    try {
+      store_.requeue_job(job.id);
+    } catch (const std::exception& error) {
+      log_("job " + job.id + ": cannot requeue: " + error.what());
+    }
+    return;
+  }
+  log_("job " + job.id + " " + api::to_string(job.kind) + ": running (attempt " + std::to_string(job.attempts) + ")");
+  const auto started = std::chrono::steady_clock::now();
+
+  JobOutcome outcome = run_job(job, store_, *live, options_.runner);
+  const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - started).count();
+  try {
+    if (outcome.requeue) {
+      store_.requeue_job(job.id);
+    } else {
+      store_.finish_job(job.id, outcome.state, outcome.result, outcome.error, outcome.estimates, outcome.dataset_id);
+    }
+  } catch (const std::exception& error) {
+    // The row stays running; the next start-up puts it back in the queue.
+    log_("job " + job.id + ": cannot record its end: " + error.what());
+  }
+  char duration[32];
+  std::snprintf(duration, sizeof duration, "%.3f", seconds);
+  log_("job " + job.id + " " + api::to_string(job.kind) + ": " +
+       (outcome.requeue ? std::string("queued again (shutdown)") : std::string(api::to_string(outcome.state))) +
+       " after " + duration + " s");
+  {
+    std::lock_guard lock(mutex_);
+    live_.erase(job.id);
+    ++generation_;
+    if (!outcome.requeue) {
+      ++statistics_.finished[std::string(api::to_string(job.kind)) + "," + api::to_string(outcome.state)];
+      ++statistics_.duration_count;
+      statistics_.duration_sum += seconds;
+      for (std::size_t b = 0; b < statistics_.duration_bucket_bounds.size(); ++b) {
+        if (seconds <= statistics_.duration_bucket_bounds[b]) ++statistics_.duration_buckets[b];
+      }
+    }
+  }
+  changed_.notify_all();
+}
+
+}  // namespace manipid::server::jobs

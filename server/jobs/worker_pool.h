@@ -1,0 +1,96 @@
+// worker_pool.h — N threads that take queued jobs from the store in submission order and run
+// them (job_runner.h). The pool also keeps what only memory can hold: each running job's live
+// progress and cancel flag, and a signal that wakes long-polls when any job ends.
+//
+// Shutdown (stop()) tells running identifications to stop at their next cost evaluation and
+// puts them back in the queue, so a restart runs them again: nothing acknowledged is lost.
+#pragma once
+
+#include "jobs/job_runner.h"
+#include "store/store.h"
+
+#include <chrono>
+#include <condition_variable>
+#include <functional>
+#include <map>
+#include <memory>
+#include <mutex>
+#include <optional>
+#include <set>
+#include <string>
+#include <thread>
+#include <vector>
+
+namespace manipid::server::jobs {
+
+struct WorkerPoolOptions {
+  int workers = 1;
+  RunnerOptions runner;
+  /// How often an idle worker looks at the store even without a submit notification (jobs
+  /// recovered at start-up, or submitted by another process on the same database).
+  std::chrono::milliseconds idle_poll{1000};
+};
+
+struct LiveProgress {
+  long evaluations = 0;
+  std::optional<double> best_cost;
+};
+
+/// Counts and durations of the jobs this process finished, for /metrics.
+struct PoolStatistics {
+  long running = 0;
+  std::map<std::string, long> finished;      ///< by "kind,state"
+  std::vector<double> duration_bucket_bounds;  ///< s, upper bounds (Prometheus "le")
+  std::vector<long> duration_buckets;          ///< cumulative counts, one per bound
+  long duration_count = 0;
+  double duration_sum = 0.0;
+};
+
+class WorkerPool {
+ public:
+  using Log = std::function<void(const std::string& line)>;
+  WorkerPool(store::Store& store, WorkerPoolOptions options, Log log);
+  ~WorkerPool();
+  WorkerPool(const WorkerPool&) = delete;
+  WorkerPool& operator=(const WorkerPool&) = delete;
+
+  void start();
+  /// Stops taking jobs, interrupts running identifications (they are requeued), joins.
+  void stop();
+
+  /// A job was queued: wake an idle worker.
+  void notify_submitted();
+  /// Asks a running job to stop at its next evaluation (also when it is about to start).
+  void cancel(const std::string& id);
+  std::optional<LiveProgress> progress(const std::string& id) const;
+
+  /// Blocks until some job changes to a terminal state or `deadline` passes; returns at once
+  /// if `generation` is already behind. Use: g = generation(); check; wait_for_change(g, t).
+  unsigned long generation() const;
+  void wait_for_change(unsigned long generation, std::chrono::steady_clock::time_point deadline) const;
+  /// Wakes long-polls (a queued job was cancelled by the routes, not by a worker).
+  void notify_changed();
+
+  PoolStatistics statistics() const;
+
+ private:
+  void work();
+  void run_one(const api::JobInfo& job);
+
+  store::Store& store_;
+  WorkerPoolOptions options_;
+  Log log_;
+  std::vector<std::thread> threads_;
+
+  mutable std::mutex mutex_;
+  std::condition_variable work_available_;
+  mutable std::condition_variable changed_;
+  bool stopping_ = false;
+  unsigned long submissions_ = 0;
+  unsigned long generation_ = 0;
+  std::map<std::string, std::shared_ptr<LiveJob>> live_;
+  std::set<std::string> pending_cancels_;  ///< cancelled between claim and registration
+  PoolStatistics statistics_;
+};
+
+}  // namespace manipid::server::jobs

@@ -1,0 +1,30 @@
+// rules.h — the rules every store backend shares, so each is defined once: random ids, RFC 3339
+// time stamps, page sizes, and the page tokens that carry a list's position and filter.
+#pragma once
+
+#include "store/store.h"
+
+#include <cstdint>
+#include <string>
+#include <string_view>
+
+namespace manipid::server::store {
+
+/// e.g. "2026-11-22T06:40:12.345Z" (UTC, milliseconds).
+std::string now_rfc3339();
+
+/// `prefix` + 16 lowercase hex digits from a per-thread generator seeded by std::random_device
+/// ("ds_", "job_", "rb_"): unguessable enough that ids are never reused, not a secret.
+std::string random_id(std::string_view prefix);
+
+/// Page tokens: "<tag>.<position in hex>.<check>", where the check is a hash of the tag, the
+/// position and the context (the job id of a history, the filter of a job list). Not secret;
+/// it catches hand-edited or truncated tokens and tokens reused with other parameters.
+std::string encode_page_token(std::string_view tag, std::int64_t position, std::string_view context);
+/// The position; throws PageRequestError (field "page_token") when malformed.
+std::int64_t decode_page_token(std::string_view token, std::string_view tag, std::string_view context);
+
+/// Page sizes: 0 → 50, above 1000 → 1000; negative → PageRequestError (field "page_size").
+int effective_page_size(int requested);
+
+}  // namespace manipid::server::store

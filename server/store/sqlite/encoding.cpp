@@ -1,0 +1,65 @@
+// encoding.cpp — value encodings of the SQLite store (see encoding.h).
+#include "store/sqlite/encoding.h"
+
+#include <array>
+#include <bit>
+#include <cstring>
+
+namespace manipid::server::store::sqlite {
+
+namespace {
+
+std::uint64_t reverse_bytes(std::uint64_t value) {
+  std::uint64_t reversed = 0;
+  for (int byte = 0; byte < 8; ++byte) {
+    reversed = (reversed << 8) | (value & 0xffu);
+    value >>= 8;
+  }
+  return reversed;
+}
+
+constexpr std::array<const char*, 5> kStateTexts = {"queued", "running", "succeeded", "failed", "cancelled"};
+constexpr std::array<const char*, 3> kKindTexts = {"simulation", "identification", "excitation"};
+
+}  // namespace
+
+std::vector<unsigned char> encode_doubles(const double* values, std::size_t count) {
+  std::vector<unsigned char> bytes(count * sizeof(double));
+  for (std::size_t i = 0; i < count; ++i) {
+    auto bits = std::bit_cast<std::uint64_t>(values[i]);
+    if constexpr (std::endian::native == std::endian::big) bits = reverse_bytes(bits);
+    std::memcpy(bytes.data() + i * sizeof(double), &bits, sizeof bits);
+  }
+  return bytes;
+}
+
+bool decode_doubles(std::span<const unsigned char> bytes, double* values, std::size_t count) {
+  if (bytes.size() != count * sizeof(double)) return false;
+  for (std::size_t i = 0; i < count; ++i) {
+    std::uint64_t bits = 0;
+    std::memcpy(&bits, bytes.data() + i * sizeof(double), sizeof bits);
+    if constexpr (std::endian::native == std::endian::big) bits = reverse_bytes(bits);
+    values[i] = std::bit_cast<double>(bits);
+  }
+  return true;
+}
+
+const char* state_text(api::JobState state) { return kStateTexts.at(static_cast<std::size_t>(state)); }
+
+std::optional<api::JobState> state_from_text(std::string_view text) {
+  for (std::size_t i = 0; i < kStateTexts.size(); ++i) {
+    if (text == kStateTexts[i]) return static_cast<api::JobState>(i);
+  }
+  return std::nullopt;
+}
+
+const char* kind_text(api::JobKind kind) { return kKindTexts.at(static_cast<std::size_t>(kind)); }
+
+std::optional<api::JobKind> kind_from_text(std::string_view text) {
+  for (std::size_t i = 0; i < kKindTexts.size(); ++i) {
+    if (text == kKindTexts[i]) return static_cast<api::JobKind>(i);
+  }
+  return std::nullopt;
+}
+
+}  // namespace manipid::server::store::sqlite

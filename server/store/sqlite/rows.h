@@ -1,0 +1,51 @@
+// rows.h — reading and writing the SQLite store's rows that several store methods
+// share: whole job and dataset records, idempotency keys, fresh ids, a job's progress rows.
+// Every function runs inside the caller's transaction on the caller's connection.
+#pragma once
+
+#include "store/sqlite/connection.h"
+
+#include "manipid/api/records.h"
+
+#include <optional>
+#include <string>
+
+namespace manipid::server::store::sqlite {
+
+/// Column lists for whole records, in the order read_job / read_dataset expect; seq last.
+extern const std::string kJobColumns;
+inline constexpr int kJobSeqColumn = 16;
+/// Only the description: the sample blobs stay on disk.
+extern const std::string kDatasetColumns;
+inline constexpr int kDatasetSeqColumn = 12;
+/// Only the description: the URDF document stays on disk.
+extern const std::string kRobotColumns;
+inline constexpr int kRobotSeqColumn = 7;
+
+api::JobInfo read_job(const Statement& row);
+api::DatasetInfo read_dataset(const Statement& row);
+api::RobotInfo read_robot(const Statement& row);
+std::optional<api::RobotInfo> select_robot(Connection& connection, const std::string& id);
+std::optional<api::JobInfo> select_job(Connection& connection, const std::string& id);
+std::optional<api::DatasetInfo> select_dataset(Connection& connection, const std::string& id);
+std::optional<api::JobState> select_state(Connection& connection, const std::string& id);
+
+struct KeyRecord {
+  std::string fingerprint;
+  std::string resource_id;
+};
+/// scope: "job", "dataset" or "robot".
+std::optional<KeyRecord> select_key(Connection& connection, const char* scope, const std::string& key);
+/// INSERT OR REPLACE: a key whose resource has gone is taken over by the new one.
+void store_key(Connection& connection, const char* scope, const api::IdempotencyKey& key, const std::string& id,
+               const std::string& now);
+void forget_keys_of(Connection& connection, const char* scope, const std::string& id);
+
+/// A fresh random id ("ds_"/"job_" + 16 hex) not held by a live row; `exists_sql` selects a
+/// row by id (?1). A 64-bit collision is unlikely, but a UNIQUE failure would be a 500.
+std::string unused_id(Connection& connection, const char* prefix, const std::string& exists_sql);
+
+/// Deletes a job's cost history and estimates.
+void clear_progress(Connection& connection, const std::string& id);
+
+}  // namespace manipid::server::store::sqlite

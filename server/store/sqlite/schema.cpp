@@ -1,0 +1,239 @@
+// schema.cpp — the tables of the SQLite store and the migrations between versions.
+// A migration is appended, never edited: databases in the field have run the old ones.
+#include "store/sqlite/schema.h"
+
+#include <array>
+#include <string>
+
+namespace manipid::server::store::sqlite {
+
+namespace {
+
+// kMigrations[i] takes user_version i to i + 1, and sets it.
+constexpr std::array<const char*, 3> kMigrations = {
+    // 0 → 1: the first schema.
+    R"sql(
+    -- seq orders datasets newest first for keyset paging; AUTOINCREMENT never hands out a
+    -- seq again, even after the newest row is deleted. The blobs come last so that reading
+    -- the description (find/list) never touches their overflow pages.
+    CREATE TABLE datasets (
+      seq           INTEGER PRIMARY KEY AUTOINCREMENT,
+      id            TEXT    NOT NULL UNIQUE,
+      name          TEXT    NOT NULL,
+      created_at    TEXT    NOT NULL,
+      source_job    TEXT,
+      joints        INTEGER NOT NULL,
+      samples       INTEGER NOT NULL,
+      dt            REAL    NOT NULL,
+      has_torque    INTEGER NOT NULL,
+      has_reference INTEGER NOT NULL,
+      t   BLOB,   -- samples doubles, little-endian
+      q   BLOB,   -- samples x joints, column-major
+      tau BLOB,   -- NULL when has_torque = 0
+      ref BLOB    -- NULL when has_reference = 0
+    );
+
+    -- dataset_id has no foreign key: a job's record outlives the datasets it used or made.
+    CREATE TABLE jobs (
+      seq              INTEGER PRIMARY KEY AUTOINCREMENT,
+      id               TEXT    NOT NULL UNIQUE,
+      kind             TEXT    NOT NULL CHECK (kind IN ('simulation', 'identification')),
+      state            TEXT    NOT NULL
+                       CHECK (state IN ('queued', 'running', 'succeeded', 'failed', 'cancelled')),
+      request          TEXT    NOT NULL,
+      dataset_id       TEXT,
+      created_at       TEXT    NOT NULL,
+      started_at       TEXT,
+      finished_at      TEXT,
+      evaluations      INTEGER NOT NULL DEFAULT 0,
+      best_cost        REAL,
+      cancel_requested INTEGER NOT NULL DEFAULT 0,
+      attempts         INTEGER NOT NULL DEFAULT 0,
+      result           TEXT,
+      error            TEXT
+    );
+    CREATE INDEX jobs_by_state ON jobs (state, seq);  -- claim order, listing by state
+    CREATE INDEX jobs_by_kind ON jobs (kind, seq);    -- listing by kind
+
+    CREATE TABLE job_history (
+      job_id TEXT    NOT NULL REFERENCES jobs (id) ON DELETE CASCADE,
+      idx    INTEGER NOT NULL,
+      cost   REAL,           -- NULL stands for NaN (SQLite stores NaN as NULL)
+      theta  BLOB,           -- doubles, little-endian
+      PRIMARY KEY (job_id, idx)
+    ) WITHOUT ROWID;
+
+    CREATE TABLE estimates (
+      job_id    TEXT NOT NULL REFERENCES jobs (id) ON DELETE CASCADE,
+      name      TEXT NOT NULL,
+      value     REAL,
+      std_error REAL,
+      PRIMARY KEY (job_id, name)
+    ) WITHOUT ROWID;
+
+    CREATE TABLE idempotency_keys (
+      scope       TEXT NOT NULL CHECK (scope IN ('job', 'dataset')),
+      key         TEXT NOT NULL,
+      fingerprint TEXT NOT NULL,
+      resource_id TEXT NOT NULL,
+      created_at  TEXT NOT NULL,
+      PRIMARY KEY (scope, key)
+    ) WITHOUT ROWID;
+    CREATE INDEX idempotency_keys_by_resource ON idempotency_keys (resource_id);
+
+    PRAGMA user_version = 1;
+    )sql",
+
+    // 1 → 2: how often a job's worker died while running it (start-up recovery counts), so a
+    // job that crashes the process is failed after --max-attempts deaths instead of looping.
+    R"sql(
+    ALTER TABLE jobs ADD COLUMN worker_losses INTEGER NOT NULL DEFAULT 0;
+    PRAGMA user_version = 2;
+    )sql",
+
+    // 2 → 3: robots (URDF documents), excitation jobs, jobs that name a robot and a validation
+    // dataset, datasets as measured (jittery time stamps, joint rates). SQLite cannot change a CHECK
+    // or insert a column before the blobs, so jobs, datasets and idempotency_keys are rebuilt: create
+    // the new table, copy, drop the old, rename (the procedure of sqlite.org/lang_altertable.html §7;
+    // prepare_database turns foreign keys off around it, or dropping jobs would delete every
+    // history through ON DELETE CASCADE). Rows from before stay as they were: every dataset then
+    // was uniform and had no rates.
+    R"sql(
+    CREATE TABLE robots (
+      seq        INTEGER PRIMARY KEY AUTOINCREMENT,
+      id         TEXT    NOT NULL UNIQUE,
+      name       TEXT    NOT NULL,
+      created_at TEXT    NOT NULL,
+      base       TEXT,
+      tip        TEXT,
+      joints     INTEGER NOT NULL,
+      summary    TEXT    NOT NULL,  -- the robot resource's description, JSON
+      urdf       TEXT    NOT NULL   -- the document as uploaded, byte for byte; last, so lists never read it
+    );
+
+    CREATE TABLE jobs_v3 (
+      seq                   INTEGER PRIMARY KEY AUTOINCREMENT,
+      id                    TEXT    NOT NULL UNIQUE,
+      kind                  TEXT    NOT NULL CHECK (kind IN ('simulation', 'identification', 'excitation')),
+      state                 TEXT    NOT NULL
+                            CHECK (state IN ('queued', 'running', 'succeeded', 'failed', 'cancelled')),
+      request               TEXT    NOT NULL,
+      dataset_id            TEXT,
+      robot_id              TEXT,
+      validation_dataset_id TEXT,
+      created_at            TEXT    NOT NULL,
+      started_at            TEXT,
+      finished_at           TEXT,
+      evaluations           INTEGER NOT NULL DEFAULT 0,
+      best_cost             REAL,
+      cancel_requested      INTEGER NOT NULL DEFAULT 0,
+      attempts              INTEGER NOT NULL DEFAULT 0,
+      worker_losses         INTEGER NOT NULL DEFAULT 0,
+      result                TEXT,
+      error                 TEXT
+    );
+    INSERT INTO jobs_v3 (seq, id, kind, state, request, dataset_id, created_at, started_at, finished_at, evaluations,
+                         best_cost, cancel_requested, attempts, worker_losses, result, error)
+      SELECT seq, id, kind, state, request, dataset_id, created_at, started_at, finished_at, evaluations,
+             best_cost, cancel_requested, attempts, worker_losses, result, error FROM jobs;
+    DROP TABLE jobs;
+    ALTER TABLE jobs_v3 RENAME TO jobs;
+    CREATE INDEX jobs_by_state ON jobs (state, seq);
+    CREATE INDEX jobs_by_kind ON jobs (kind, seq);
+    CREATE INDEX jobs_by_robot ON jobs (robot_id) WHERE robot_id IS NOT NULL;
+
+    CREATE TABLE datasets_v3 (
+      seq           INTEGER PRIMARY KEY AUTOINCREMENT,
+      id            TEXT    NOT NULL UNIQUE,
+      name          TEXT    NOT NULL,
+      created_at    TEXT    NOT NULL,
+      source_job    TEXT,
+      joints        INTEGER NOT NULL,
+      samples       INTEGER NOT NULL,
+      dt            REAL    NOT NULL,  -- the period (uniform) or the median step (jittery)
+      uniform       INTEGER NOT NULL,
+      has_torque    INTEGER NOT NULL,
+      has_reference INTEGER NOT NULL,
+      has_rates     INTEGER NOT NULL,
+      has_accelerations INTEGER NOT NULL,
+      t   BLOB,   -- samples doubles, little-endian
+      q   BLOB,   -- samples x joints, column-major
+      tau BLOB,   -- NULL when has_torque = 0
+      ref BLOB,   -- NULL when has_reference = 0
+      qd  BLOB,   -- NULL when has_rates = 0
+      qdd BLOB    -- NULL when has_accelerations = 0
+    );
+    INSERT INTO datasets_v3 (seq, id, name, created_at, source_job, joints, samples, dt, uniform, has_torque,
+                             has_reference, has_rates, has_accelerations, t, q, tau, ref, qd, qdd)
+      SELECT seq, id, name, created_at, source_job, joints, samples, dt, 1, has_torque, has_reference, 0, 0, t, q,
+             tau, ref, NULL, NULL FROM datasets;
+    DROP TABLE datasets;
+    ALTER TABLE datasets_v3 RENAME TO datasets;
+
+    CREATE TABLE idempotency_keys_v3 (
+      scope       TEXT NOT NULL CHECK (scope IN ('job', 'dataset', 'robot')),
+      key         TEXT NOT NULL,
+      fingerprint TEXT NOT NULL,
+      resource_id TEXT NOT NULL,
+      created_at  TEXT NOT NULL,
+      PRIMARY KEY (scope, key)
+    ) WITHOUT ROWID;
+    INSERT INTO idempotency_keys_v3 SELECT scope, key, fingerprint, resource_id, created_at FROM idempotency_keys;
+    DROP TABLE idempotency_keys;
+    ALTER TABLE idempotency_keys_v3 RENAME TO idempotency_keys;
+    CREATE INDEX idempotency_keys_by_resource ON idempotency_keys (resource_id);
+
+    PRAGMA user_version = 3;
+    )sql",
+};
+
+int read_user_version(Connection& connection) {
+  auto statement = connection.prepare("PRAGMA user_version");
+  return statement.step() ? static_cast<int>(statement.integer(0)) : 0;
+}
+
+}  // namespace
+
+int current_schema_version() { return static_cast<int>(kMigrations.size()); }
+
+void prepare_database(Connection& connection) {
+  // journal_mode is kept in the file, so only this first connection sets it.
+  std::string mode;
+  for (int attempt = 1;; ++attempt) {
+    try {
+      auto statement = connection.prepare("PRAGMA journal_mode = WAL");
+      mode = statement.step() ? statement.text(0) : "";
+      break;
+    } catch (const BusyError&) {
+      if (attempt >= kMaxAttempts) throw;
+      sleep_before_retry(attempt);
+    }
+  }
+  if (mode != "wal") {
+    throw StoreError("the database cannot use WAL journaling (journal_mode is '" + mode +
+                     "'); it must be a file on a local file system");
+  }
+
+  const int newest = current_schema_version();
+  // Migrations rebuild tables that others reference (lang_altertable.html §7): foreign keys off for
+  // the transaction (the pragma is a no-op inside one), checked before the commit, on again after.
+  connection.execute("PRAGMA foreign_keys = OFF");
+  try {
+    run_transaction(connection, TransactionKind::write, [&] {
+      const int version = read_user_version(connection);
+      if (version > newest) {
+        throw StoreError("the database has schema version " + std::to_string(version) + ", newer than version " +
+                         std::to_string(newest) + " this manipid understands; use a newer manipid");
+      }
+      for (int step = version; step < newest; ++step) connection.execute(kMigrations[static_cast<std::size_t>(step)]);
+      auto violations = connection.prepare("PRAGMA foreign_key_check");
+      if (violations.step()) throw StoreError("the database's rows do not match after the schema migration");
+    });
+  } catch (...) {
+    connection.execute("PRAGMA foreign_keys = ON");
+    throw;
+  }
+  connection.execute("PRAGMA foreign_keys = ON");
+}
+
+}  // namespace manipid::server::store::sqlite

@@ -1,0 +1,622 @@
+// store.cpp — the Store (store/store.h) over one SQLite file: datasets with their samples,
+// jobs and their life cycle, cost histories, estimates and idempotency keys. Every state
+// change is one BEGIN IMMEDIATE transaction run through run_transaction (retried on BUSY).
+#include "store/sqlite/connection.h"
+#include "store/sqlite/encoding.h"
+#include "store/sqlite/rows.h"
+#include "store/sqlite/schema.h"
+#include "store/sqlite/store.h"
+#include "store/rules.h"
+
+#include <cstdint>
+#include <limits>
+#include <stdexcept>
+
+namespace manipid::server::store::sqlite {
+
+namespace {
+
+
+void check_shape(const Eigen::MatrixXd& matrix, int samples, int joints, const char* name) {
+  if (matrix.cols() == 0) return;
+  if (matrix.rows() != samples || matrix.cols() != joints) {
+    throw std::invalid_argument(std::string("Trajectory.") + name + " must be samples x joints or empty");
+  }
+}
+
+/// One job_history row (idx, cost, theta) of the statement's current step.
+api::HistoryEntry history_entry(const Statement& rows, const std::string& id) {
+  api::HistoryEntry entry;
+  entry.index = static_cast<long>(rows.integer(0));
+  entry.cost = rows.real_or_null(1).value_or(std::numeric_limits<double>::quiet_NaN());
+  const auto theta = rows.blob(2);
+  entry.theta.resize(theta.size() / sizeof(double));
+  if (!sqlite::decode_doubles(theta, entry.theta.data(), entry.theta.size())) {
+    throw StoreError("history entry of job " + id + " has a damaged theta in the database");
+  }
+  return entry;
+}
+
+class SqliteStore final : public Store {
+ public:
+  explicit SqliteStore(const std::string& path) : pool_(path, open_and_prepare(path)) {}
+
+  // ---- datasets ----
+
+  DatasetOutcome insert_dataset(const std::string& name, const Trajectory& data, const std::string& source_job,
+                                const std::optional<api::IdempotencyKey>& key) override {
+    const int samples = data.samples();
+    const int joints = data.joint_count();
+    if (data.q.rows() != samples) throw std::invalid_argument("Trajectory.q must have one row per sample");
+    check_shape(data.tau, samples, joints, "tau");
+    check_shape(data.ref, samples, joints, "ref");
+    check_shape(data.qd, samples, joints, "qd");
+    check_shape(data.qdd, samples, joints, "qdd");
+    // Encoded before the transaction: the write lock is held only for the insert itself.
+    const auto t = sqlite::encode_doubles(data.t.data(), static_cast<std::size_t>(data.t.size()));
+    const auto q = sqlite::encode_doubles(data.q.data(), static_cast<std::size_t>(data.q.size()));
+    const auto tau = sqlite::encode_doubles(data.tau.data(), static_cast<std::size_t>(data.tau.size()));
+    const auto ref = sqlite::encode_doubles(data.ref.data(), static_cast<std::size_t>(data.ref.size()));
+    const auto qd = sqlite::encode_doubles(data.qd.data(), static_cast<std::size_t>(data.qd.size()));
+    const auto qdd = sqlite::encode_doubles(data.qdd.data(), static_cast<std::size_t>(data.qdd.size()));
+    const bool uniform = data.is_uniform();
+
+    auto connection = pool_.checkout();
+    return sqlite::run_transaction(*connection, TransactionKind::write, [&]() -> DatasetOutcome {
+      if (key) {
+        if (auto earlier = select_key(*connection, "dataset", key->key)) {
+          if (earlier->fingerprint != key->fingerprint) return {SubmitStatus::key_reused, {}};
+          if (auto dataset = select_dataset(*connection, earlier->resource_id)) {
+            return {SubmitStatus::replayed, *dataset};
+          }
+        }
+      }
+      api::DatasetInfo dataset;
+      dataset.id = unused_id(*connection, "ds_", "SELECT 1 FROM datasets WHERE id = ?1");
+      dataset.name = name;
+      dataset.created_at = now_rfc3339();
+      dataset.source_job = source_job;
+      dataset.joints = joints;
+      dataset.samples = samples;
+      dataset.dt = data.sample_period();  // uniform: t[1] − t[0]; jittery: the median step
+      dataset.uniform = uniform;
+      dataset.has_torque = data.has_torque();
+      dataset.has_reference = data.has_reference();
+      dataset.has_rates = data.has_rates();
+      dataset.has_accelerations = data.has_accelerations();
+
+      auto insert = connection->prepare(
+          "INSERT INTO datasets (id, name, created_at, source_job, joints, samples, dt, has_torque, "
+          "has_reference, t, q, tau, ref, uniform, has_rates, qd, has_accelerations, qdd) "
+          "VALUES (?1, ?2, ?3, ?4, ?5, ?6, ?7, ?8, ?9, ?10, ?11, ?12, ?13, ?14, ?15, ?16, ?17, ?18)");
+      insert.bind_text(1, dataset.id)
+          .bind_text(2, dataset.name)
+          .bind_text(3, dataset.created_at)
+          .bind_text_or_null(4, dataset.source_job)
+          .bind_integer(5, joints)
+          .bind_integer(6, samples)
+          .bind_real(7, dataset.dt)
+          .bind_integer(8, dataset.has_torque ? 1 : 0)
+          .bind_integer(9, dataset.has_reference ? 1 : 0)
+          .bind_blob_or_null(10, t)
+          .bind_blob_or_null(11, q)
+          .bind_blob_or_null(12, tau)
+          .bind_blob_or_null(13, ref)
+          .bind_integer(14, uniform ? 1 : 0)
+          .bind_integer(15, dataset.has_rates ? 1 : 0)
+          .bind_blob_or_null(16, qd)
+          .bind_integer(17, dataset.has_accelerations ? 1 : 0)
+          .bind_blob_or_null(18, qdd);
+      insert.run();
+      if (key) store_key(*connection, "dataset", *key, dataset.id, dataset.created_at);
+      return {SubmitStatus::created, dataset};
+    });
+  }
+
+  std::optional<api::DatasetInfo> find_dataset(const std::string& id) override {
+    auto connection = pool_.checkout();
+    return sqlite::run_transaction(*connection, TransactionKind::read, [&] { return select_dataset(*connection, id); });
+  }
+
+  std::optional<Trajectory> load_dataset(const std::string& id) override {
+    auto connection = pool_.checkout();
+    return sqlite::run_transaction(*connection, TransactionKind::read, [&]() -> std::optional<Trajectory> {
+      auto row = connection->prepare(
+          "SELECT samples, joints, has_torque, has_reference, t, q, tau, ref, has_rates, qd, has_accelerations, qdd "
+          "FROM datasets WHERE id = ?1");
+      row.bind_text(1, id);
+      if (!row.step()) return std::nullopt;
+      const auto samples = static_cast<Eigen::Index>(row.integer(0));
+      const auto joints = static_cast<Eigen::Index>(row.integer(1));
+      Trajectory data;
+      data.t.resize(samples);
+      data.q.resize(samples, joints);
+      data.tau.resize(samples, row.integer(2) != 0 ? joints : 0);
+      data.ref.resize(samples, row.integer(3) != 0 ? joints : 0);
+      data.qd.resize(samples, row.integer(8) != 0 ? joints : 0);
+      data.qdd.resize(samples, row.integer(10) != 0 ? joints : 0);
+      const bool intact = sqlite::decode_doubles(row.blob(4), data.t.data(), static_cast<std::size_t>(data.t.size())) &&
+                          sqlite::decode_doubles(row.blob(5), data.q.data(), static_cast<std::size_t>(data.q.size())) &&
+                          sqlite::decode_doubles(row.blob(6), data.tau.data(), static_cast<std::size_t>(data.tau.size())) &&
+                          sqlite::decode_doubles(row.blob(7), data.ref.data(), static_cast<std::size_t>(data.ref.size())) &&
+                          sqlite::decode_doubles(row.blob(9), data.qd.data(), static_cast<std::size_t>(data.qd.size())) &&
+                          sqlite::decode_doubles(row.blob(11), data.qdd.data(), static_cast<std::size_t>(data.qdd.size()));
+      if (!intact) throw StoreError("dataset " + id + " has samples of the wrong size in the database");
+      return data;
+    });
+  }
+
+  api::Page<api::DatasetInfo> list_datasets(const api::PageRequest& page) override {
+    const int size = effective_page_size(page.page_size);
+    const std::int64_t before =
+        page.page_token.empty() ? INT64_MAX : decode_page_token(page.page_token, "d1", "");
+    auto connection = pool_.checkout();
+    return sqlite::run_transaction(*connection, TransactionKind::read, [&] {
+      auto rows = connection->prepare("SELECT " + kDatasetColumns +
+                                      " FROM datasets WHERE seq < ?1 ORDER BY seq DESC LIMIT ?2");
+      rows.bind_integer(1, before).bind_integer(2, size + 1);  // one more tells whether a next page exists
+      api::Page<api::DatasetInfo> result;
+      std::int64_t last_seq = 0;
+      while (rows.step()) {
+        if (static_cast<int>(result.items.size()) == size) {
+          result.next_page_token = encode_page_token("d1", last_seq, "");
+          break;
+        }
+        result.items.push_back(read_dataset(rows));
+        last_seq = rows.integer(kDatasetSeqColumn);
+      }
+      return result;
+    });
+  }
+
+  DeleteResult delete_dataset(const std::string& id) override {
+    auto connection = pool_.checkout();
+    return sqlite::run_transaction(*connection, TransactionKind::write, [&] {
+      auto readers = connection->prepare(
+          "SELECT 1 FROM jobs WHERE (dataset_id = ?1 OR validation_dataset_id = ?1) AND state IN ('queued', 'running') "
+          "LIMIT 1");
+      readers.bind_text(1, id);
+      if (readers.step()) return DeleteResult::in_use;
+      auto remove = connection->prepare("DELETE FROM datasets WHERE id = ?1");
+      remove.bind_text(1, id);
+      remove.run();
+      if (connection->changes() == 0) return DeleteResult::not_found;
+      forget_keys_of(*connection, "dataset", id);
+      return DeleteResult::deleted;
+    });
+  }
+
+  // ---- robots ----
+
+  RobotOutcome insert_robot(const NewRobot& robot, const std::optional<api::IdempotencyKey>& key) override {
+    auto connection = pool_.checkout();
+    return sqlite::run_transaction(*connection, TransactionKind::write, [&]() -> RobotOutcome {
+      if (key) {
+        if (auto earlier = select_key(*connection, "robot", key->key)) {
+          if (earlier->fingerprint != key->fingerprint) return {SubmitStatus::key_reused, {}};
+          if (auto existing = sqlite::select_robot(*connection, earlier->resource_id)) {
+            return {SubmitStatus::replayed, *existing};
+          }
+        }
+      }
+      api::RobotInfo created;
+      created.id = unused_id(*connection, "rb_", "SELECT 1 FROM robots WHERE id = ?1");
+      created.name = robot.name;
+      created.created_at = now_rfc3339();
+      created.base = robot.base;
+      created.tip = robot.tip;
+      created.joints = robot.joints;
+      created.summary = robot.summary;
+      auto insert = connection->prepare(
+          "INSERT INTO robots (id, name, created_at, base, tip, joints, summary, urdf) "
+          "VALUES (?1, ?2, ?3, ?4, ?5, ?6, ?7, ?8)");
+      insert.bind_text(1, created.id)
+          .bind_text(2, created.name)
+          .bind_text(3, created.created_at)
+          .bind_text_or_null(4, created.base)
+          .bind_text_or_null(5, created.tip)
+          .bind_integer(6, created.joints)
+          .bind_text(7, created.summary)
+          .bind_text(8, robot.urdf);
+      insert.run();
+      if (key) store_key(*connection, "robot", *key, created.id, created.created_at);
+      return {SubmitStatus::created, created};
+    });
+  }
+
+  std::optional<api::RobotInfo> find_robot(const std::string& id) override {
+    auto connection = pool_.checkout();
+    return sqlite::run_transaction(*connection, TransactionKind::read, [&] { return sqlite::select_robot(*connection, id); });
+  }
+
+  std::optional<std::string> load_robot_urdf(const std::string& id) override {
+    auto connection = pool_.checkout();
+    return sqlite::run_transaction(*connection, TransactionKind::read, [&]() -> std::optional<std::string> {
+      auto row = connection->prepare("SELECT urdf FROM robots WHERE id = ?1");
+      row.bind_text(1, id);
+      if (!row.step()) return std::nullopt;
+      return row.text(0);
+    });
+  }
+
+  api::Page<api::RobotInfo> list_robots(const api::PageRequest& page) override {
+    const int size = effective_page_size(page.page_size);
+    const std::int64_t before =
+        page.page_token.empty() ? INT64_MAX : decode_page_token(page.page_token, "r1", "");
+    auto connection = pool_.checkout();
+    return sqlite::run_transaction(*connection, TransactionKind::read, [&] {
+      auto rows = connection->prepare("SELECT " + sqlite::kRobotColumns +
+                                      " FROM robots WHERE seq < ?1 ORDER BY seq DESC LIMIT ?2");
+      rows.bind_integer(1, before).bind_integer(2, size + 1);
+      api::Page<api::RobotInfo> result;
+      std::int64_t last_seq = 0;
+      while (rows.step()) {
+        if (static_cast<int>(result.items.size()) == size) {
+          result.next_page_token = encode_page_token("r1", last_seq, "");
+          break;
+        }
+        result.items.push_back(sqlite::read_robot(rows));
+        last_seq = rows.integer(sqlite::kRobotSeqColumn);
+      }
+      return result;
+    });
+  }
+
+  DeleteResult delete_robot(const std::string& id) override {
+    auto connection = pool_.checkout();
+    return sqlite::run_transaction(*connection, TransactionKind::write, [&] {
+      auto users = connection->prepare(
+          "SELECT 1 FROM jobs WHERE robot_id = ?1 AND state IN ('queued', 'running') LIMIT 1");
+      users.bind_text(1, id);
+      if (users.step()) return DeleteResult::in_use;
+      auto remove = connection->prepare("DELETE FROM robots WHERE id = ?1");
+      remove.bind_text(1, id);
+      remove.run();
+      if (connection->changes() == 0) return DeleteResult::not_found;
+      forget_keys_of(*connection, "robot", id);
+      return DeleteResult::deleted;
+    });
+  }
+
+  // ---- jobs ----
+
+  SubmitOutcome submit_job(const NewJob& job, const std::optional<api::IdempotencyKey>& key,
+                           int queue_limit) override {
+    auto connection = pool_.checkout();
+    return sqlite::run_transaction(*connection, TransactionKind::write, [&]() -> SubmitOutcome {
+      if (key) {
+        if (auto earlier = select_key(*connection, "job", key->key)) {
+          if (earlier->fingerprint != key->fingerprint) return {SubmitStatus::key_reused, {}};
+          if (auto existing = select_job(*connection, earlier->resource_id)) return {SubmitStatus::replayed, *existing};
+        }
+      }
+      if (queue_limit > 0) {
+        auto count = connection->prepare("SELECT count(*) FROM jobs WHERE state = 'queued'");
+        if (count.step() && count.integer(0) >= queue_limit) return {SubmitStatus::queue_full, {}};
+      }
+      api::JobInfo created;
+      created.id = unused_id(*connection, "job_", "SELECT 1 FROM jobs WHERE id = ?1");
+      created.kind = job.kind;
+      created.state = api::JobState::queued;
+      created.created_at = now_rfc3339();
+      created.request = job.request;
+      created.dataset_id = job.dataset_id;
+      created.robot_id = job.robot_id;
+      created.validation_dataset_id = job.validation_dataset_id;
+
+      auto insert = connection->prepare(
+          "INSERT INTO jobs (id, kind, state, request, dataset_id, created_at, robot_id, validation_dataset_id) "
+          "VALUES (?1, ?2, 'queued', ?3, ?4, ?5, ?6, ?7)");
+      insert.bind_text(1, created.id)
+          .bind_text(2, sqlite::kind_text(job.kind))
+          .bind_text(3, job.request)
+          .bind_text_or_null(4, job.dataset_id)
+          .bind_text(5, created.created_at)
+          .bind_text_or_null(6, job.robot_id)
+          .bind_text_or_null(7, job.validation_dataset_id);
+      insert.run();
+      if (key) store_key(*connection, "job", *key, created.id, created.created_at);
+      return {SubmitStatus::created, created};
+    });
+  }
+
+  std::optional<api::JobInfo> find_job(const std::string& id) override {
+    auto connection = pool_.checkout();
+    return sqlite::run_transaction(*connection, TransactionKind::read, [&] { return select_job(*connection, id); });
+  }
+
+  api::Page<api::JobInfo> list_jobs(const api::JobFilter& filter, const api::PageRequest& page) override {
+    const int size = effective_page_size(page.page_size);
+    // The token is bound to the filter: a token from another filter would skip or repeat jobs.
+    const std::string context = std::string("state=") + (filter.state ? sqlite::state_text(*filter.state) : "") +
+                                ";kind=" + (filter.kind ? sqlite::kind_text(*filter.kind) : "") +
+                                ";robot=" + filter.robot_id;
+    const std::int64_t before =
+        page.page_token.empty() ? INT64_MAX : decode_page_token(page.page_token, "j1", context);
+    // Fixed SQL fragments per filter combination (no values in the text), so each variant is
+    // prepared once and can use its index.
+    std::string sql = "SELECT " + kJobColumns + " FROM jobs WHERE seq < ?1";
+    if (filter.state) sql += " AND state = ?2";
+    if (filter.kind) sql += " AND kind = ?3";
+    if (!filter.robot_id.empty()) sql += " AND robot_id = ?5";
+    sql += " ORDER BY seq DESC LIMIT ?4";
+
+    auto connection = pool_.checkout();
+    return sqlite::run_transaction(*connection, TransactionKind::read, [&] {
+      auto rows = connection->prepare(sql);
+      rows.bind_integer(1, before).bind_integer(4, size + 1);
+      if (filter.state) rows.bind_text(2, sqlite::state_text(*filter.state));
+      if (filter.kind) rows.bind_text(3, sqlite::kind_text(*filter.kind));
+      if (!filter.robot_id.empty()) rows.bind_text(5, filter.robot_id);
+      api::Page<api::JobInfo> result;
+      std::int64_t last_seq = 0;
+      while (rows.step()) {
+        if (static_cast<int>(result.items.size()) == size) {
+          result.next_page_token = encode_page_token("j1", last_seq, context);
+          break;
+        }
+        result.items.push_back(read_job(rows));
+        last_seq = rows.integer(kJobSeqColumn);
+      }
+      return result;
+    });
+  }
+
+  std::optional<api::JobInfo> claim_next_job() override {
+    auto connection = pool_.checkout();
+    return sqlite::run_transaction(*connection, TransactionKind::write, [&]() -> std::optional<api::JobInfo> {
+      // One statement under the write lock: no other connection can claim the same row.
+      auto claim = connection->prepare(
+          "UPDATE jobs SET state = 'running', started_at = ?1, attempts = attempts + 1 "
+          "WHERE seq = (SELECT seq FROM jobs WHERE state = 'queued' ORDER BY seq LIMIT 1) RETURNING " +
+          kJobColumns);
+      claim.bind_text(1, now_rfc3339());
+      if (!claim.step()) return std::nullopt;
+      auto job = read_job(claim);
+      claim.run();  // finish the statement before COMMIT
+      return job;
+    });
+  }
+
+  void record_progress(const std::string& id, long evaluations, std::optional<double> best_cost,
+                       const std::vector<api::HistoryEntry>& batch) override {
+    std::vector<std::vector<unsigned char>> thetas;
+    thetas.reserve(batch.size());
+    for (const auto& entry : batch) thetas.push_back(sqlite::encode_doubles(entry.theta.data(), entry.theta.size()));
+
+    auto connection = pool_.checkout();
+    sqlite::run_transaction(*connection, TransactionKind::write, [&] {
+      // Only a running job takes progress: a late batch after requeue or finish is dropped.
+      auto update =
+          connection->prepare("UPDATE jobs SET evaluations = ?2, best_cost = ?3 WHERE id = ?1 AND state = 'running'");
+      update.bind_text(1, id).bind_integer(2, evaluations).bind_real_or_null(3, best_cost);
+      update.run();
+      if (connection->changes() == 0) return;
+      for (std::size_t i = 0; i < batch.size(); ++i) {
+        auto insert = connection->prepare(
+            "INSERT OR REPLACE INTO job_history (job_id, idx, cost, theta) VALUES (?1, ?2, ?3, ?4)");
+        insert.bind_text(1, id).bind_integer(2, batch[i].index).bind_real(3, batch[i].cost);
+        insert.bind_blob_or_null(4, thetas[i]);  // an empty θ is NULL and reads back empty
+        insert.run();
+      }
+    });
+  }
+
+  void finish_job(const std::string& id, api::JobState state, const std::string& result, const std::string& error,
+                  const std::vector<EstimateRow>& estimates, const std::string& dataset_id) override {
+    if (!api::is_terminal(state)) throw std::invalid_argument("finish_job needs succeeded, failed or cancelled");
+    auto connection = pool_.checkout();
+    sqlite::run_transaction(*connection, TransactionKind::write, [&] {
+      // A finished job keeps its first outcome; queued is accepted too (ended before it ran).
+      auto update = connection->prepare(
+          "UPDATE jobs SET state = ?2, finished_at = ?3, result = ?4, error = ?5, "
+          "dataset_id = coalesce(?6, dataset_id) WHERE id = ?1 AND state IN ('queued', 'running')");
+      update.bind_text(1, id)
+          .bind_text(2, sqlite::state_text(state))
+          .bind_text(3, now_rfc3339())
+          .bind_text_or_null(4, result)
+          .bind_text_or_null(5, error)
+          .bind_text_or_null(6, dataset_id);
+      update.run();
+      if (connection->changes() == 0) return;
+      auto clear = connection->prepare("DELETE FROM estimates WHERE job_id = ?1");
+      clear.bind_text(1, id);
+      clear.run();
+      for (const auto& estimate : estimates) {
+        auto insert = connection->prepare(
+            "INSERT OR REPLACE INTO estimates (job_id, name, value, std_error) VALUES (?1, ?2, ?3, ?4)");
+        insert.bind_text(1, id).bind_text(2, estimate.name).bind_real(3, estimate.value).bind_real_or_null(
+            4, estimate.std_error);
+        insert.run();
+      }
+    });
+  }
+
+  void requeue_job(const std::string& id) override {
+    auto connection = pool_.checkout();
+    sqlite::run_transaction(*connection, TransactionKind::write, [&] {
+      auto running = connection->prepare("SELECT cancel_requested FROM jobs WHERE id = ?1 AND state = 'running'");
+      running.bind_text(1, id);
+      if (!running.step()) return;
+      const bool cancel_requested = running.integer(0) != 0;
+      running.run();
+      if (cancel_requested) {
+        // The client asked to cancel it: running it again would ignore that.
+        auto cancel = connection->prepare("UPDATE jobs SET state = 'cancelled', finished_at = ?2 WHERE id = ?1");
+        cancel.bind_text(1, id).bind_text(2, now_rfc3339());
+        cancel.run();
+        return;
+      }
+      clear_progress(*connection, id);
+      auto requeue = connection->prepare(
+          "UPDATE jobs SET state = 'queued', started_at = NULL, cancel_requested = 0, evaluations = 0, "
+          "best_cost = NULL WHERE id = ?1");
+      requeue.bind_text(1, id);
+      requeue.run();
+    });
+  }
+
+  CancelOutcome cancel_job(const std::string& id) override {
+    auto connection = pool_.checkout();
+    return sqlite::run_transaction(*connection, TransactionKind::write, [&] {
+      const auto state = select_state(*connection, id);
+      if (!state) return CancelOutcome::not_found;
+      if (*state == api::JobState::queued) {
+        auto cancel = connection->prepare("UPDATE jobs SET state = 'cancelled', finished_at = ?2 WHERE id = ?1");
+        cancel.bind_text(1, id).bind_text(2, now_rfc3339());
+        cancel.run();
+        return CancelOutcome::cancelled_now;
+      }
+      if (*state == api::JobState::running) {
+        auto request = connection->prepare("UPDATE jobs SET cancel_requested = 1 WHERE id = ?1");
+        request.bind_text(1, id);
+        request.run();
+        return CancelOutcome::requested;
+      }
+      return CancelOutcome::already_finished;
+    });
+  }
+
+  DeleteResult delete_job(const std::string& id) override {
+    auto connection = pool_.checkout();
+    return sqlite::run_transaction(*connection, TransactionKind::write, [&] {
+      const auto state = select_state(*connection, id);
+      if (!state) return DeleteResult::not_found;
+      if (!api::is_terminal(*state)) return DeleteResult::in_use;
+      clear_progress(*connection, id);
+      forget_keys_of(*connection, "job", id);
+      auto remove = connection->prepare("DELETE FROM jobs WHERE id = ?1");
+      remove.bind_text(1, id);
+      remove.run();
+      return DeleteResult::deleted;
+    });
+  }
+
+  std::optional<api::Page<api::HistoryEntry>> history(const std::string& id, const api::PageRequest& page) override {
+    const int size = effective_page_size(page.page_size);
+    const bool first_page = page.page_token.empty();
+    const std::int64_t after = first_page ? 0 : decode_page_token(page.page_token, "h1", id);
+    auto connection = pool_.checkout();
+    return sqlite::run_transaction(
+        *connection, TransactionKind::read, [&]() -> std::optional<api::Page<api::HistoryEntry>> {
+          if (!select_state(*connection, id)) return std::nullopt;
+          auto rows = connection->prepare(
+              first_page ? "SELECT idx, cost, theta FROM job_history WHERE job_id = ?1 ORDER BY idx LIMIT ?3"
+                         : "SELECT idx, cost, theta FROM job_history WHERE job_id = ?1 AND idx > ?2 "
+                           "ORDER BY idx LIMIT ?3");
+          rows.bind_text(1, id).bind_integer(3, size + 1);
+          if (!first_page) rows.bind_integer(2, after);
+          api::Page<api::HistoryEntry> result;
+          while (rows.step()) {
+            if (static_cast<int>(result.items.size()) == size) {
+              result.next_page_token = encode_page_token("h1", result.items.back().index, id);
+              break;
+            }
+            result.items.push_back(history_entry(rows, id));
+          }
+          return result;
+        });
+  }
+
+  std::optional<api::HistoryOverview> history_overview(const std::string& id, long max_points) override {
+    auto connection = pool_.checkout();
+    return sqlite::run_transaction(*connection, TransactionKind::read, [&]() -> std::optional<api::HistoryOverview> {
+      if (!select_state(*connection, id)) return std::nullopt;
+      api::HistoryOverview overview;
+      auto extent = connection->prepare("SELECT count(*), min(idx), max(idx) FROM job_history WHERE job_id = ?1");
+      extent.bind_text(1, id);
+      extent.step();
+      overview.total = static_cast<long>(extent.integer(0));
+      if (overview.total == 0) return overview;
+      const std::int64_t first = extent.integer(1), last = extent.integer(2);
+      auto best = connection->prepare(
+          "SELECT idx FROM job_history WHERE job_id = ?1 AND cost IS NOT NULL ORDER BY cost, idx LIMIT 1");
+      best.bind_text(1, id);
+      if (best.step()) overview.best_index = static_cast<long>(best.integer(0));
+      overview.stride = api::thinning_stride(overview.total, max_points);
+      // A scan of the job's part of the primary key; only the chosen rows' blobs are decoded.
+      auto rows = connection->prepare(
+          "SELECT idx, cost, theta FROM job_history WHERE job_id = ?1 "
+          "AND ((idx - ?2) % ?3 = 0 OR idx = ?4 OR idx = ?5) ORDER BY idx");
+      rows.bind_text(1, id).bind_integer(2, first).bind_integer(3, overview.stride).bind_integer(4, last);
+      rows.bind_integer(5, overview.best_index.value_or(last));
+      while (rows.step()) overview.items.push_back(history_entry(rows, id));
+      return overview;
+    });
+  }
+
+  // ---- the process's life ----
+
+  RecoveryOutcome recover_interrupted_jobs(int max_attempts,
+                                           const std::function<std::string(int losses)>& lost_error) override {
+    auto connection = pool_.checkout();
+    return sqlite::run_transaction(*connection, TransactionKind::write, [&] {
+      RecoveryOutcome outcome;
+      const std::string now = now_rfc3339();
+      // Cancellation was asked for before the crash: honour it rather than run the job again.
+      auto cancel = connection->prepare(
+          "UPDATE jobs SET state = 'cancelled', finished_at = ?1 WHERE state = 'running' AND cancel_requested = 1");
+      cancel.bind_text(1, now);
+      cancel.run();
+      outcome.cancelled = connection->changes();
+      connection->prepare("UPDATE jobs SET worker_losses = worker_losses + 1 WHERE state = 'running'").run();
+      // The attempt that died leaves nothing behind: its history and estimates go.
+      connection
+          ->prepare("DELETE FROM job_history WHERE job_id IN (SELECT id FROM jobs WHERE state = 'running')")
+          .run();
+      connection->prepare("DELETE FROM estimates WHERE job_id IN (SELECT id FROM jobs WHERE state = 'running')").run();
+      // A job that took its worker down max_attempts times is failed, never run again.
+      std::vector<std::pair<std::string, int>> lost;
+      auto poisoned = connection->prepare("SELECT id, worker_losses FROM jobs WHERE state = 'running' AND worker_losses >= ?1");
+      poisoned.bind_integer(1, max_attempts);
+      while (poisoned.step()) lost.emplace_back(poisoned.text(0), static_cast<int>(poisoned.integer(1)));
+      for (const auto& [id, losses] : lost) {
+        auto fail = connection->prepare(
+            "UPDATE jobs SET state = 'failed', finished_at = ?2, error = ?3 WHERE id = ?1 AND state = 'running'");
+        fail.bind_text(1, id).bind_text(2, now).bind_text(3, lost_error(losses));
+        fail.run();
+        outcome.failed.push_back(id);
+      }
+      connection
+          ->prepare(
+              "UPDATE jobs SET state = 'queued', started_at = NULL, evaluations = 0, best_cost = NULL "
+              "WHERE state = 'running'")
+          .run();
+      outcome.requeued = connection->changes();
+      return outcome;
+    });
+  }
+
+  std::map<api::JobState, long> count_jobs_by_state() override {
+    auto connection = pool_.checkout();
+    return sqlite::run_transaction(*connection, TransactionKind::read, [&] {
+      std::map<api::JobState, long> counts;
+      for (auto state : {api::JobState::queued, api::JobState::running, api::JobState::succeeded,
+                         api::JobState::failed, api::JobState::cancelled}) {
+        counts[state] = 0;
+      }
+      auto rows = connection->prepare("SELECT state, count(*) FROM jobs GROUP BY state");
+      while (rows.step()) {
+        const auto state = sqlite::state_from_text(rows.text(0));
+        if (!state) throw StoreError("a job has an unknown state in the database");
+        counts[*state] = static_cast<long>(rows.integer(1));
+      }
+      return counts;
+    });
+  }
+
+ private:
+  static std::unique_ptr<Connection> open_and_prepare(const std::string& path) {
+    auto connection = std::make_unique<Connection>(path);
+    sqlite::prepare_database(*connection);
+    return connection;
+  }
+
+  sqlite::ConnectionPool pool_;
+};
+
+}  // namespace
+
+std::unique_ptr<Store> open_store(const std::string& path) { return std::make_unique<SqliteStore>(path); }
+
+}  // namespace manipid::server::store::sqlite

@@ -1,0 +1,173 @@
+// store.h — where datasets, robots, jobs, cost histories and estimates live: a small storage
+// interface, so the SQL dialect stays inside one backend (store/sqlite/ now; PostgreSQL for
+// multi-machine deployments next), and open_store(url), which picks the backend.
+//
+// Contract every backend keeps:
+//  - Each state change is one transaction; what a call returned as done survives a crash of
+//    the process (nothing acknowledged is lost).
+//  - Thread-safe: any thread may call any method at any time (backends keep their own
+//    connections per thread or a pool).
+//  - Jobs are claimed in submission order, each by exactly one worker.
+//  - Ids are random ("ds_"/"job_" + 16 hex digits), never reused.
+#pragma once
+
+#include "manipid/api/records.h"
+#include "manipid/core/trajectory.h"
+
+#include <functional>
+#include <map>
+#include <memory>
+#include <optional>
+#include <stdexcept>
+#include <string>
+#include <utility>
+#include <vector>
+
+namespace manipid::server::store {
+
+/// A storage failure the caller cannot fix (disk full, corrupt file, I/O error). The
+/// service answers 500 / marks the job failed; the message is for the log only.
+class StoreError : public std::runtime_error {
+ public:
+  using std::runtime_error::runtime_error;
+};
+
+/// A page request the store cannot serve: a negative page size, a page token it did not issue
+/// (or issued for another filter). The caller's mistake: the service answers 422 naming `field`.
+class PageRequestError : public std::invalid_argument {
+ public:
+  PageRequestError(std::string field, const std::string& message)
+      : std::invalid_argument(message), field_(std::move(field)) {}
+  const std::string& field() const noexcept { return field_; }
+
+ private:
+  std::string field_;
+};
+
+struct NewJob {
+  api::JobKind kind = api::JobKind::identification;
+  std::string request;                ///< JSON text
+  std::string dataset_id;             ///< input dataset, may be empty
+  std::string robot_id;               ///< the URDF robot it works on, may be empty
+  std::string validation_dataset_id;  ///< a second dataset it reads, may be empty
+};
+
+enum class SubmitStatus {
+  created,               ///< a new job (or dataset) was stored
+  replayed,              ///< same Idempotency-Key and fingerprint: the earlier one is returned
+  key_reused,            ///< same key, different fingerprint: nothing stored
+  queue_full,            ///< queued jobs ≥ queue_limit: nothing stored
+};
+
+struct SubmitOutcome {
+  SubmitStatus status = SubmitStatus::created;
+  api::JobInfo job;  ///< the new or earlier job (empty unless created/replayed)
+};
+
+struct DatasetOutcome {
+  SubmitStatus status = SubmitStatus::created;  ///< never queue_full
+  api::DatasetInfo dataset;
+};
+
+struct NewRobot {
+  std::string name;
+  std::string urdf;     ///< the document, kept byte for byte
+  std::string base, tip;
+  int joints = 0;
+  std::string summary;  ///< the robot resource's description, JSON text
+};
+
+struct RobotOutcome {
+  SubmitStatus status = SubmitStatus::created;  ///< never queue_full
+  api::RobotInfo robot;
+};
+
+/// What a delete did. `in_use`: a queued or running job will read it, nothing deleted.
+enum class DeleteResult { deleted, not_found, in_use };
+
+/// Estimates of a finished identification, one row per parameter (also kept in the result
+/// JSON; this table is for queries across jobs).
+struct EstimateRow {
+  std::string name;
+  double value = 0.0;
+  std::optional<double> std_error;
+};
+
+enum class CancelOutcome { not_found, cancelled_now, requested, already_finished };
+
+/// What start-up recovery did with the jobs a dead process left running.
+struct RecoveryOutcome {
+  int requeued = 0;                  ///< back in the queue, to run again
+  int cancelled = 0;                 ///< their cancellation had been asked for: cancelled
+  std::vector<std::string> failed;   ///< ids of jobs whose worker died too often: failed for good
+};
+
+class Store {
+ public:
+  virtual ~Store() = default;
+
+  // ---- datasets ----
+  /// Stores the samples (as binary blobs, not text). `key`, when given, makes it idempotent.
+  virtual DatasetOutcome insert_dataset(const std::string& name, const Trajectory& data, const std::string& source_job,
+                                        const std::optional<api::IdempotencyKey>& key) = 0;
+  virtual std::optional<api::DatasetInfo> find_dataset(const std::string& id) = 0;
+  virtual std::optional<Trajectory> load_dataset(const std::string& id) = 0;
+  virtual api::Page<api::DatasetInfo> list_datasets(const api::PageRequest& page) = 0;  ///< newest first
+  /// Not while a queued or running job will read it (as its data or its validation data).
+  virtual DeleteResult delete_dataset(const std::string& id) = 0;
+
+  // ---- robots ----
+  /// Stores a URDF robot (document and parsed summary). `key`, when given, makes it idempotent.
+  virtual RobotOutcome insert_robot(const NewRobot& robot, const std::optional<api::IdempotencyKey>& key) = 0;
+  virtual std::optional<api::RobotInfo> find_robot(const std::string& id) = 0;
+  /// The URDF document as uploaded.
+  virtual std::optional<std::string> load_robot_urdf(const std::string& id) = 0;
+  virtual api::Page<api::RobotInfo> list_robots(const api::PageRequest& page) = 0;  ///< newest first
+  /// Not while a queued or running job uses it.
+  virtual DeleteResult delete_robot(const std::string& id) = 0;
+
+  // ---- jobs ----
+  /// Inserts a queued job unless the key replays or conflicts or the queue is full
+  /// (queue_limit ≤ 0: no limit). The key check, the count and the insert are one transaction.
+  virtual SubmitOutcome submit_job(const NewJob& job, const std::optional<api::IdempotencyKey>& key, int queue_limit) = 0;
+  virtual std::optional<api::JobInfo> find_job(const std::string& id) = 0;
+  virtual api::Page<api::JobInfo> list_jobs(const api::JobFilter& filter, const api::PageRequest& page) = 0;  ///< newest first
+  /// The oldest queued job, now running (started_at set, attempts + 1); nullopt when none.
+  virtual std::optional<api::JobInfo> claim_next_job() = 0;
+  /// Progress of a running job plus a batch of new history entries, in one transaction.
+  virtual void record_progress(const std::string& id, long evaluations, std::optional<double> best_cost,
+                               const std::vector<api::HistoryEntry>& batch) = 0;
+  /// A running job's end: state (succeeded, failed or cancelled), result JSON or problem
+  /// JSON, estimates (may be empty), the dataset it made or used.
+  virtual void finish_job(const std::string& id, api::JobState state, const std::string& result,
+                          const std::string& error, const std::vector<EstimateRow>& estimates,
+                          const std::string& dataset_id) = 0;
+  /// A running job back to queued with its history cleared (shutdown before it finished).
+  virtual void requeue_job(const std::string& id) = 0;
+  /// Queued → cancelled at once; running → cancel_requested set; finished → unchanged.
+  virtual CancelOutcome cancel_job(const std::string& id) = 0;
+  /// Finished jobs only (in_use while queued or running); removes its history and estimates too.
+  virtual DeleteResult delete_job(const std::string& id) = 0;
+  /// History entries in index order; the page token is opaque (keyset on index).
+  virtual std::optional<api::Page<api::HistoryEntry>> history(const std::string& id, const api::PageRequest& page) = 0;
+  /// Every stride-th entry with the first, last and best, stride = ceil(total / max_points),
+  /// read in one transaction (a running job's history grows meanwhile).
+  virtual std::optional<api::HistoryOverview> history_overview(const std::string& id, long max_points) = 0;
+
+  // ---- the process's life ----
+  /// At start-up: every job left running by a dead process counts one more worker loss and
+  /// goes back to queued (history cleared) — unless its cancellation had been asked for
+  /// (cancelled), or it has now lost its worker `max_attempts` times: then it is failed with
+  /// the error `lost_error(losses)` and never runs again, so a job that kills the process
+  /// cannot kill it on every restart. One transaction.
+  virtual RecoveryOutcome recover_interrupted_jobs(int max_attempts,
+                                                   const std::function<std::string(int losses)>& lost_error) = 0;
+  virtual std::map<api::JobState, long> count_jobs_by_state() = 0;
+};
+
+/// The store a `--db` value names: "sqlite:PATH" or a plain PATH is a SQLite file (created if
+/// missing, migrated if older); "postgresql://…" or "postgres://…" a PostgreSQL database, which
+/// this build cannot open yet (StoreError says so). Throws StoreError when it cannot be opened.
+std::unique_ptr<Store> open_store(const std::string& url);
+
+}  // namespace manipid::server::store

@@ -1,0 +1,112 @@
+// sqlite_store_test.cpp — what only the SQLite backend does (the contract every backend keeps is
+// store_contract_test.cpp): its schema version check, unusable files, waiting for another
+// connection's write lock, and open_store() choosing it from a --db value.
+#include "store/sqlite/store.h"
+
+#include <gtest/gtest.h>
+#include <sqlite3.h>
+
+#include <chrono>
+#include <cstdio>
+#include <filesystem>
+#include <string>
+#include <thread>
+
+namespace manipid::server::store {
+namespace {
+
+namespace fs = std::filesystem;
+
+NewJob identification_job() {
+  NewJob job;
+  job.kind = api::JobKind::identification;
+  job.request = R"({"upload_id":"ds_x"})";
+  job.dataset_id = "ds_0123456789abcdef";
+  return job;
+}
+
+class SqliteStoreTest : public ::testing::Test {
+ protected:
+  void SetUp() override {
+    std::string pattern = (fs::temp_directory_path() / "manipid-sqlite-XXXXXX").string();
+    ASSERT_NE(mkdtemp(pattern.data()), nullptr);
+    directory_ = pattern;
+    path_ = (directory_ / "manipid.db").string();
+    store_ = sqlite::open_store(path_);
+  }
+
+  void TearDown() override {
+    store_.reset();  // close every connection before the files go
+    fs::remove_all(directory_);
+  }
+
+  fs::path directory_;
+  std::string path_;
+  std::unique_ptr<Store> store_;
+};
+
+TEST_F(SqliteStoreTest, DatabaseFromNewerVersionIsRefused) {
+  store_.reset();
+  sqlite3* database = nullptr;
+  ASSERT_EQ(sqlite3_open(path_.c_str(), &database), SQLITE_OK);
+  ASSERT_EQ(sqlite3_exec(database, "PRAGMA user_version = 99", nullptr, nullptr, nullptr), SQLITE_OK);
+  sqlite3_close(database);
+  try {
+    sqlite::open_store(path_);
+    ADD_FAILURE() << "expected StoreError";
+  } catch (const StoreError& error) {
+    EXPECT_NE(std::string(error.what()).find("newer"), std::string::npos) << error.what();
+    EXPECT_NE(std::string(error.what()).find("99"), std::string::npos) << error.what();
+  }
+}
+
+TEST_F(SqliteStoreTest, UnusableFilesThrowStoreError) {
+  EXPECT_THROW(sqlite::open_store((directory_ / "missing-dir" / "x.db").string()), StoreError);
+  const auto garbage = directory_ / "garbage.db";
+  {
+    std::FILE* file = std::fopen(garbage.c_str(), "wb");
+    ASSERT_NE(file, nullptr);
+    for (int i = 0; i < 4096; ++i) std::fputc('x', file);
+    std::fclose(file);
+  }
+  EXPECT_THROW(sqlite::open_store(garbage.string()), StoreError);
+}
+
+TEST_F(SqliteStoreTest, WriterWaitsForAnotherConnectionsLockInsteadOfFailing) {
+  // Another connection (as another process would) holds the write lock for a while.
+  sqlite3* other = nullptr;
+  ASSERT_EQ(sqlite3_open(path_.c_str(), &other), SQLITE_OK);
+  ASSERT_EQ(sqlite3_exec(other, "BEGIN IMMEDIATE", nullptr, nullptr, nullptr), SQLITE_OK);
+  std::thread release([other] {
+    std::this_thread::sleep_for(std::chrono::milliseconds(300));
+    sqlite3_exec(other, "COMMIT", nullptr, nullptr, nullptr);
+  });
+  const auto start = std::chrono::steady_clock::now();
+  SubmitOutcome outcome;
+  EXPECT_NO_THROW(outcome = store_->submit_job(identification_job(), std::nullopt, 0));
+  const auto waited = std::chrono::steady_clock::now() - start;
+  release.join();
+  sqlite3_close(other);
+  EXPECT_EQ(outcome.status, SubmitStatus::created);
+  EXPECT_GE(waited, std::chrono::milliseconds(250));
+  // Readers are not blocked by a writer in WAL mode.
+  EXPECT_TRUE(store_->find_job(outcome.job.id));
+}
+
+TEST_F(SqliteStoreTest, OpenStoreReadsTheDbValue) {
+  // A plain path and sqlite:PATH name the same file: a job stored through one is seen by the other.
+  const auto id = store_->submit_job(identification_job(), std::nullopt, 0).job.id;
+  EXPECT_TRUE(open_store(path_)->find_job(id));
+  EXPECT_TRUE(open_store("sqlite:" + path_)->find_job(id));
+  try {
+    open_store("postgresql://lab@db.example/manipid");
+    ADD_FAILURE() << "expected StoreError";
+  } catch (const StoreError& error) {
+    EXPECT_NE(std::string(error.what()).find("PostgreSQL"), std::string::npos) << error.what();
+  }
+  EXPECT_THROW(open_store("sqlite:"), StoreError);
+  EXPECT_THROW(open_store(""), StoreError);
+}
+
+}  // namespace
+}  // namespace manipid::server::store
