@@ -78,6 +78,9 @@ CLI::Validator unsigned_integer();
 void apply_parameter(const std::string& item, Parameters& parameters, const std::string& option);
 /// A finite number, or InputError naming the option.
 double parse_number_option(const std::string& text, const std::string& option);
+/// One value per joint from a comma list (--kp, --kd): exactly `joints` finite numbers, else
+/// InputError naming the option.
+Eigen::VectorXd parse_gain_list(const std::string& text, int joints, const char* option);
 long long parse_integer_option(const std::string& text, const std::string& option, long long lowest, long long highest);
 
 // ---- Robot selection (simulate, torque; later identify) ----------------------------------
@@ -127,6 +130,7 @@ struct SimulateOptions {
   std::optional<double> relative_tolerance;
   std::optional<double> absolute_tolerance;
   std::optional<double> duration;
+  std::string kp, kd;  ///< comma lists; empty = the preset's gains
   std::string output = "-";
 };
 CLI::App* add_simulate_command(CLI::App& app, SimulateOptions& options);
@@ -171,6 +175,7 @@ struct IdentifyOptions {
   std::string kinetic_energy = "complete";
   std::vector<std::string> free;     ///< comma lists of names
   std::vector<std::string> initial;  ///< comma lists of NAME=VALUE
+  std::vector<std::string> truth;    ///< comma lists of NAME=VALUE: known true values, shown beside the estimates
   std::string method = "input-error";
   std::string algorithm = "LN_BOBYQA";
   std::string kp, kd;                ///< comma lists; empty = the preset's
