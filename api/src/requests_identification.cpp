@@ -262,7 +262,9 @@ void check_against_data(const IdentificationSpec& spec, int joints, int samples,
   if (options.method != IdentificationMethod::input_error && !has_reference) {
     throw InputError("method", std::string(to_string(options.method)) +
                                    " simulates the closed loop from the recorded reference: " + noun +
-                                   " has no ref columns");
+                                   " has no ref columns, and without the reference r the controller followed "
+                                   "(tau = Kp (r - q) - Kd qd) the loop cannot be simulated; input-error needs only q "
+                                   "and tau");
   }
   if (options.torque_source == TorqueSource::measured && !has_torque) {
     throw InputError("torque_source", "torque_source \"measured\" needs the tau columns: " + noun + " has none");

@@ -819,7 +819,8 @@ TEST(CheckAgainstData, SamplesMustFillTheFilter) {
 
 TEST(CheckAgainstData, ColumnsTheMethodAndTorqueSourceNeed) {
   expect_error([] { check_against_data(spec_with({{"method", "output-error"}}), 4, 1000, true, false); }, "method",
-               "output-error simulates the closed loop from the recorded reference: the dataset has no ref columns");
+               "output-error simulates the closed loop from the recorded reference: the dataset has no ref columns, "
+               "and without the reference r the controller followed");
   expect_error([] { check_against_data(spec_with({{"method", "two-stage"}}), 4, 1000, true, false); }, "method",
                "two-stage");
   expect_error([] { check_against_data(spec_with({{"torque_source", "reference"}}), 4, 1000, true, false); },

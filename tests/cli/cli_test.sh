@@ -281,7 +281,7 @@ expect_error "identify: wrong gain count" 2 "--kp needs 4 comma-separated values
   "$manipid" identify paper.csv --kp 1,2,3
 expect_error "identify: too few samples for the filter" 2 "the data has" \
   "$manipid" identify <(head -100 paper.csv) --half-length 100 --band 0.2
-expect_error "identify: output-error without ref" 2 "no ref columns" \
+expect_error "identify: output-error without ref, saying why" 2 "needs the reference r the controller followed" \
   "$manipid" identify <(cut -d, -f1-9 paper.csv) --method output-error
 
 # ---- identify: true values only when known ----------------------------------------------------

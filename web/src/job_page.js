@@ -1,6 +1,6 @@
 // job_page.js — one job at its own address, /jobs/{id}: state and progress; for an
 // identification the cost over evaluations (log scale) and each parameter's estimate over
-// evaluations beside its true value when the data were simulated (the paper's Figs. 4–5),
+// evaluations beside its true value when known (simulated here, or given as truth) (the paper's Figs. 4–5),
 // live while it runs; then the result table, correlation heat map, identifiability findings,
 // and the filtered measured torque beside the model torque at the estimate with the residual;
 // for every job with data, the measured angles (with the reference) and torques (Fig. 2).
