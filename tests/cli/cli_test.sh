@@ -325,6 +325,12 @@ check "identify --torque-source reference: the estimated gains form the torque" 
 check "identify: given gains the data contradict are named" \
   grep -q 'joint 2: the given PD gains Kp = 40000, Kd = 120 do not fit the data' other_paper_gains.txt
 check "identify: ... with the gains the data suggest" grep -q '^PD gains the data suggest: Kp = (300' other_paper_gains.txt
+# No tau: the gains cannot be estimated; the preset's are assumed, and the result says so.
+cut -d, -f1-5,10-13 paper.csv >no_tau.csv
+"$manipid" identify no_tau.csv --half-length 100 --band 0.2 >no_tau.txt
+check "identify without tau: the preset's gains, said to be assumed" bash -c "
+  grep -q '^PD gains (assumed: the preset.s): Kp = (3800, 40000, 10000, 500)' no_tau.txt &&
+  grep -q 'the PD gains were neither given nor estimable' no_tau.txt"
 expect_error "simulate --kp: one per joint" 2 "--kp needs 4 comma-separated values" \
   "$manipid" simulate --kp 1,2 --out never.csv
 
