@@ -1,22 +1,20 @@
 #!/usr/bin/env python3
 """print_result.py — a job's JSON (GET /v1/jobs/{id}) as the table `manipid identify` prints:
-estimates with standard errors beside the paper's true values, and the identifiability findings.
+estimates with standard errors, beside the true values when the result knows them (its "truth": a
+simulation's parameters or values the request gave; none for uploaded data), and the identifiability findings.
 Usage: python3 scripts/print_result.py job.json
 """
 import json
 import sys
 
-TRUE = {"m1": 50, "m2": 25, "m3": 15, "m4": 5, "l1": 0.4, "l2": 0.8, "l3": 0.6, "l4": 0.2}
-
-
-def true_value(name):
-    """The paper's true value of a parameter or of a product such as "m1*l1^2"; None if unknown."""
+def true_value(truth, name):
+    """The known true value of a parameter or of a product such as "m1*l1^2"; None if unknown."""
     value = 1.0
     for factor in name.split("*"):
         base, _, power = factor.partition("^")
-        if base not in TRUE:
+        if base not in truth:
             return None
-        value *= TRUE[base] ** int(power or 1)
+        value *= truth[base] ** int(power or 1)
     return value
 
 
@@ -35,14 +33,27 @@ def main():
     filter_ = result["filter"]
     print(f"{result['method']}, {result['algorithm']}; filter M = {filter_['half_length']}, band = {filter_['band']:g} "
           f"rad/sample{' (chosen from the data)' if filter_['automatic'] else ''}; torque from {result['torque_source']}")
-    print(f"\n{'parameter':<10} {'initial':>12} {'estimate':>14} {'std error':>12} {'true':>10}")
+    gains = result.get("gains") or {}
+    listed = lambda values, digits=6, unit="": "(" + ", ".join(number(v, digits) + unit for v in values) + ")"
+    source = {"given": "given", "estimated": "estimated from the data", "assumed": "assumed: the preset's"}
+    if gains.get("kp") is not None:
+        print(f"PD gains ({source.get(gains['source'], gains['source'])}): Kp = {listed(gains['kp'])}, Kd = {listed(gains['kd'])}")
+    estimated = gains.get("estimated")
+    if estimated and gains.get("source") != "estimated":
+        print(f"PD gains the data suggest: Kp = {listed(estimated['kp'])}, Kd = {listed(estimated['kd'])}")
+    if estimated:
+        fit = listed([100 * value for value in estimated["relative_residual"]], 3, " %")
+        print(f"PD law fit: {fit} of each joint's filtered torque unexplained by the estimated gains")
+    truth = result.get("truth")
+    true_column = (lambda name: f" {number(true_value(truth, name)):>10}") if truth else (lambda name: "")
+    print(f"\n{'parameter':<10} {'initial':>12} {'estimate':>14} {'std error':>12}" + (f" {'true':>10}" if truth else ""))
     for name, estimate in result["estimates"].items():
         shown = "not alone" if name in unidentifiable else number(estimate)
         error = "-" if name in unidentifiable else number(result["std_errors"][name], 3)
-        print(f"{name:<10} {number(result['initial'][name]):>12} {shown:>14} {error:>12} {number(true_value(name)):>10}")
+        print(f"{name:<10} {number(result['initial'][name]):>12} {shown:>14} {error:>12}" + true_column(name))
     for combination in result["identifiability"]["combinations"]:
         print(f"{combination['name']:<10} {'':>12} {number(combination['value']):>14} "
-              f"{number(combination['std_error'], 3):>12} {number(true_value(combination['name'])):>10}")
+              f"{number(combination['std_error'], 3):>12}" + true_column(combination["name"]))
     print(f"\ncost {number(result['initial_cost'])} -> {number(result['final_cost'])} after {result['evaluations']} "
           f"evaluations in {result['wall_seconds']:.3f} s; stopped: {result['stop_reason']}")
     findings = result["identifiability"]["findings"]

@@ -124,7 +124,23 @@ nlohmann::ordered_json torque_fit_to_json(const std::string& request_json, const
     from_reference = !data.has_torque();
   }
 
-  const FilteredData filtered = filter_for_input_error(data, filter, from_reference, spec.options.controller);
+  // The gains it used (given, estimated from the data, or assumed), as its result reports them;
+  // results stored before they did fall back to the request's gains, then the preset's.
+  std::optional<PdController> gains = spec.options.controller ? spec.options.controller : spec.options.assumed_controller;
+  if (result.contains("gains") && result["gains"].is_object() && result["gains"].value("kp", Json()).is_array() &&
+      result["gains"].value("kd", Json()).is_array()) {
+    const Json& kp = result["gains"]["kp"];
+    const Json& kd = result["gains"]["kd"];
+    const auto joints = static_cast<Eigen::Index>(kp.size());
+    if (joints == data.joint_count() && kd.size() == kp.size()) {
+      gains = PdController{Eigen::VectorXd(joints), Eigen::VectorXd(joints)};
+      for (Eigen::Index j = 0; j < joints; ++j) {
+        gains->kp[j] = kp[static_cast<std::size_t>(j)].is_number() ? kp[static_cast<std::size_t>(j)].get<double>() : 0.0;
+        gains->kd[j] = kd[static_cast<std::size_t>(j)].is_number() ? kd[static_cast<std::size_t>(j)].get<double>() : 0.0;
+      }
+    }
+  }
+  const FilteredData filtered = filter_for_input_error(data, filter, from_reference, gains);
   const TorqueFit fit = torque_fit(model, Parameters::from_vector(theta), data, filtered);
   const Eigen::MatrixXd residual = fit.residual();
 

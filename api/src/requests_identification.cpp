@@ -5,6 +5,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
 #include <numbers>
 
 namespace manipid::api {
@@ -107,7 +108,7 @@ IdentificationSpec identification_from_json(const nlohmann::json& body) {
       body, "",
       {"dataset_id", "simulation", "preset", "kinetic_energy", "method", "algorithm", "free", "initial", "lower", "upper",
        "kp", "kd", "half_length", "band", "torque_source", "weights", "max_evaluations", "max_seconds",
-       "relative_x_tolerance", "relative_f_tolerance", "output_error_iterations"});
+       "relative_x_tolerance", "relative_f_tolerance", "output_error_iterations", "truth"});
   IdentificationSpec spec;
 
   // The data: an uploaded dataset, or a simulation to run first.
@@ -148,8 +149,10 @@ IdentificationSpec identification_from_json(const nlohmann::json& body) {
   // Options: the defaults of `manipid identify` (command_identify.cpp), then the request's.
   IdentificationOptions& options = spec.options;
   options.initial = spec.preset.initial_parameters;
-  // The gains that drove the data: the simulation's when it is given (it may override them).
-  options.controller = spec.simulation ? spec.simulation->preset.controller : spec.preset.controller;
+  // The gains that drove the data: the simulation's when it is given (it may override them);
+  // for a dataset, estimated from its tau, q and ref (core), the preset's only when it has no tau.
+  if (spec.simulation) options.controller = spec.simulation->preset.controller;
+  options.assumed_controller = spec.preset.controller;
 
   if (const Json* method = object.find("method")) {
     options.method = parse_identification_method(fields::read_string(*method, "method"), "method");
@@ -176,8 +179,11 @@ IdentificationSpec identification_from_json(const nlohmann::json& body) {
     check_parameter_ranges(options.initial, "initial");
   }
   read_bounds(object, joints, options);
-  if (const Json* kp = object.find("kp")) options.controller->kp = fields::read_gains(*kp, "kp", joints);
-  if (const Json* kd = object.find("kd")) options.controller->kd = fields::read_gains(*kd, "kd", joints);
+  const Json* kp = object.find("kp");
+  const Json* kd = object.find("kd");
+  if ((kp || kd) && !options.controller) options.controller = spec.preset.controller;  // one given: the other the preset's
+  if (kp) options.controller->kp = fields::read_gains(*kp, "kp", joints);
+  if (kd) options.controller->kd = fields::read_gains(*kd, "kd", joints);
 
   if (const Json* half_length = object.find("half_length")) {
     if (half_length->is_string() && half_length->get_ref<const std::string&>() == "auto") {
@@ -224,9 +230,24 @@ IdentificationSpec identification_from_json(const nlohmann::json& body) {
     options.output_error_iterations = static_cast<int>(fields::read_integer(*iterations, "output_error_iterations", 0, 1000));
   }
 
+  if (const Json* truth = object.find("truth")) {
+    spec.truth = Eigen::VectorXd::Constant(2 * joints, std::numeric_limits<double>::quiet_NaN());
+    fields::read_parameter_object(*truth, "truth", joints, true,
+                                  [&](int index, double number, const std::string&) { spec.truth[index] = number; });
+  }
+
   // A simulation's data is known now (it always has tau and ref): check it like a dataset's.
   if (spec.simulation) check_against_data(spec, joints, fields::simulation_samples(*spec.simulation), true, true);
   return spec;
+}
+
+Eigen::VectorXd known_truth(const IdentificationSpec& spec, const SimulationSpec* simulation) {
+  if (spec.truth.size() > 0) return spec.truth;
+  if (spec.simulation) simulation = &*spec.simulation;
+  if (simulation && simulation->parameters.joint_count() == spec.preset.model.joint_count()) {
+    return simulation->parameters.vector();
+  }
+  return {};
 }
 
 void check_against_data(const IdentificationSpec& spec, int joints, int samples, bool has_torque, bool has_reference) {
@@ -241,7 +262,9 @@ void check_against_data(const IdentificationSpec& spec, int joints, int samples,
   if (options.method != IdentificationMethod::input_error && !has_reference) {
     throw InputError("method", std::string(to_string(options.method)) +
                                    " simulates the closed loop from the recorded reference: " + noun +
-                                   " has no ref columns");
+                                   " has no ref columns, and without the reference r the controller followed "
+                                   "(tau = Kp (r - q) - Kd qd) the loop cannot be simulated; input-error needs only q "
+                                   "and tau");
   }
   if (options.torque_source == TorqueSource::measured && !has_torque) {
     throw InputError("torque_source", "torque_source \"measured\" needs the tau columns: " + noun + " has none");

@@ -23,9 +23,37 @@ const char* source_name(TorqueSource source) {
   }
 }
 
+nlohmann::ordered_json numbers(const Eigen::VectorXd& values) {
+  nlohmann::ordered_json array = nlohmann::ordered_json::array();
+  for (Eigen::Index i = 0; i < values.size(); ++i) array.push_back(number(values[i]));
+  return array;
+}
+
+nlohmann::ordered_json gains_to_json(const IdentificationResult& result) {
+  nlohmann::ordered_json estimated = nullptr;
+  if (result.estimated_gains) {
+    estimated = {{"kp", numbers(result.estimated_gains->gains.kp)},
+                 {"kd", numbers(result.estimated_gains->gains.kd)},
+                 {"relative_residual", numbers(result.estimated_gains->relative_residual)}};
+  }
+  return {{"source", to_string(result.gain_source)},
+          {"kp", result.controller ? numbers(result.controller->kp) : nlohmann::ordered_json(nullptr)},
+          {"kd", result.controller ? numbers(result.controller->kd) : nlohmann::ordered_json(nullptr)},
+          {"estimated", estimated}};
+}
+
 }  // namespace
 
-nlohmann::ordered_json result_to_json(const IdentificationResult& result) {
+nlohmann::ordered_json truth_to_json(const std::vector<std::string>& names, const Eigen::VectorXd& truth) {
+  nlohmann::ordered_json object = nlohmann::ordered_json::object();
+  for (std::size_t i = 0; i < names.size() && static_cast<Eigen::Index>(i) < truth.size(); ++i) {
+    const double value = truth[static_cast<Eigen::Index>(i)];
+    if (std::isfinite(value)) object[names[i]] = value;
+  }
+  return object.empty() ? nlohmann::ordered_json(nullptr) : object;
+}
+
+nlohmann::ordered_json result_to_json(const IdentificationResult& result, const Eigen::VectorXd& truth) {
   // What the data determine: a parameter they cannot separate from another (m1 and l1 of the
   // paper's robot) has no estimate of its own, only the combination in "identifiability".
   Eigen::VectorXd estimates = result.estimate;
@@ -82,7 +110,10 @@ nlohmann::ordered_json result_to_json(const IdentificationResult& result) {
         {"dt", result.filter.dt},
         {"automatic", result.filter_chosen_automatically}}},
       {"torque_source", source_name(result.torque_source)},
+      {"gains", gains_to_json(result)},
+      {"residual_check", {{"residual_rms", number(result.residual_rms)}, {"noise_rms", number(result.noise_rms)}}},
       {"warnings", result.warnings},
+      {"truth", truth_to_json(result.names, truth)},
   };
 }
 

@@ -2,6 +2,7 @@
 #include "manipid/core/identification.h"
 
 #include "filter_choice.h"
+#include "manipid/core/dynamics.h"
 #include "manipid/core/input_error.h"
 #include "manipid/core/output_error.h"
 #include "optimizer.h"
@@ -11,6 +12,7 @@
 #include <Eigen/Eigenvalues>
 #include <Eigen/SVD>
 
+#include <algorithm>
 #include <chrono>
 #include <cmath>
 #include <limits>
@@ -31,6 +33,15 @@ IdentificationMethod parse_identification_method(const std::string& text, const 
   if (text == "output-error") return IdentificationMethod::output_error;
   if (text == "two-stage") return IdentificationMethod::two_stage;
   throw InputError(field, "unknown method '" + text + "' (expected input-error, output-error or two-stage)");
+}
+
+const char* to_string(GainSource source) {
+  switch (source) {
+    case GainSource::given: return "given";
+    case GainSource::estimated: return "estimated";
+    case GainSource::assumed: return "assumed";
+    default: return "none";
+  }
 }
 
 std::vector<std::string> identification_algorithms() {
@@ -90,17 +101,27 @@ Setup validate(const RobotModel& model, const Trajectory& data, const Identifica
   }
   const bool gradient = detail::algorithm_uses_gradient(options.algorithm);  // throws on unknown names
   const bool needs_simulation = options.method != IdentificationMethod::input_error;
+  // Gains come from the user, else from the data's τ, q and r, else the assumed ones.
+  const bool gains_available = options.controller || options.assumed_controller || (data.has_torque() && data.has_reference());
   if (needs_simulation) {
     if (!data.has_reference()) {
-      throw InputError("ref", std::string(to_string(options.method)) + " needs the reference: the data has no ref columns");
+      throw InputError("ref", std::string(to_string(options.method)) +
+                                  " simulates the closed loop τ = Kp (r − q) − Kd q̇, which needs the reference r the "
+                                  "controller followed: the data has no ref columns (input-error needs only q and tau)");
     }
-    if (!options.controller) throw InputError("kp", std::string(to_string(options.method)) + " needs the PD gains kp and kd");
+    if (!gains_available) {
+      throw InputError("kp", std::string(to_string(options.method)) +
+                                 " simulates the closed loop with the PD gains: give kp and kd (the data has no tau "
+                                 "columns to estimate them from)");
+    }
     if (options.method == IdentificationMethod::output_error && gradient) {
       throw InputError("algorithm", "output-error runs derivative-free algorithms only (LN_BOBYQA, LN_NELDERMEAD, LN_SBPLX)");
     }
   }
-  if (options.controller && (options.controller->kp.size() != n || options.controller->kd.size() != n)) {
-    throw InputError("kp", "kp and kd need " + std::to_string(n) + " entries, one per joint");
+  for (const std::optional<PdController>* gains : {&options.controller, &options.assumed_controller}) {
+    if (*gains && ((*gains)->kp.size() != n || (*gains)->kd.size() != n)) {
+      throw InputError("kp", "kp and kd need " + std::to_string(n) + " entries, one per joint");
+    }
   }
   switch (options.torque_source) {
     case TorqueSource::measured:
@@ -116,7 +137,7 @@ Setup validate(const RobotModel& model, const Trajectory& data, const Identifica
   }
   if (setup.use_reference && options.method != IdentificationMethod::output_error) {
     if (!data.has_reference()) throw InputError("tau", "the data has neither tau nor ref columns");
-    if (!options.controller) throw InputError("kp", "the data has no tau columns: forming the torque from ref needs kp and kd");
+    if (!gains_available) throw InputError("kp", "the data has no tau columns: forming the torque from ref needs kp and kd");
   }
   if (options.max_evaluations < 1) throw InputError("max_evaluations", "max_evaluations must be at least 1");
   if (!(options.max_seconds > 0)) throw InputError("max_seconds", "max_seconds must be positive");
@@ -174,6 +195,190 @@ void require_finite_costs(const IdentificationResult& result) {
     throw IdentificationError("the cost at the end of the search is " + describe_value(result.final_cost) +
                               "; narrow the bounds (lower/upper) around physically meaningful values");
   }
+}
+
+// ---- controller gains ----------------------------------------------------------------------
+
+// When given gains contradict the data. The estimated gains' residual is the law's noise floor
+// on these data: what measurement noise (and the filter's edge effects) leaves unexplained by
+// the best gains; gains consistent with the data leave about as much. A given gain that is off
+// by x % leaves roughly x % of that gain's share of the torque unexplained. We call the given
+// gains contradicted when their residual exceeds both 10× the floor — far beyond what noise
+// explains, so not a fluke of a noisy joint — and 5 % of the torque's RMS — so that on clean
+// data, whose floor is ~1e-6, a gain rounded in its third digit is not flagged: what matters to
+// output-error is a loop that behaves differently, i.e. a sizeable share of the torque unexplained.
+// Measured on another arm run under Kp 300, Kd 30 (tests/core/other_robot_test.cpp; by hand:
+// manipid simulate --param m1=8,m2=4,m3=2,m4=1,l1=0.3,l2=0.5,l3=0.4,l4=0.25 --kp 300,300,300,300
+// --kd 30,30,30,30 [--noise-q 1e-4 --quantize-q 16 --noise-tau-relative 0.01 --seed 7], then
+// manipid identify --torque-source reference --kp <paper's> --kd <paper's>): the paper's gains
+// leave 810–13000 % unexplained per joint, against floors of 0.00026–0.0104 % (clean) and
+// 0.2–4.1 % (noisy, the 4.1 % on joint 4, whose torque is small); the right gains, given, raise
+// no warning on either run.
+constexpr double kGainContradictionRatio = 10.0;
+constexpr double kGainContradictionFloor = 0.05;
+// An estimated law that leaves this much of a joint's torque unexplained: the torque does not
+// come from a PD loop on this reference (or the noise swamps it), so the estimated gains are
+// doubtful too. Noise alone left 4.1 % on the noisy run above (with gains still within 0.2 %), so
+// the limit is well above that.
+constexpr double kGainPoorFit = 0.25;
+
+std::string gain_list(const Eigen::VectorXd& values) {
+  std::ostringstream text;
+  text.precision(6);
+  text << "(";
+  for (Eigen::Index j = 0; j < values.size(); ++j) text << (j ? ", " : "") << values[j];
+  text << ")";
+  return text.str();
+}
+
+std::string percent(double fraction) {
+  std::ostringstream text;
+  text.precision(3);
+  text << 100.0 * fraction << " %";
+  return text.str();
+}
+
+/// The filter the gains are fitted with when the method has not filtered the measured torque
+/// itself: output-error's structure filter (M = 100, Ωg = 0.2), shortened for short data. The law
+/// is linear, so the band does not bias the gains; it only removes noise.
+FilterSettings gain_filter(const Trajectory& data) {
+  const int half_length = std::max(2, std::min(100, (data.samples() - 2) / 8));
+  return FilterSettings{half_length, 0.2, data.dt()};
+}
+
+GainFit fit_gains(const Trajectory& data, const FilteredData& measured) {
+  return fit_pd_gains(measured, filter_reference(data, measured.filter));
+}
+
+/// The gains the method uses (given, estimated, assumed), recorded in the result with the
+/// warnings they call for. Needs result.estimated_gains set when the data carry τ and r.
+PdController settle_gains(const IdentificationOptions& options, const FilteredData* measured, const Trajectory& data,
+                          IdentificationResult& result) {
+  if (result.controller) return *result.controller;
+  const std::optional<GainFit>& fit = result.estimated_gains;
+  if (options.controller) {
+    result.controller = options.controller;
+    result.gain_source = GainSource::given;
+    if (fit && measured) {
+      const Eigen::VectorXd given = pd_law_relative_residual(*measured, filter_reference(data, measured->filter), *options.controller);
+      for (Eigen::Index j = 0; j < given.size(); ++j) {
+        const double floor = fit->relative_residual[j];
+        if (given[j] > kGainContradictionRatio * floor && given[j] > kGainContradictionFloor) {
+          std::ostringstream text;
+          text << "joint " << j + 1 << ": the given PD gains Kp = " << options.controller->kp[j]
+               << ", Kd = " << options.controller->kd[j] << " do not fit the data: they leave " << percent(given[j])
+               << " of its filtered torque unexplained (τ − Kp (r − q) + Kd q̇), against " << percent(floor)
+               << " for the gains the data suggest, Kp = " << fit->gains.kp[j] << ", Kd = " << fit->gains.kd[j]
+               << "; " << to_string(options.method)
+               << " simulates the loop with the given gains, so check them or leave kp and kd out to use the "
+                  "estimated ones";
+          result.warnings.push_back(text.str());
+        }
+      }
+    }
+  } else if (fit) {
+    result.controller = fit->gains;
+    result.gain_source = GainSource::estimated;
+    for (Eigen::Index j = 0; j < fit->relative_residual.size(); ++j) {
+      if (fit->relative_residual[j] > kGainPoorFit) {
+        std::ostringstream text;
+        text << "joint " << j + 1 << ": the PD law τ = Kp (r − q) − Kd q̇ explains its torque only to "
+             << percent(fit->relative_residual[j])
+             << " (RMS residual over RMS torque, filtered), so the gains estimated from the data (Kp = " << fit->gains.kp[j]
+             << ", Kd = " << fit->gains.kd[j]
+             << ") are doubtful: the torque may not come from a PD loop on this reference; give kp and kd if known";
+        result.warnings.push_back(text.str());
+      }
+    }
+  } else {
+    result.controller = options.assumed_controller;
+    result.gain_source = GainSource::assumed;
+    result.warnings.push_back("the PD gains were neither given nor estimable (the data has no tau columns to fit "
+                              "τ = Kp (r − q) − Kd q̇ to): assumed Kp = " + gain_list(options.assumed_controller->kp) +
+                              ", Kd = " + gain_list(options.assumed_controller->kd) +
+                              "; give kp and kd if the robot ran with other gains");
+  }
+  return *result.controller;
+}
+
+// ---- is the residual noise? ---------------------------------------------------------------
+
+// The standard errors treat the residual as noise. On noise-free data it is the method's own bias
+// (the regressor formed from filtered q is not the filtered regressor) and numerical error, and the
+// standard errors then say nothing about the error: on the paper's clean run σ(m2) = 5e-6 against
+// an actual error of 3e-4. Two signs, either of which the result names in `warnings`:
+//  (a) the residual is far above what the measurement noise in the data would leave there: each
+//      raw signal's white-noise level (detail::estimate_noise, fourth differences) carried through
+//      the method — τ noise through the low-pass (× ‖c0‖), q noise through the second-derivative
+//      filter and the mass matrix (× ‖c2‖ · |M_jk|, the dominant path), or for output-error the q
+//      noise itself — with residual RMS > kBiasRatio × that noise RMS;
+//  (b) the data carry no measurable noise at all (every q below kNoiseFreeAngle rad, every measured
+//      τ below kNoiseFreeTorque of its RMS): simulated or computed data, whose residual cannot be
+//      measurement noise whatever its size. The finest encoders (24 bits, steps of 3.7e-7 rad,
+//      σ ≈ 1e-7 rad) and torque sensing (≥ 1e-5 of range) sit well above these limits.
+// Measured, input-error (manipid simulate [--noise-q 1e-4 --quantize-q 16 --noise-tau-relative 0.01]
+// --out F.csv; manipid identify F.csv --json [--half-length 100 --band 0.2]; result.residual_check):
+//   clean, M = 100, Ωg = 0.2:      residual 2.37 N·m, noise 2.6e-5: ratio 9.1e4      → (a)
+//   clean, chosen M = 400, Ωg = 2.4: residual 1.6e-3, noise 1.7e-2: ratio 0.093     → (b): q noise
+//      1.9e-13..1.5e-9 rad (the integrator's), τ noise 5e-12..5e-9 of its RMS
+//   noisy, M = 100, Ωg = 0.2:      residual 13.4, noise 13.5: ratio 0.99; q noise 1.0e-4 rad
+//   noisy, chosen M = 200, Ωg = 0.15: residual 9.9, noise 7.6: ratio 1.30
+// so kBiasRatio = 10 sits 7× above the noisy cases and 4 decades below the clean one; (b)'s limits
+// sit 4 (q: 1e-4 vs 1e-8 rad) and 5 (τ: 1e-2 vs 1e-7) decades below the noisy case's noise and
+// 7× (q) and 20× (τ) above the clean run's.
+// A lag-1 autocorrelation test was tried first and does not separate the cases: 1 − ρ over the
+// low-pass filter's own 1 − ρ_noise measured 1.08 (clean, M = 400, Ωg = 2.4, where the
+// integrator's rough q dominates the residual) and 2.9 (clean, M = 100, Ωg = 0.2) against 2.8 and
+// 2.2 on the noisy case — no threshold between them.
+constexpr double kBiasRatio = 10.0;
+constexpr double kNoiseFreeAngle = 1e-8;   // rad
+constexpr double kNoiseFreeTorque = 1e-7;  // of each joint's torque RMS
+
+/// RMS over all entries; NaN for an empty matrix.
+double rms(const Eigen::Ref<const Eigen::MatrixXd>& x) {
+  return x.size() ? std::sqrt(x.squaredNorm() / static_cast<double>(x.size())) : std::numeric_limits<double>::quiet_NaN();
+}
+
+/// (b): no measurable noise in q, nor in τ when it is measured.
+bool noise_free(const Trajectory& data, bool torque_measured) {
+  for (int k = 0; k < data.joint_count(); ++k) {
+    if (detail::estimate_noise(data.q.col(k)) >= kNoiseFreeAngle) return false;
+    if (torque_measured && data.has_torque() &&
+        detail::estimate_noise(data.tau.col(k)) >= kNoiseFreeTorque * rms(data.tau.col(k))) {
+      return false;
+    }
+  }
+  return true;
+}
+
+void judge_residual(double residual_rms, double noise_rms, bool data_noise_free, IdentificationResult& result) {
+  result.residual_rms = residual_rms;
+  result.noise_rms = noise_rms;
+  if (!std::isfinite(residual_rms) || !(residual_rms > 0)) return;
+  std::ostringstream text;
+  text.precision(3);
+  if (data_noise_free) {
+    text << "the residual is the method's bias, not noise: the data carry no measurable noise (below " << kNoiseFreeAngle
+         << " rad on q and " << kNoiseFreeTorque
+         << " of tau's RMS: simulated or computed data), so the residual (RMS " << residual_rms
+         << ") is the method's bias and numerical error; the standard errors assume noise and understate the actual "
+            "error, which can be many times larger";
+  } else if (!(residual_rms <= kBiasRatio * noise_rms)) {
+    text << "the residual is the method's bias, not noise: its RMS (" << residual_rms
+         << ") is far above what the measurement noise in the data would leave (" << noise_rms
+         << "); the standard errors assume noise and understate the actual error, which can be many times larger";
+  } else {
+    return;
+  }
+  result.warnings.push_back(text.str());
+}
+
+/// Output-error: the residual q̂ − q (stacked joint after joint) against the noise on q.
+void assess_output_error_residual(const Trajectory& data, const Eigen::VectorXd& residual, IdentificationResult& result) {
+  if (!residual.allFinite()) return;
+  double noise_variance = 0.0;
+  for (int k = 0; k < data.joint_count(); ++k) noise_variance += std::pow(detail::estimate_noise(data.q.col(k)), 2);
+  judge_residual(rms(residual), std::sqrt(noise_variance / data.joint_count()), noise_free(data, false), result);
 }
 
 // Gauss–Newton polish of an input-error minimum. The Gram form makes each step exact and
@@ -260,6 +465,10 @@ InputErrorStage run_input_error(const Problem& problem, IdentificationResult& re
   result.filter_chosen_automatically = stage.choice.automatic;
   result.torque_source = setup.use_reference ? TorqueSource::reference : TorqueSource::measured;
   stage.filtered = filter_for_input_error(problem.data, stage.choice.settings, setup.use_reference, options.controller);
+  if (!setup.use_reference && problem.data.has_reference() && !result.estimated_gains) {
+    // τ, q and r at hand: the gains the data imply, from the signals just filtered.
+    result.estimated_gains = fit_gains(problem.data, stage.filtered);
+  }
   Eigen::VectorXd weights;
   if (options.weighting == JointWeighting::inverse_variance) {
     weights.resize(setup.n);
@@ -321,6 +530,43 @@ void assess_input_error(const Problem& problem, const InputErrorStage& stage, Id
   apply_uncertainty(result, detail::assess_uncertainty(uncertainty));
 }
 
+/// Input-error: the residual τ̂(q^f, θ̂) − τ^f against τ noise through the low-pass and q noise
+/// through q̈^f and the mass matrix (each joint's noise variance, summed).
+void assess_input_error_residual(const Problem& problem, const InputErrorStage& stage, IdentificationResult& result) {
+  const Trajectory& data = problem.data;
+  const int n = problem.setup.n;
+  const Parameters estimate = Parameters::from_vector(result.estimate);
+  const TorqueFit fit = torque_fit(problem.model, estimate, data, stage.filtered);
+  const auto filter = cached_filter(stage.choice.settings);
+  const double lowpass_gain = filter->coefficients(FilterOrder::lowpass).norm();
+  const double acceleration_gain = filter->coefficients(FilterOrder::derivative2).norm();
+  Eigen::VectorXd q_noise(n);
+  for (int k = 0; k < n; ++k) q_noise[k] = detail::estimate_noise(data.q.col(k));
+  // The mass matrix's squared entries, averaged over 16 samples of the filtered motion.
+  Eigen::MatrixXd mass_squared = Eigen::MatrixXd::Zero(n, n);
+  DynamicsWorkspace workspace(problem.model);
+  Eigen::MatrixXd mass(n, n);
+  const int points = std::min(16, stage.filtered.samples());
+  for (int i = 0; i < points; ++i) {
+    const int row = static_cast<int>((static_cast<long>(i) * (stage.filtered.samples() - 1)) / std::max(1, points - 1));
+    mass_matrix(problem.model, estimate, workspace, stage.filtered.q.row(row).transpose(), mass);
+    mass_squared += mass.cwiseAbs2() / points;
+  }
+  double noise_variance = 0.0;
+  for (int j = 0; j < n; ++j) {
+    double tau_part = 0.0;
+    if (result.torque_source == TorqueSource::measured) {
+      tau_part = detail::estimate_noise(data.tau.col(j)) * lowpass_gain;
+    } else if (result.controller) {
+      tau_part = result.controller->kp[j] * q_noise[j] * lowpass_gain;  // τ^f formed from q^f
+    }
+    noise_variance += tau_part * tau_part;
+    for (int k = 0; k < n; ++k) noise_variance += mass_squared(j, k) * std::pow(q_noise[k] * acceleration_gain, 2);
+  }
+  judge_residual(rms(fit.residual()), std::sqrt(noise_variance / n),
+                 noise_free(data, result.torque_source == TorqueSource::measured), result);
+}
+
 void identify_input_error(const Problem& problem, IdentificationResult& result) {
   const InputErrorStage stage = run_input_error(problem, result);
   assess_input_error(problem, stage, result);
@@ -332,6 +578,7 @@ void identify_input_error(const Problem& problem, IdentificationResult& result) 
             "biased; the two-stage method (--method two-stage) removes that bias";
     result.warnings.push_back(text.str());
   }
+  assess_input_error_residual(problem, stage, result);
 }
 
 void identify_output_error(const Problem& problem, IdentificationResult& result) {
@@ -353,6 +600,7 @@ void identify_output_error(const Problem& problem, IdentificationResult& result)
   output_error.evaluate(Parameters::from_vector(result.estimate), &residual);
   const Eigen::MatrixXd jacobian = detail::output_error_jacobian(output_error, result.estimate, residual, setup.free, basis);
   assess_output_error(problem, output_error, structure, residual, jacobian, result);
+  assess_output_error_residual(problem.data, residual, result);
 }
 
 void identify_two_stage(const Problem& problem, IdentificationResult& result) {
@@ -364,7 +612,9 @@ void identify_two_stage(const Problem& problem, IdentificationResult& result) {
     return;
   }
   const Eigen::MatrixXd basis = identifiable_directions(problem, *stage.cost, result.estimate);
-  const OutputErrorCost output_error(problem.model, problem.data, *options.controller, options.simulation_relative_tolerance);
+  const PdController gains =
+      settle_gains(options, setup.use_reference ? nullptr : &stage.filtered, problem.data, result);
+  const OutputErrorCost output_error(problem.model, problem.data, gains, options.simulation_relative_tolerance);
   const detail::FitBounds bounds{setup.n, setup.free, setup.lower, setup.upper};
   const detail::GaussNewtonOutcome outcome =
       detail::gauss_newton_output_error(output_error, result.estimate, basis, bounds, options, problem.log);
@@ -374,6 +624,7 @@ void identify_two_stage(const Problem& problem, IdentificationResult& result) {
   result.cancelled = outcome.cancelled;
   require_finite_costs(result);
   assess_output_error(problem, output_error, *stage.cost, outcome.residual, outcome.jacobian, result);
+  assess_output_error_residual(problem.data, outcome.residual, result);
 }
 
 }  // namespace
@@ -388,8 +639,20 @@ IdentificationResult identify(const RobotModel& model, const Trajectory& measure
   result.names = setup.names;
   result.free = setup.free;
   result.initial = setup.initial;
+  // Methods that need the gains before they filter (output-error, the torque formed from ref)
+  // settle them first, from the data when they carry τ, q and r; two-stage on the measured torque
+  // settles them after its first stage, from the signals that stage filtered.
+  IdentificationOptions settled = options;
+  if (options.method == IdentificationMethod::output_error || setup.use_reference) {
+    std::optional<FilteredData> measured;
+    if (data.has_torque() && data.has_reference()) {
+      measured = filter_for_input_error(data, gain_filter(data), false, std::nullopt);
+      result.estimated_gains = fit_gains(data, *measured);
+    }
+    settled.controller = settle_gains(options, measured ? &*measured : nullptr, data, result);
+  }
   detail::EvaluationLog log(options.history_limit, options.on_evaluation);
-  const Problem problem{model, data, options, setup, log};
+  const Problem problem{model, data, settled, setup, log};
   // One function per method, as Ceres dispatches its minimisers.
   switch (options.method) {
     case IdentificationMethod::input_error: identify_input_error(problem, result); break;

@@ -13,6 +13,7 @@
 #include <cstring>
 #include <filesystem>
 #include <memory>
+#include <sstream>
 #include <system_error>
 
 namespace manipid::server::cli {
@@ -85,6 +86,22 @@ void apply_parameter(const std::string& item, Parameters& parameters, const std:
   if (*value < 0.0) {
     throw InputError(name, option + " " + item + ": " + name + " must not be negative");
   }
+}
+
+Eigen::VectorXd parse_gain_list(const std::string& text, int joints, const char* option) {
+  std::vector<std::string> items;
+  std::stringstream stream(text);
+  std::string item;
+  while (std::getline(stream, item, ',')) {
+    if (!item.empty()) items.push_back(item);
+  }
+  if (static_cast<int>(items.size()) != joints) {
+    throw InputError(option + 2, std::string(option) + " needs " + std::to_string(joints) +
+                                     " comma-separated values, one per joint");
+  }
+  Eigen::VectorXd values(joints);
+  for (int j = 0; j < joints; ++j) values[j] = parse_number_option(items[static_cast<std::size_t>(j)], option);
+  return values;
 }
 
 double parse_number_option(const std::string& text, const std::string& option) {

@@ -78,6 +78,9 @@ CLI::Validator unsigned_integer();
 void apply_parameter(const std::string& item, Parameters& parameters, const std::string& option);
 /// A finite number, or InputError naming the option.
 double parse_number_option(const std::string& text, const std::string& option);
+/// One value per joint from a comma list (--kp, --kd): exactly `joints` finite numbers, else
+/// InputError naming the option.
+Eigen::VectorXd parse_gain_list(const std::string& text, int joints, const char* option);
 long long parse_integer_option(const std::string& text, const std::string& option, long long lowest, long long highest);
 
 // ---- Robot selection (simulate, torque; later identify) ----------------------------------

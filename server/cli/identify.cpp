@@ -9,6 +9,7 @@
 
 #include <cmath>
 #include <cstdio>
+#include <limits>
 #include <sstream>
 
 namespace manipid::server::cli {
@@ -24,15 +25,6 @@ std::vector<std::string> split_list(const std::string& text) {
   return items;
 }
 
-Eigen::VectorXd gains(const std::vector<std::string>& items, int n, const char* option) {
-  if (static_cast<int>(items.size()) != n) {
-    throw InputError(option + 2, std::string(option) + " needs " + std::to_string(n) + " comma-separated values, one per joint");
-  }
-  Eigen::VectorXd values(n);
-  for (int j = 0; j < n; ++j) values[j] = parse_number_option(items[j], option);
-  return values;
-}
-
 std::string format(double value, int digits = 6) {
   if (!std::isfinite(value)) return "-";
   char buffer[64];
@@ -40,14 +32,39 @@ std::string format(double value, int digits = 6) {
   return buffer;
 }
 
-void print_table(const IdentificationResult& result, const Parameters& truth) {
+std::string list(const Eigen::VectorXd& values, int digits = 6, const char* unit = "") {
+  std::string text = "(";
+  for (Eigen::Index j = 0; j < values.size(); ++j) text += (j ? ", " : "") + format(values[j], digits) + unit;
+  return text + ")";
+}
+
+/// `truth`: empty when no true value is known (then no "true" column), else 2n entries with NaN
+/// for the values not given.
+void print_table(const IdentificationResult& result, const Eigen::VectorXd& truth) {
   const auto& unidentifiable = result.identifiability.unidentifiable;
+  const bool known_truth = truth.size() > 0;
   std::printf("%s, %s; filter M = %d, band = %g rad/sample%s; torque from %s\n", to_string(result.method),
               result.algorithm.c_str(), result.filter.half_length, result.filter.band,
               result.filter_chosen_automatically ? " (chosen from the data)" : "",
               result.torque_source == TorqueSource::reference ? "ref and the PD gains" : "the measured tau");
-  std::printf("\n%-10s %12s %14s %12s %10s\n", "parameter", "initial", "estimate", "std error", "true");
-  const Eigen::VectorXd true_theta = truth.vector();
+  if (result.controller) {
+    std::printf("PD gains (%s): Kp = %s, Kd = %s\n",
+                result.gain_source == GainSource::given       ? "given"
+                : result.gain_source == GainSource::estimated ? "estimated from the data"
+                                                              : "assumed: the preset's",
+                list(result.controller->kp).c_str(), list(result.controller->kd).c_str());
+  }
+  if (result.estimated_gains && result.gain_source != GainSource::estimated) {
+    std::printf("PD gains the data suggest: Kp = %s, Kd = %s\n", list(result.estimated_gains->gains.kp).c_str(),
+                list(result.estimated_gains->gains.kd).c_str());
+  }
+  if (result.estimated_gains) {
+    std::printf("PD law fit: %s of each joint's filtered torque unexplained by the estimated gains\n",
+                list(100.0 * result.estimated_gains->relative_residual, 3, " %").c_str());
+  }
+  std::printf("\n%-10s %12s %14s %12s", "parameter", "initial", "estimate", "std error");
+  if (known_truth) std::printf(" %10s", "true");
+  std::printf("\n");
   for (std::size_t i = 0; i < result.names.size(); ++i) {
     const std::string& name = result.names[i];
     std::string estimate = format(result.estimate[static_cast<Eigen::Index>(i)]);
@@ -58,28 +75,32 @@ void print_table(const IdentificationResult& result, const Parameters& truth) {
       estimate = "not alone";  // never a confident number for what the data cannot tell
       error = "-";
     }
-    std::printf("%-10s %12s %14s %12s %10s\n", name.c_str(), format(result.initial[static_cast<Eigen::Index>(i)]).c_str(),
-                estimate.c_str(), error.c_str(), format(true_theta[static_cast<Eigen::Index>(i)]).c_str());
+    std::printf("%-10s %12s %14s %12s", name.c_str(), format(result.initial[static_cast<Eigen::Index>(i)]).c_str(),
+                estimate.c_str(), error.c_str());
+    if (known_truth) std::printf(" %10s", format(truth[static_cast<Eigen::Index>(i)]).c_str());
+    std::printf("\n");
   }
+  const int joints = static_cast<int>(result.names.size() / 2);
   for (const IdentifiableCombination& combination : result.identifiability.combinations) {
-    double true_value = 1.0;
-    // The true value of a product term, from its factors' true values.
-    const std::string& name = combination.name;
-    bool known = true;
-    std::stringstream stream(name);
-    std::string factor;
-    while (std::getline(stream, factor, '*')) {
-      int power = 1;
-      if (const auto caret = factor.find('^'); caret != std::string::npos) {
-        power = std::stoi(factor.substr(caret + 1));
-        factor = factor.substr(0, caret);
+    std::printf("%-10s %12s %14s %12s", combination.name.c_str(), "", format(combination.value).c_str(),
+                format(combination.std_error, 3).c_str());
+    if (known_truth) {
+      // The true value of a product term, from its factors' true values (NaN when one is not given).
+      double true_value = 1.0;
+      std::stringstream stream(combination.name);
+      std::string factor;
+      while (std::getline(stream, factor, '*')) {
+        int power = 1;
+        if (const auto caret = factor.find('^'); caret != std::string::npos) {
+          power = std::stoi(factor.substr(caret + 1));
+          factor = factor.substr(0, caret);
+        }
+        const int index = parameter_index(factor, joints);
+        true_value *= index < 0 ? std::numeric_limits<double>::quiet_NaN() : std::pow(truth[index], power);
       }
-      const int index = parameter_index(factor, truth.joint_count());
-      if (index < 0) known = false;
-      else true_value *= std::pow(true_theta[index], power);
+      std::printf(" %10s", format(true_value).c_str());
     }
-    std::printf("%-10s %12s %14s %12s %10s\n", name.c_str(), "", format(combination.value).c_str(),
-                format(combination.std_error, 3).c_str(), known ? format(true_value).c_str() : "");
+    std::printf("\n");
   }
   std::printf("\ncost %s -> %s after %ld evaluations", format(result.initial_cost).c_str(),
               format(result.final_cost).c_str(), result.evaluations);
@@ -115,14 +136,19 @@ CLI::App* add_identify_command(CLI::App& app, IdentifyOptions& options) {
   command->add_option("--free", options.free, "Comma-separated free parameters (default: all)");
   command->add_option("--init", options.initial,
                       "Start values NAME=VALUE, comma-separated or repeated (default: the paper's)");
+  command->add_option("--truth", options.truth,
+                      "Known true values NAME=VALUE, comma-separated or repeated, shown beside the estimates (default: "
+                      "none; a CSV does not say which robot made it)");
   command->add_option("--method", options.method, "input-error, output-error or two-stage")
       ->check(CLI::IsMember({"input-error", "output-error", "two-stage"}))
       ->capture_default_str();
   command->add_option("--algorithm", options.algorithm, "NLopt algorithm")
       ->check(CLI::IsMember(identification_algorithms()))
       ->capture_default_str();
-  command->add_option("--kp", options.kp, "PD gains Kp, comma-separated (default: the preset's)");
-  command->add_option("--kd", options.kd, "PD gains Kd, comma-separated (default: the preset's)");
+  command->add_option("--kp", options.kp,
+                      "PD gains Kp, comma-separated (default: estimated from the data's tau, q and ref; without tau, "
+                      "the preset's)");
+  command->add_option("--kd", options.kd, "PD gains Kd, comma-separated (default: as --kp)");
   command->add_option("--half-length", options.half_length, "Filter half-length M, or 'auto'")->capture_default_str();
   command->add_option("--band", options.band, "Filter band edge in rad/sample, or 'auto'")->capture_default_str();
   command->add_option("--torque-source", options.torque_source,
@@ -144,7 +170,7 @@ CLI::App* add_identify_command(CLI::App& app, IdentifyOptions& options) {
   // A URDF robot: its base parameters by linear input-error; the paper model's options do not apply.
   add_urdf_options(*command, options.urdf, false);
   CLI::Option* robot = command->get_option("--robot");
-  for (const char* paper_only : {"--preset", "--kinetic-energy", "--free", "--init", "--algorithm", "--kp", "--kd",
+  for (const char* paper_only : {"--preset", "--kinetic-energy", "--free", "--init", "--truth", "--algorithm", "--kp", "--kd",
                                  "--torque-source", "--max-evaluations", "--max-seconds", "--history"}) {
     command->get_option(paper_only)->excludes(robot);
   }
@@ -203,12 +229,26 @@ int run_identify(const IdentifyOptions& options) {
   } catch (const InputError& error) {
     rethrow_with_source(error, "--init");
   }
+  // Known true values: only what the user gives (NaN = not given).
+  Eigen::VectorXd truth;
+  if (!options.truth.empty()) {
+    Parameters given = Parameters::from_vector(Eigen::VectorXd::Constant(2 * n, std::numeric_limits<double>::quiet_NaN()));
+    for (const std::string& list : options.truth) {
+      for (const std::string& item : split_list(list)) apply_parameter(item, given, "--truth");
+    }
+    truth = given.vector();
+  }
   for (const std::string& list : options.free) {
     for (const std::string& name : split_list(list)) identification.free.push_back(name);
   }
-  identification.controller = preset.controller;
-  if (!options.kp.empty()) identification.controller->kp = gains(split_list(options.kp), n, "--kp");
-  if (!options.kd.empty()) identification.controller->kd = gains(split_list(options.kd), n, "--kd");
+  // Gains: given (one of --kp/--kd given completes the other from the preset's), else estimated
+  // from the data when they carry tau and ref, else the preset's, with a warning (core).
+  identification.assumed_controller = preset.controller;
+  if (!options.kp.empty() || !options.kd.empty()) {
+    identification.controller = preset.controller;
+    if (!options.kp.empty()) identification.controller->kp = parse_gain_list(options.kp, n, "--kp");
+    if (!options.kd.empty()) identification.controller->kd = parse_gain_list(options.kd, n, "--kd");
+  }
   identification.half_length =
       options.half_length == "auto" ? 0 : static_cast<int>(parse_integer_option(options.half_length, "--half-length", 2, 1'000'000));
   identification.band = options.band == "auto" ? 0.0 : parse_number_option(options.band, "--band");
@@ -240,9 +280,9 @@ int run_identify(const IdentifyOptions& options) {
     write_table(options.history, table);
   }
   if (options.json) {
-    std::printf("%s\n", api::result_to_json(result).dump(2).c_str());
+    std::printf("%s\n", api::result_to_json(result, truth).dump(2).c_str());
   } else {
-    print_table(result, preset.true_parameters);
+    print_table(result, truth);
   }
   return result.cancelled ? exit_failure : exit_success;
 }

@@ -18,6 +18,7 @@ struct IdentifyOptions {
   std::string kinetic_energy = "complete";
   std::vector<std::string> free;     ///< comma lists of names
   std::vector<std::string> initial;  ///< comma lists of NAME=VALUE
+  std::vector<std::string> truth;    ///< comma lists of NAME=VALUE: known true values, shown beside the estimates
   std::string method = "input-error";
   std::string algorithm = "LN_BOBYQA";
   std::string kp, kd;                ///< comma lists; empty = the preset's

@@ -55,6 +55,8 @@ CLI::App* add_simulate_command(CLI::App& app, SimulateOptions& options) {
       ->check(positive_number());
   command->add_option("--duration", options.duration, "Simulated time in s (preset: 9.7)")
       ->check(positive_number());
+  command->add_option("--kp", options.kp, "PD gains Kp, comma-separated, one per joint (default: the preset's)");
+  command->add_option("--kd", options.kd, "PD gains Kd, comma-separated, one per joint (default: the preset's)");
   command->add_option("--out", options.output, "Output CSV file, '-' for stdout")->capture_default_str();
   return command;
 }
@@ -76,11 +78,16 @@ int run_simulate(const SimulateOptions& options) {
   noise.quantize_bits = options.quantize_bits;
   noise.seed = options.seed;
 
+  PdController controller = preset.controller;
+  const int joints = preset.model.joint_count();
+  if (!options.kp.empty()) controller.kp = parse_gain_list(options.kp, joints, "--kp");
+  if (!options.kd.empty()) controller.kd = parse_gain_list(options.kd, joints, "--kd");
+
   SimulationSummary summary;
   Trajectory trajectory;
   try {
     const SampledReference reference = make_step_reference(preset.reference);
-    trajectory = simulate_closed_loop(preset.model, robot.parameters, preset.controller, reference,
+    trajectory = simulate_closed_loop(preset.model, robot.parameters, controller, reference,
                                       simulation, &summary);
     if (noise.any()) apply_measurement_noise(trajectory, noise);
   } catch (const InputError& error) {

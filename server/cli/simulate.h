@@ -22,6 +22,7 @@ struct SimulateOptions {
   std::optional<double> relative_tolerance;
   std::optional<double> absolute_tolerance;
   std::optional<double> duration;
+  std::string kp, kd;  ///< comma lists; empty = the preset's gains
   std::string output = "-";
 };
 CLI::App* add_simulate_command(CLI::App& app, SimulateOptions& options);

@@ -99,6 +99,31 @@ class HistoryWriter {
   Clock::time_point last_flush_;
 };
 
+/// The simulation that made a stored dataset (a simulation job's, or an identification's that
+/// simulated first), if one did.
+std::optional<api::SimulationSpec> simulation_behind(store::Store& store, const std::string& dataset_id) {
+  const auto dataset = store.find_dataset(dataset_id);
+  if (!dataset || dataset->source_job.empty()) return std::nullopt;
+  const auto source = store.find_job(dataset->source_job);
+  if (!source) return std::nullopt;
+  try {
+    if (source->kind == api::JobKind::simulation) return api::simulation_from_json(nlohmann::json::parse(source->request));
+    if (source->kind == api::JobKind::identification && source->robot_id.empty()) {
+      return api::identification_from_json(nlohmann::json::parse(source->request)).simulation;
+    }
+  } catch (const std::exception&) {
+    // A request stored by an older version that no longer parses: no truth, not a failed job.
+  }
+  return std::nullopt;
+}
+
+/// What the result shows as true values (api::known_truth): never a preset's for uploaded data.
+Eigen::VectorXd truth_of(store::Store& store, const api::IdentificationSpec& spec, const std::string& dataset_id) {
+  if (spec.truth.size() > 0 || spec.simulation) return api::known_truth(spec, nullptr);
+  const std::optional<api::SimulationSpec> simulation = simulation_behind(store, dataset_id);
+  return api::known_truth(spec, simulation ? &*simulation : nullptr);
+}
+
 JobOutcome run_identification_job(const api::JobInfo& job, store::Store& store, LiveJob& live, const RunnerOptions& options) {
   api::IdentificationSpec spec = api::identification_from_json(nlohmann::json::parse(job.request));
   std::string dataset_id = spec.dataset_id;
@@ -134,7 +159,7 @@ JobOutcome run_identification_job(const api::JobInfo& job, store::Store& store, 
     return outcome;
   }
   outcome.state = result.cancelled ? api::JobState::cancelled : api::JobState::succeeded;
-  nlohmann::ordered_json json = api::result_to_json(result);
+  nlohmann::ordered_json json = api::result_to_json(result, truth_of(store, spec, dataset_id));
   json["dataset_id"] = dataset_id;
   outcome.result = json.dump();
   for (std::size_t i = 0; i < result.names.size(); ++i) {

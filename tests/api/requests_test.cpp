@@ -544,9 +544,12 @@ TEST(IdentificationJson, MinimalRequestIdentifiesLikeTheCommand) {
   EXPECT_EQ(options.band, 0.0);
   EXPECT_EQ(options.torque_source, TorqueSource::automatic);
   EXPECT_EQ(options.weighting, JointWeighting::unit);
-  ASSERT_TRUE(options.controller.has_value());
-  EXPECT_EQ(options.controller->kp, paper.controller.kp);
-  EXPECT_EQ(options.controller->kd, paper.controller.kd);
+  // No gains given: the core estimates them from the dataset's tau, q and ref; the preset's are
+  // only assumed for data without tau.
+  EXPECT_FALSE(options.controller.has_value());
+  ASSERT_TRUE(options.assumed_controller.has_value());
+  EXPECT_EQ(options.assumed_controller->kp, paper.controller.kp);
+  EXPECT_EQ(options.assumed_controller->kd, paper.controller.kd);
   EXPECT_EQ(options.max_evaluations, 20000);
   EXPECT_EQ(options.max_seconds, 120.0);
   EXPECT_EQ(options.relative_x_tolerance, defaults.relative_x_tolerance);
@@ -655,6 +658,31 @@ TEST(IdentificationJson, SimulationSetsTheModelAndGainsByDefault) {
   const IdentificationSpec chosen = identification_from_json(explicit_model);
   EXPECT_EQ(chosen.preset.model.kinetic_energy, KineticEnergy::complete);
   EXPECT_EQ(chosen.options.controller->kp, Eigen::Vector4d(1, 2, 3, 4));
+}
+
+TEST(IdentificationJson, TruthOnlyWhenKnown) {
+  // An uploaded dataset: no truth unless the request gives it (never the preset's).
+  const IdentificationSpec uploaded = identification_from_json(identify_dataset);
+  EXPECT_EQ(uploaded.truth.size(), 0);
+  EXPECT_EQ(known_truth(uploaded, nullptr).size(), 0);
+  // The request's values, by name; the rest unknown (NaN).
+  const IdentificationSpec given = identification_from_json(with(identify_dataset, "truth", {{"m2", 20}, {"l2", 0.7}}));
+  const Eigen::VectorXd truth = known_truth(given, nullptr);
+  ASSERT_EQ(truth.size(), 8);
+  EXPECT_EQ(truth[1], 20.0);
+  EXPECT_EQ(truth[5], 0.7);
+  EXPECT_TRUE(std::isnan(truth[0]));
+  // A dataset some simulation made: that simulation's parameters.
+  SimulationSpec simulation = simulation_from_json({{"parameters", {{"m2", 21}}}});
+  EXPECT_EQ(known_truth(uploaded, &simulation)[1], 21.0);
+  EXPECT_EQ(known_truth(uploaded, &simulation)[0], 50.0);
+  // A request that simulates: its simulation's parameters, unless it gives truth itself.
+  const IdentificationSpec simulated = identification_from_json({{"simulation", {{"parameters", {{"m3", 12}}}}}});
+  EXPECT_EQ(known_truth(simulated, nullptr)[2], 12.0);
+  // Validated like the other parameter maps.
+  expect_identification_error(with(identify_dataset, "truth", {{"m9", 1}}), "truth.m9", "unknown parameter \"m9\" in truth");
+  expect_identification_error(with(identify_dataset, "truth", {{"m2", -1}}), "truth.m2", "must not be negative");
+  expect_identification_error(with(identify_dataset, "truth", 3), "truth", "a JSON object");
 }
 
 TEST(IdentificationJson, SimulatedDataIsCheckedUpFront) {
@@ -791,7 +819,8 @@ TEST(CheckAgainstData, SamplesMustFillTheFilter) {
 
 TEST(CheckAgainstData, ColumnsTheMethodAndTorqueSourceNeed) {
   expect_error([] { check_against_data(spec_with({{"method", "output-error"}}), 4, 1000, true, false); }, "method",
-               "output-error simulates the closed loop from the recorded reference: the dataset has no ref columns");
+               "output-error simulates the closed loop from the recorded reference: the dataset has no ref columns, "
+               "and without the reference r the controller followed");
   expect_error([] { check_against_data(spec_with({{"method", "two-stage"}}), 4, 1000, true, false); }, "method",
                "two-stage");
   expect_error([] { check_against_data(spec_with({{"torque_source", "reference"}}), 4, 1000, true, false); },

@@ -281,8 +281,65 @@ expect_error "identify: wrong gain count" 2 "--kp needs 4 comma-separated values
   "$manipid" identify paper.csv --kp 1,2,3
 expect_error "identify: too few samples for the filter" 2 "the data has" \
   "$manipid" identify <(head -100 paper.csv) --half-length 100 --band 0.2
-expect_error "identify: output-error without ref" 2 "no ref columns" \
+expect_error "identify: output-error without ref, saying why" 2 "needs the reference r the controller followed" \
   "$manipid" identify <(cut -d, -f1-9 paper.csv) --method output-error
+
+# ---- identify: true values only when known ----------------------------------------------------
+# A CSV says nothing of the robot it came from: no "true" column unless the user gives --truth.
+check "identify: no true column for a CSV without --truth" bash -c "grep -E '^parameter ' table.txt | grep -vq true"
+check "identify: no true value beside an estimate" bash -c "awk '\$1 == \"m2\" { exit NF != 4 }' table.txt"
+check "identify --json: truth null without --truth" grep -q '"truth": null' result.json
+"$manipid" identify paper.csv --half-length 100 --band 0.2 --truth m2=25,l2=0.8 --truth m3=15 >truth.txt
+check "identify --truth: the true column" bash -c "grep -E '^parameter ' truth.txt | grep -q true"
+check "identify --truth: m2's true value beside its estimate" bash -c "awk '\$1 == \"m2\" { exit \$5 != 25 }' truth.txt"
+check "identify --truth: l2 and m3 too" bash -c "awk '\$1 == \"l2\" && \$5 == 0.8 { a = 1 } \$1 == \"m3\" && \$5 == 15 { b = 1 } END { exit !(a && b) }' truth.txt"
+check "identify --truth: m4 not given, no value" bash -c "awk '\$1 == \"m4\" { exit \$5 != \"-\" }' truth.txt"
+"$manipid" identify paper.csv --json --half-length 100 --band 0.2 --truth m2=25 >truth.json
+check "identify --json --truth: the given values" bash -c "grep -A2 '\"truth\"' truth.json | grep -q '\"m2\": 25'"
+expect_error "identify --truth: unknown name" 2 "--truth m9=1" \
+  "$manipid" identify paper.csv --truth m9=1
+expect_error "identify --truth: not a number" 2 "--truth m2=abc: 'abc' is not a finite number" \
+  "$manipid" identify paper.csv --truth m2=abc
+
+# ---- identify: the PD gains from the data ----------------------------------------------------
+# Another arm (lighter, other lengths) under other gains (Kp 300, Kd 30): the gains are read from
+# its tau, q and ref; the paper's gains, given, are named as contradicted, with what the data suggest.
+other=(--param m1=8,m2=4,m3=2,m4=1,l1=0.3,l2=0.5,l3=0.4,l4=0.25)
+"$manipid" simulate "${other[@]}" --kp 300,300,300,300 --kd 30,30,30,30 --out other.csv 2>/dev/null
+check "simulate --kp/--kd: other gains change the run" differ other.csv paper.csv
+init=(--init m1=8.1,m2=4.1,m3=2.1,m4=1.1,l1=0.31,l2=0.51,l3=0.41,l4=0.26 --half-length 100 --band 0.2)
+"$manipid" identify other.csv "${init[@]}" --json >other.json
+gains_ok() {  # the estimated gains in the JSON within 1 % of Kp 300, Kd 30
+  python3 -c '
+import json, sys
+gains = json.load(open(sys.argv[1]))["gains"]
+estimated = gains["estimated"]
+ok = all(abs(k - 300) < 3 for k in estimated["kp"]) and all(abs(k - 30) < 0.3 for k in estimated["kd"])
+sys.exit(0 if ok and gains["source"] == sys.argv[2] else 1)' "$@"
+}
+check "identify: the gains estimated from the data (input-error uses none)" gains_ok other.json none
+"$manipid" identify other.csv "${init[@]}" --torque-source reference --json >other_reference.json
+check "identify --torque-source reference: the estimated gains form the torque" gains_ok other_reference.json estimated
+"$manipid" identify other.csv "${init[@]}" --torque-source reference \
+  --kp 3800,40000,10000,500 --kd 159.5,120,50,2 >other_paper_gains.txt
+check "identify: given gains the data contradict are named" \
+  grep -q 'joint 2: the given PD gains Kp = 40000, Kd = 120 do not fit the data' other_paper_gains.txt
+check "identify: ... with the gains the data suggest" grep -q '^PD gains the data suggest: Kp = (300' other_paper_gains.txt
+# No tau: the gains cannot be estimated; the preset's are assumed, and the result says so.
+cut -d, -f1-5,10-13 paper.csv >no_tau.csv
+"$manipid" identify no_tau.csv --half-length 100 --band 0.2 >no_tau.txt
+check "identify without tau: the preset's gains, said to be assumed" bash -c "
+  grep -q '^PD gains (assumed: the preset.s): Kp = (3800, 40000, 10000, 500)' no_tau.txt &&
+  grep -q 'the PD gains were neither given nor estimable' no_tau.txt"
+expect_error "simulate --kp: one per joint" 2 "--kp needs 4 comma-separated values" \
+  "$manipid" simulate --kp 1,2 --out never.csv
+
+# ---- identify: is the residual noise? -------------------------------------------------------
+# Clean data: the residual is the method's bias and the standard errors say nothing of the error.
+check "identify: bias-dominated residual on clean data is named" grep -q "the residual is the method's bias, not noise" table.txt
+"$manipid" simulate --noise-q 1e-4 --quantize-q 16 --noise-tau-relative 0.01 --out noisy.csv 2>/dev/null
+"$manipid" identify noisy.csv >noisy_table.txt
+check "identify: noisy data, no bias warning" bash -c "grep -q '^cost' noisy_table.txt && ! grep -q 'the method.s bias, not noise' noisy_table.txt"
 
 # ---- excitation: optimal excitation trajectories for URDF robots -------------------------------
 

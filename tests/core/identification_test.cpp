@@ -145,6 +145,40 @@ TEST(Identification, AutomaticFilterBeatsThePaperOnTheCompleteModel) {
   EXPECT_EQ(result.identifiability.unidentifiable, (std::vector<std::string>{"m1", "l1"}));
 }
 
+bool warns_of_bias(const IdentificationResult& result) {
+  return std::any_of(result.warnings.begin(), result.warnings.end(), [](const std::string& warning) {
+    return warning.find("the residual is the method's bias, not noise") != std::string::npos;
+  });
+}
+
+TEST(Identification, SaysWhenTheResidualIsBiasNotNoise) {
+  // Noise-free data: the residual is the method's smooth bias, so the standard errors are no
+  // statement about the error: the result says so, for the default (filter chosen from the data)
+  // and the paper's filter alike.
+  const Preset preset = cedro2009();
+  const Trajectory& clean = paper_run(KineticEnergy::complete);
+  IdentificationOptions automatic;
+  automatic.initial = preset.initial_parameters;
+  const IdentificationResult clean_automatic = identify(preset.model, clean, automatic);
+  EXPECT_TRUE(warns_of_bias(clean_automatic)) << clean_automatic.residual_rms << " vs " << clean_automatic.noise_rms;
+  const IdentificationResult clean_paper = identify(preset.model, clean, paper_options(preset));
+  EXPECT_TRUE(warns_of_bias(clean_paper)) << clean_paper.residual_rms << " vs " << clean_paper.noise_rms;
+  // The paper's noisy case (manipid simulate --noise-q 1e-4 --quantize-q 16 --noise-tau-relative 0.01):
+  // the residual is noise, no such warning.
+  Trajectory noisy = clean;
+  MeasurementNoise noise;
+  noise.q_sigma = 1e-4;
+  noise.quantize_bits = 16;
+  noise.tau_relative_sigma = 0.01;
+  apply_measurement_noise(noisy, noise);
+  for (const IdentificationOptions& options : {automatic, paper_options(preset)}) {
+    const IdentificationResult result = identify(preset.model, noisy, options);
+    EXPECT_FALSE(warns_of_bias(result)) << result.residual_rms << " vs " << result.noise_rms;
+    EXPECT_GT(result.noise_rms, 0.0);  // the noise was found
+    EXPECT_LE(result.residual_rms, 10 * result.noise_rms);
+  }
+}
+
 TEST(Identification, GradientAlgorithmsReachTheSameMinimum) {
   const Preset preset = cedro2009(KineticEnergy::paper);
   IdentificationOptions options = paper_options(preset);

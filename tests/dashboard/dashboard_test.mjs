@@ -76,6 +76,29 @@ try {
   check(await page.locator("#correlation tbody td").count() === 36, "6 × 6 correlation heat map (m1 and l1 have none)");
   await page.screenshot({ path: path.join(artifacts, "job-1280x800.png"), fullPage: true });
 
+  // The same data uploaded: nothing says which robot made them, so no true values anywhere —
+  // unless the request gives them ("truth").
+  const csv = await fetch(`${url}/v1/datasets/${job.dataset_id}/data?format=csv`).then((r) => r.text());
+  const uploaded = await fetch(`${url}/v1/datasets`, { method: "POST", headers: { "Content-Type": "text/csv" }, body: csv })
+    .then((r) => r.json());
+  const identifyUploaded = (extra) => fetch(`${url}/v1/identifications`, {
+    method: "POST", headers: { "Content-Type": "application/json" },
+    body: JSON.stringify({ dataset_id: uploaded.id, half_length: 100, band: 0.2, ...extra }) }).then((r) => r.json());
+  for (const [truth, label] of [[undefined, "uploaded data"], [{ m2: 25 }, "uploaded data with truth"]]) {
+    const submitted = await identifyUploaded(truth ? { truth } : {});
+    await page.goto(`${url}/jobs/${submitted.id}`);
+    await page.waitForSelector("body[data-ready=true]", { timeout: 240000 });
+    const head = await page.textContent("#result-table thead");
+    check(head.includes("True") === Boolean(truth), `${label}: ${truth ? "a" : "no"} True column`);
+    check(await series("#chart-parameter-m2") === (truth ? 2 : 1), `${label}: m2 chart ${truth ? "with" : "without"} a true value`);
+    if (truth) {
+      const row = await page.textContent('#result-table tr[data-parameter="m2"]');
+      check(row.includes("25"), "... the given m2 = 25 beside the estimate");
+    }
+  }
+  await page.goto(`${url}/jobs/${jobId}`);  // back to the paper's job for the narrow-screen check
+  await page.waitForSelector("body[data-ready=true]", { timeout: 240000 });
+
   // A narrow screen: nothing wider than the viewport but the scrollable tables.
   await page.setViewportSize({ width: 390, height: 844 });
   await page.waitForTimeout(300);

@@ -74,6 +74,8 @@ class PaperExperiment(unittest.TestCase):
         self.assertEqual(result["identifiability"]["combinations"][0]["name"], "m1*l1^2")
         self.assertIsNone(result["std_errors"]["m1"])
         self.assertEqual(job["progress"]["evaluations"], result["evaluations"])
+        # An uploaded file says nothing of the robot that made it: no true values (not the preset's).
+        self.assertIsNone(result["truth"])
 
         # The whole history is stored and pages through to the same count.
         entries, token = [], None
@@ -108,6 +110,34 @@ class PaperExperiment(unittest.TestCase):
         reference = identify_cli(self.csv_path)
         for name, value in reference["point"].items():
             self.assertAlmostEqual(job["result"]["point"][name], value, delta=1e-9 * abs(value), msg=name)
+        # The data were simulated here: the simulation's own parameters are the truth.
+        self.assertEqual(job["result"]["truth"], {"m1": 50, "m2": 25, "m3": 15, "m4": 5,
+                                                  "l1": 0.4, "l2": 0.8, "l3": 0.6, "l4": 0.2})
+
+    def test_truth_is_what_is_known(self):
+        # Values the user gives are shown as given; names are checked like the other parameter maps.
+        _, dataset = self.upload()
+        request = {"dataset_id": dataset["id"], "half_length": 100, "band": 0.2, "truth": {"m2": 25, "l2": 0.8}}
+        status, _, job = self.server.request("POST", "/v1/identifications", request)
+        self.assertEqual(status, 202, job)
+        job = self.server.wait_job(job["id"])
+        self.assertEqual(job["state"], "succeeded", job)
+        self.assertEqual(job["result"]["truth"], {"m2": 25, "l2": 0.8})
+        status, _, problem = self.server.request("POST", "/v1/identifications", {**request, "truth": {"m9": 1}})
+        self.assertEqual(status, 422, problem)
+        self.assertEqual(problem["field"], "truth.m9", problem)
+        # A dataset a simulation job made: that simulation's parameters.
+        status, _, simulation = self.server.request(
+            "POST", "/v1/simulations", {"preset": "cedro2009", "duration": 1.0, "parameters": {"m2": 21}})
+        simulation = self.server.wait_job(simulation["id"])
+        self.assertEqual(simulation["state"], "succeeded", simulation)
+        status, _, job = self.server.request(
+            "POST", "/v1/identifications", {"dataset_id": simulation["dataset_id"], "half_length": 100, "band": 0.2})
+        self.assertEqual(status, 202, job)
+        job = self.server.wait_job(job["id"])
+        self.assertEqual(job["state"], "succeeded", job)
+        self.assertEqual(job["result"]["truth"]["m2"], 21)
+        self.assertEqual(job["result"]["truth"]["m3"], 15)
 
     def test_simulation_job_creates_a_dataset(self):
         status, _, job = self.server.request("POST", "/v1/simulations", {"preset": "cedro2009", "duration": 1.0})

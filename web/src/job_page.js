@@ -1,6 +1,6 @@
 // job_page.js — one job at its own address, /jobs/{id}: state and progress; for an
 // identification the cost over evaluations (log scale) and each parameter's estimate over
-// evaluations beside its true value when the data were simulated (the paper's Figs. 4–5),
+// evaluations beside its true value when known (simulated here, or given as truth) (the paper's Figs. 4–5),
 // live while it runs; then the result table, correlation heat map, identifiability findings,
 // and the filtered measured torque beside the model torque at the estimate with the residual;
 // for every job with data, the measured angles (with the reference) and torques (Fig. 2).
@@ -16,7 +16,7 @@ const MAX_POINTS = 2000;  // per series, for drawing; the server keeps every sam
 const TERMINAL = ["succeeded", "failed", "cancelled"];
 const sleep = (ms) => new Promise((resolve) => setTimeout(resolve, ms));
 
-/** The simulation request behind a job's data, if its data were simulated (for true values). */
+/** The simulation request behind a job's data, if its data were simulated here. */
 async function simulationBehind(job) {
   if (job.kind === "simulation") return job.request;
   if (job.request.simulation) return job.request.simulation;
@@ -27,7 +27,15 @@ async function simulationBehind(job) {
   return source.kind === "simulation" ? source.request : source.request.simulation || null;
 }
 
+/**
+ * The true values, only where they are known: the server's word once the job has a result
+ * (result.truth: the user's "truth", else the simulation's parameters, else null), before that
+ * the request's "truth" or the simulation behind the data. Uploaded data have none: no preset's
+ * values beside another robot's estimates.
+ */
 async function trueValues(job) {
+  if (job.result && "truth" in job.result) return job.result.truth;
+  if (job.request.truth) return job.request.truth;
   const simulation = await simulationBehind(job).catch(() => null);
   if (!simulation) return null;
   const energy = simulation.kinetic_energy || "complete";
@@ -155,7 +163,7 @@ class HistoryCharts {
     parent.append(
       section("history", "Cost over evaluations", this.note, this.costBox),
       section("estimates", "Estimates over evaluations",
-        h("p", { class: "muted" }, truth ? "Dashed: the true value the data were simulated with." : "The data were not simulated here: no true values."),
+        h("p", { class: "muted" }, truth ? "Dashed: the true value (the simulation's, or as given in the request)." : "No true values are known for these data (they were not simulated here and the request gave none)."),
         h("div", { class: "grid" }, names.map((name) => this.parameterBoxes[name]))));
     this.charts = null;
   }

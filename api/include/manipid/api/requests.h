@@ -63,6 +63,10 @@ struct IdentificationSpec {
   std::optional<SimulationSpec> simulation;
   Preset preset;                           ///< the model identified (with kinetic energy)
   IdentificationOptions options;           ///< callbacks and cancel left empty
+  /// True values the user knows ("truth"), shown beside the estimates: 2n entries in θ order,
+  /// NaN where not given; empty when the request has none (a simulation's own parameters are
+  /// then the truth, see `known_truth`).
+  Eigen::VectorXd truth;
 };
 
 /// {"dataset_id": "ds_…" | "simulation": {<simulation request>},
@@ -71,8 +75,13 @@ struct IdentificationSpec {
 ///  "kp"?: [...], "kd"?: [...], "half_length"?: int | "auto", "band"?: number | "auto",
 ///  "torque_source"?: "auto"|"measured"|"reference", "weights"?: "unit"|"inverse-variance",
 ///  "max_evaluations"?, "max_seconds"?, "relative_x_tolerance"?, "relative_f_tolerance"?,
-///  "output_error_iterations"?}
+///  "output_error_iterations"?, "truth"?: {"m2": 20.0, ...}}
 IdentificationSpec identification_from_json(const nlohmann::json& body);
+
+/// The true values known for an identification: the request's "truth" when given, else the
+/// parameters of the simulation that makes its data (`simulation`: the request's own, or the one
+/// that made its dataset), else empty — data uploaded from elsewhere have no known truth.
+Eigen::VectorXd known_truth(const IdentificationSpec& spec, const SimulationSpec* simulation);
 
 /// Checks what needs the data: joint count matches the model, enough samples for the
 /// filter (> 2M+1), ref columns for output-error/two-stage or torque_source=reference.

@@ -16,7 +16,17 @@
 //                         "singular_values": [...]},
 //     "initial_cost", "final_cost", "evaluations", "simulations", "refinement_steps",
 //     "wall_seconds", "stop_reason", "cancelled",
-//     "filter": {"half_length", "band", "dt", "automatic"}, "torque_source", "warnings": [...] }
+//     "filter": {"half_length", "band", "dt", "automatic"}, "torque_source",
+//     "gains": {"source": "none"|"given"|"estimated"|"assumed", "kp": [...]|null, "kd": [...]|null,
+//               "estimated": {"kp", "kd", "relative_residual": [...]} | null},
+//     "residual_check": {"residual_rms", "noise_rms"} (the final residual's RMS and what the data's
+//               measurement noise would leave; far above it, the residual is the method's bias and
+//               the standard errors understate the error),
+//     "warnings": [...],
+//     "truth": {"m2": 25, ...} | null }
+// "truth" holds the true values where they are known — a simulation's own parameters, or values
+// the user gave (`--truth`, the request's "truth") — and is null otherwise: an uploaded file says
+// nothing of the robot it came from, so no preset's values are shown beside its estimates.
 #pragma once
 
 #include "manipid/core/identification.h"
@@ -27,7 +37,10 @@
 
 namespace manipid::api {
 
-nlohmann::ordered_json result_to_json(const IdentificationResult& result);
+/// `truth`: empty when unknown, else 2n entries in θ order with NaN for a value not given.
+nlohmann::ordered_json result_to_json(const IdentificationResult& result, const Eigen::VectorXd& truth = {});
+/// The known entries of `truth` by name ({"m2": 25, ...}), or null when none is known.
+nlohmann::ordered_json truth_to_json(const std::vector<std::string>& names, const Eigen::VectorXd& truth);
 /// History records as {"index", "cost", "parameters": {"m1": ...}} objects.
 nlohmann::ordered_json history_to_json(const std::vector<HistoryRecord>& history, const std::vector<std::string>& names);
 

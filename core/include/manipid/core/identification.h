@@ -18,6 +18,7 @@
 // why the optimiser stopped.
 #pragma once
 
+#include "manipid/core/controller_gains.h"
 #include "manipid/core/filters.h"
 #include "manipid/core/model.h"
 #include "manipid/core/resample.h"
@@ -29,6 +30,7 @@
 #include <algorithm>
 #include <atomic>
 #include <functional>
+#include <limits>
 #include <optional>
 #include <stdexcept>
 #include <string>
@@ -80,8 +82,16 @@ struct IdentificationOptions {
 
   TorqueSource torque_source = TorqueSource::automatic;
   JointWeighting weighting = JointWeighting::unit;
-  /// Controller gains, needed for TorqueSource::reference and by output-error.
+  /// Controller gains, used for TorqueSource::reference and by output-error and two-stage:
+  /// the gains the user gives (or that a simulation used). When empty and the data carry tau
+  /// and ref, the gains are estimated from the data (controller_gains.h, reported in the
+  /// result's `estimated_gains`); when empty and the data have no tau, `assumed_controller`
+  /// is used with a warning saying so. Given gains that the data contradict are used as given,
+  /// with a warning naming the joint and the gains the data suggest.
   std::optional<PdController> controller;
+  /// The gains to assume when none are given and the data cannot tell (no tau column), e.g.
+  /// the preset's; empty = such a request is refused.
+  std::optional<PdController> assumed_controller;
 
   /// Stopping rules (NLopt): relative tolerances on x and f, evaluation and time budgets.
   double relative_x_tolerance = 1e-10;
@@ -140,6 +150,15 @@ struct IdentifiabilityReport {
   }
 };
 
+/// Where the controller gains the method used came from.
+enum class GainSource {
+  none,       ///< no gains used (input-error on the measured torque)
+  given,      ///< IdentificationOptions::controller
+  estimated,  ///< fitted to the data's τ, q and r (IdentificationResult::estimated_gains)
+  assumed,    ///< IdentificationOptions::assumed_controller: neither given nor estimable
+};
+const char* to_string(GainSource source);
+
 struct IdentificationResult {
   IdentificationMethod method = IdentificationMethod::input_error;
   std::string algorithm;
@@ -163,6 +182,17 @@ struct IdentificationResult {
   FilterSettings filter;               ///< the filter used (chosen or given)
   bool filter_chosen_automatically = false;
   TorqueSource torque_source = TorqueSource::measured;
+  /// The PD gains the method used (empty for GainSource::none) and where they came from.
+  std::optional<PdController> controller;
+  GainSource gain_source = GainSource::none;
+  /// The gains fitted to the data whenever they carry τ, q and r, with the law's fit.
+  std::optional<GainFit> estimated_gains;
+  /// Is the final residual noise? Its RMS (filtered torque, N·m, for input-error; q, rad, for
+  /// output-error and two-stage) beside what the measurement noise found in the raw data would
+  /// leave there. A residual far above that (10×) is the method's bias, and the standard errors,
+  /// which assume noise, then understate the error (a warning says so). NaN if not assessed.
+  double residual_rms = std::numeric_limits<double>::quiet_NaN();
+  double noise_rms = std::numeric_limits<double>::quiet_NaN();
   std::vector<std::string> warnings;   ///< caveats users must read (e.g. about std errors)
   std::vector<HistoryRecord> history;  ///< bounded, see IdentificationOptions::history_limit
 };
