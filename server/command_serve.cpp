@@ -11,7 +11,7 @@
 #include "manipid/api/problem.h"
 #include "manipid/api/routes.h"
 
-#include <httplib.h>  // after the manipid headers: see api/src/http/route_state.h
+#include "manipid/api/http_server.h"  // includes httplib.h: after the manipid headers (api/src/http/route_state.h)
 
 #include <pthread.h>
 #include <signal.h>
@@ -133,7 +133,7 @@ int run_serve(const ServeOptions& options) {
   WorkerPool pool(*store, pool_options, log_line);
   JobService service(*store, pool, JobServiceOptions{options.queue_limit, log_line});
 
-  httplib::Server server;
+  api::HttpServer server;
   const int http_threads = options.http_threads;
   server.new_task_queue = [http_threads] { return new httplib::ThreadPool(static_cast<std::size_t>(http_threads)); };
   // Without TCP_NODELAY, Nagle plus delayed ACKs hold each keep-alive answer (headers and
@@ -149,12 +149,7 @@ int run_serve(const ServeOptions& options) {
   routes.log = log_line;
   api::register_routes(server, service, routes);
 
-  int port = options.port;
-  if (port == 0) {
-    port = server.bind_to_any_port(options.host);
-  } else if (!server.bind_to_port(options.host, port)) {
-    port = -1;
-  }
+  const int port = server.bind(options.host, options.port);
   if (port <= 0) {
     throw OutputError("cannot listen on " + options.host + ":" + std::to_string(options.port) +
                       " (address in use, or not an address of this machine)");

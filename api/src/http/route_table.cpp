@@ -62,6 +62,10 @@ void register_routes(httplib::Server& server, Service& service, RouteOptions opt
     request_started = Clock::now();
     return before_routing(*state, request, response);
   });
+  server.set_expect_100_continue_handler([state](const httplib::Request& request, httplib::Response& response) {
+    request_started = Clock::now();
+    return before_continue(*state, request, response);
+  });
   server.set_error_handler(httplib::Server::HandlerWithResponse(
       [state](const httplib::Request& request, httplib::Response& response) { return on_error(*state, request, response); }));
   server.set_exception_handler(on_exception);
