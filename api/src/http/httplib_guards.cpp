@@ -225,6 +225,7 @@ httplib::Server::HandlerResponse on_error(const RouteState& state, const httplib
       break;
     case 405: kind = ProblemKind::method_not_allowed; detail = "method " + request.method + " not allowed here"; break;
     case 413: kind = ProblemKind::payload_too_large; detail = "the body is larger than this server accepts (--max-body)"; break;
+    case 414: kind = ProblemKind::uri_too_long; detail = "the request target is longer than this server reads"; break;
     case 400: kind = ProblemKind::malformed_body; detail = "the request could not be read"; break;
     default:
       if (response.status < 500) {
