@@ -143,6 +143,10 @@ int run_serve(const ServeOptions& options) {
   server.set_keep_alive_timeout(2);
   server.set_read_timeout(30);
   server.set_write_timeout(30);
+  // A request's line and headers must arrive within 10 s of their first byte: a client
+  // trickling a byte a second holds a thread 10 s, not for ever (per-read timeouts never fire).
+  server.set_header_deadline(std::chrono::seconds(10));
+  server.set_listen_backlog(128);  // 0.11.4 listens with 5
   api::RouteOptions routes;
   routes.max_body = max_body;
   routes.token = options.token;
@@ -174,7 +178,9 @@ int run_serve(const ServeOptions& options) {
     pool.notify_changed();  // long-polls return now
     // cpp-httplib 0.11.4's stop() does nothing until listen has started.
     while (!server.is_running() && !listen_returned) std::this_thread::sleep_for(std::chrono::milliseconds(1));
-    server.stop();
+    // Stops listening and shuts every open connection down: 0.11.4's own stop() waits for
+    // each HTTP thread's client, and a trickling client never finishes.
+    server.stop_and_disconnect();
   });
 
   const bool listened = server.listen_after_bind();

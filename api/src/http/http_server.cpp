@@ -1,6 +1,6 @@
 // http_server.cpp — HttpServer (http_server.h): cpp-httplib 0.11.4's connection loop, taken
-// back so that a refusal closes its connection, the backlog is ours, a late request head is cut
-// off and stopping shuts every connection down. Requests are still read by httplib itself.
+// back so that a refusal closes its connection, the backlog is ours, a late request head or
+// body is cut off and stopping shuts every connection down. Requests are still read by httplib itself.
 #include "manipid/api/http_server.h"
 
 #include <poll.h>
@@ -91,13 +91,20 @@ void HttpServer::close_after_answer(httplib::Response& response) {
   close_requested = true;
 }
 
-void HttpServer::head_received() {
+void HttpServer::head_received(std::uint64_t declared_body) {
   if (current_server == nullptr) return;
-  std::lock_guard lock(current_server->mutex_);
-  if (auto found = current_server->connections_.find(current_socket); found != current_server->connections_.end()) {
-    found->second = Clock::time_point::max();
+  HttpServer& server = *current_server;
+  auto deadline = Clock::time_point::max();
+  if (declared_body > 0 && server.header_deadline_.count() > 0 && server.body_rate_ > 0) {
+    const double seconds = static_cast<double>(declared_body) / static_cast<double>(server.body_rate_);
+    deadline = Clock::now() + server.header_deadline_ +
+               std::chrono::duration_cast<Clock::duration>(std::chrono::duration<double>(std::min(seconds, 1e7)));
   }
+  std::lock_guard lock(server.mutex_);
+  if (auto found = server.connections_.find(current_socket); found != server.connections_.end()) found->second = deadline;
 }
+
+void HttpServer::body_received() { head_received(0); }
 
 /// Shuts down the connections whose request head is late; the thread reading it then sees the
 /// end of the stream, and httplib gives up on the request.

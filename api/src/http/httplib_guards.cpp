@@ -132,6 +132,10 @@ httplib::Server::HandlerResponse before_routing(RouteState& state, const httplib
   HttpServer::head_received();
   refuse_brotli(request);
   if (const auto problem = length_problem(state, request)) return refuse(response, *problem, request.path);
+  // The body (digits, at most --max-body: checked above) gets its own deadline.
+  HttpServer::head_received(request.has_header("Content-Length")
+                                ? std::stoull(request.get_header_value("Content-Length"))
+                                : 0);
   // The bearer token guards the API only: the dashboard's static files stay outside its reach
   // (the page asks for the token and sends it with its own API calls).
   const bool versioned = request.path.rfind("/v1/", 0) == 0 || request.path == "/v1";
@@ -208,6 +212,7 @@ std::string allowed_methods(const RouteState& state, const std::string& path) {
 /// the methods they take in Allow (RFC 9110 § 15.5.6).
 httplib::Server::HandlerResponse on_error(const RouteState& state, const httplib::Request& request,
                                           httplib::Response& response) {
+  HttpServer::body_received();
   if (!response.body.empty()) return httplib::Server::HandlerResponse::Unhandled;  // ours already
   ProblemKind kind = ProblemKind::internal;
   std::string detail = "internal error";

@@ -11,7 +11,8 @@
 // - stop() closes the listening socket, then joins every HTTP thread, each blocked until its
 //   client sends or its read timeout fires (30 s per read, so never with a trickling client).
 // - Per-read timeouts only: a client trickling one header byte a second holds a thread for ever.
-//   A header deadline (set_header_deadline) shuts the connection down when its head is late.
+//   A header deadline (set_header_deadline), and for a body a deadline from a minimum rate
+//   (set_minimum_body_rate), shut the connection down when the request is late.
 // Nothing here reads or parses HTTP: requests are still read and answered by httplib's own
 // process_request; this class only decides when a connection's socket is shut down.
 #pragma once
@@ -20,6 +21,7 @@
 
 #include <chrono>
 #include <condition_variable>
+#include <cstdint>
 #include <map>
 #include <mutex>
 #include <string>
@@ -53,8 +55,16 @@ class HttpServer : public httplib::Server {
   /// read and dropped for at most a second, so the client gets the answer before the FIN).
   static void close_after_answer(httplib::Response& response);
 
-  /// Called by the pre-routing hook: the request's head has arrived (its header deadline is met).
-  static void head_received();
+  /// A body must arrive at this rate at least, after its head: its deadline is the header
+  /// deadline plus declared length / rate (with a header deadline set; 0.11.4 has only a
+  /// per-read timeout, which a byte every few seconds never trips).
+  void set_minimum_body_rate(std::uint64_t bytes_per_second) { body_rate_ = bytes_per_second; }
+
+  /// Called by the hooks: the request's head has arrived (its header deadline is met), with a
+  /// body of `declared_body` bytes still to read (0: none), which gets its own deadline.
+  static void head_received(std::uint64_t declared_body = 0);
+  /// Called by the handlers (and the error hook): the body is read, no deadline while answering.
+  static void body_received();
 
  private:
   bool process_and_close_socket(socket_t sock) override;
@@ -62,6 +72,7 @@ class HttpServer : public httplib::Server {
 
   int backlog_ = 128;
   std::chrono::milliseconds header_deadline_{0};
+  std::uint64_t body_rate_ = 256 * 1024;
   std::mutex mutex_;
   std::condition_variable changed_;
   bool stopping_ = false;
