@@ -134,8 +134,7 @@ int run_serve(const ServeOptions& options) {
   JobService service(*store, pool, JobServiceOptions{options.queue_limit, log_line});
 
   api::HttpServer server;
-  const int http_threads = options.http_threads;
-  server.new_task_queue = [http_threads] { return new httplib::ThreadPool(static_cast<std::size_t>(http_threads)); };
+  server.set_http_threads(static_cast<std::size_t>(std::max(options.http_threads, 1)));
   // Without TCP_NODELAY, Nagle plus delayed ACKs hold each keep-alive answer (headers and
   // body are two writes) for ~40 ms: 360 status requests/s instead of thousands.
   server.set_tcp_nodelay(true);

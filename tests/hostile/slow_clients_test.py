@@ -5,7 +5,8 @@ Item 5 of the hardening issue, the part our code can mend around cpp-httplib 0.1
 head trickling a byte at a time is cut off 10 s after its first byte, a body when it is slower
 than 256 KiB/s after that (0.11.4's per-read timeouts never fire for either); SIGTERM with 20 trickling clients exits within 10 s (0.11.4's stop() waited
 for each of them: still running after 90 s); the listen backlog is 128 (0.11.4 listens with 5)
-and 64 simultaneous connects are all served. With more trickling clients than HTTP threads,
+and 64 simultaneous connects are all served; an idle keep-alive connection gives its thread up
+to a connection waiting for one. With more trickling clients than HTTP threads,
 another client waits for a head's deadline: the limit of 0.11.4's thread per connection. The
 times printed are measurements; the bounds asserted are generous ones, not benchmarks.
 
@@ -150,6 +151,36 @@ class SlowClients(unittest.TestCase):
             finally:
                 for trickler in tricklers:
                     trickler.stop()
+
+    def test_idle_keep_alive_connections_give_their_threads_to_a_waiting_client(self):
+        # 0.11.4 kept an idle keep-alive connection's thread for its whole timeout (2 s here),
+        # while a new connection waited for a thread.
+        with temporary_directory() as directory, Server(os.path.join(directory, "jobs.db"),
+                                                        "--http-threads", "2") as server:
+            idle = []
+            try:
+                for _ in range(2):
+                    connection = socket.create_connection((server.host, server.port), timeout=10)
+                    connection.sendall(b"GET /healthz HTTP/1.1\r\nHost: x\r\n\r\n")
+                    self.assertTrue(connection.recv(65536).startswith(b"HTTP/1.1 200"))
+                    idle.append(connection)  # kept alive, idle, each holding a thread
+                status, seconds = healthz_seconds(server)
+                print(f"\n  /healthz with both threads held by idle keep-alives: {seconds * 1000:.0f} ms", file=sys.stderr)
+                self.assertEqual(status, 200)
+                self.assertLess(seconds, 1.0)  # not the 2 s keep-alive timeout
+                closed = 0
+                for connection in idle:
+                    connection.settimeout(0.5)
+                    try:
+                        while connection.recv(65536):  # the rest of its answer, then the end
+                            pass
+                        closed += 1
+                    except socket.timeout:
+                        pass
+                self.assertGreaterEqual(closed, 1)  # one gave its thread up
+            finally:
+                for connection in idle:
+                    connection.close()
 
     @unittest.skipUnless(shutil.which("ss"), "needs ss (iproute2)")
     def test_the_listen_backlog_is_128_not_5(self):

@@ -8,7 +8,10 @@
 
 #include <algorithm>
 #include <array>
+#include <deque>
+#include <functional>
 #include <limits>
+#include <vector>
 
 namespace manipid::api {
 namespace {
@@ -48,9 +51,66 @@ void linger(socket_t sock) {
   }
 }
 
+/// httplib::ThreadPool plus a count of the connections waiting for a thread (its own queue is
+/// private), so an idle keep-alive connection can give its thread up to one.
+class CountingPool : public httplib::TaskQueue {
+ public:
+  CountingPool(std::size_t threads, std::atomic<std::size_t>& queued) : queued_(queued) {
+    for (std::size_t i = 0; i < threads; ++i) threads_.emplace_back([this] { work(); });
+  }
+  ~CountingPool() override { shutdown(); }
+
+  void enqueue(std::function<void()> task) override {
+    {
+      std::lock_guard lock(mutex_);
+      tasks_.push_back(std::move(task));
+      ++queued_;
+    }
+    ready_.notify_one();
+  }
+
+  void shutdown() override {
+    {
+      std::lock_guard lock(mutex_);
+      stopping_ = true;
+    }
+    ready_.notify_all();
+    for (std::thread& thread : threads_) {
+      if (thread.joinable()) thread.join();
+    }
+  }
+
+ private:
+  void work() {
+    for (;;) {
+      std::function<void()> task;
+      {
+        std::unique_lock lock(mutex_);
+        ready_.wait(lock, [this] { return stopping_ || !tasks_.empty(); });
+        if (tasks_.empty()) return;  // stopping, and every accepted connection served
+        task = std::move(tasks_.front());
+        tasks_.pop_front();
+        --queued_;
+      }
+      task();
+    }
+  }
+
+  std::atomic<std::size_t>& queued_;
+  std::vector<std::thread> threads_;
+  std::deque<std::function<void()>> tasks_;
+  std::mutex mutex_;
+  std::condition_variable ready_;
+  bool stopping_ = false;
+};
+
 }  // namespace
 
 HttpServer::HttpServer() = default;
+
+void HttpServer::set_http_threads(std::size_t threads) {
+  new_task_queue = [this, threads] { return new CountingPool(std::max<std::size_t>(threads, 1), queued_); };
+}
 
 HttpServer::~HttpServer() {
   {
@@ -106,6 +166,19 @@ void HttpServer::head_received(std::uint64_t declared_body) {
 
 void HttpServer::body_received() { head_received(0); }
 
+/// Waits for the next request on a kept-alive connection: false when `idle` passes first, or
+/// as soon as an accepted connection is waiting for a thread (this one then gives its thread up).
+bool HttpServer::wait_next_request(socket_t sock, std::chrono::milliseconds idle) {
+  const auto deadline = Clock::now() + idle;
+  constexpr auto slice = std::chrono::milliseconds(50);
+  for (;;) {
+    if (queued_ > 0) return false;
+    const auto left = std::chrono::duration_cast<std::chrono::milliseconds>(deadline - Clock::now());
+    if (left.count() <= 0) return false;
+    if (wait_readable(sock, std::min(left, std::chrono::milliseconds(slice)))) return true;
+  }
+}
+
 /// Shuts down the connections whose request head is late; the thread reading it then sees the
 /// end of the stream, and httplib gives up on the request.
 void HttpServer::watch_deadlines() {
@@ -137,7 +210,11 @@ bool HttpServer::process_and_close_socket(socket_t sock) {
   bool lingering = false;
   const std::chrono::milliseconds idle{std::chrono::seconds(keep_alive_timeout_sec_)};
   for (std::size_t count = keep_alive_max_count_; count > 0 && svr_sock_ != INVALID_SOCKET; --count) {
-    if (!wait_readable(sock, idle)) break;
+    if (count == keep_alive_max_count_) {
+      if (!wait_readable(sock, idle)) break;
+    } else if (!wait_next_request(sock, idle)) {
+      break;
+    }
     {
       std::lock_guard lock(mutex_);
       if (stopping_) break;

@@ -8,6 +8,8 @@
 //   refusal before the body is read (401, 411, 413, 415, 400) would leave that body to be parsed
 //   as the next request: request smuggling. close_after_answer() ends the connection instead.
 // - listen() is called with a backlog of 5: 64 simultaneous connects got resets.
+// - An idle keep-alive connection holds its thread until its timeout, while accepted
+//   connections wait for a thread: set_http_threads drops idle ones when one is waiting.
 // - stop() closes the listening socket, then joins every HTTP thread, each blocked until its
 //   client sends or its read timeout fires (30 s per read, so never with a trickling client).
 // - Per-read timeouts only: a client trickling one header byte a second holds a thread for ever.
@@ -19,6 +21,7 @@
 
 #include <httplib.h>
 
+#include <atomic>
 #include <chrono>
 #include <condition_variable>
 #include <cstdint>
@@ -35,6 +38,11 @@ class HttpServer : public httplib::Server {
   ~HttpServer() override;
   HttpServer(const HttpServer&) = delete;
   HttpServer& operator=(const HttpServer&) = delete;
+
+  /// `threads` connections served at once (the task queue httplib runs connections on). A
+  /// connection waiting for a thread makes idle keep-alive connections close at once instead
+  /// of holding their threads until their keep-alive timeout.
+  void set_http_threads(std::size_t threads);
 
   /// The listen backlog applied when binding (0.11.4 itself listens with 5).
   void set_listen_backlog(int backlog) { backlog_ = backlog; }
@@ -68,9 +76,11 @@ class HttpServer : public httplib::Server {
 
  private:
   bool process_and_close_socket(socket_t sock) override;
+  bool wait_next_request(socket_t sock, std::chrono::milliseconds idle);
   void watch_deadlines();
 
   int backlog_ = 128;
+  std::atomic<std::size_t> queued_{0};  ///< accepted connections waiting for a thread
   std::chrono::milliseconds header_deadline_{0};
   std::uint64_t body_rate_ = 256 * 1024;
   std::mutex mutex_;
