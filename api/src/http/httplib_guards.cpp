@@ -179,6 +179,13 @@ httplib::Server::HandlerResponse before_routing(RouteState& state, const httplib
   return httplib::Server::HandlerResponse::Unhandled;
 }
 
+void after_routing(const httplib::Request&, httplib::Response& response) {
+  if (response.get_header_value("Connection") != "close") return;
+  response.headers.erase("Connection");
+  response.headers.erase("Keep-Alive");
+  response.set_header("Connection", "close");
+}
+
 /// cpp-httplib 0.11.4 calls the logger for a request it refused at the request line (400),
 /// with the method as sent: any token, quotes and braces included. As a label it would break
 /// the Prometheus text of /metrics and add a counter per token a client cares to invent.

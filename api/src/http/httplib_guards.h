@@ -32,6 +32,11 @@ httplib::Server::HandlerResponse before_routing(RouteState& state, const httplib
 /// the client sends it (curl asks so for bodies over 1 MiB). Returns 100 or the refusal's status.
 int before_continue(const RouteState& state, const httplib::Request& request, httplib::Response& response);
 
+/// The post-routing hook (0.11.4 runs it after adding its own Connection or Keep-Alive
+/// header): an answer that closes its connection says "Connection: close" once, and no
+/// "Keep-Alive" beside it.
+void after_routing(const httplib::Request& request, httplib::Response& response);
+
 /// The request's method as a /metrics label: one of the methods httplib parses, else "other".
 std::string method_label(const std::string& method);
 
