@@ -142,6 +142,16 @@ class Refusals(unittest.TestCase):
         self.assert_refused_and_closed(self.server, post_head("/v1/datasets", len(body)), body, 413,
                                        "PAYLOAD_TOO_LARGE", "body")
 
+    def test_a_client_that_sends_a_too_large_body_before_reading_still_gets_its_413(self):
+        # Python's http.client (and curl below 1 MiB) send the whole body first: the refused
+        # body is drained, not answered with a reset.
+        for size in (64 * 1024, 8 * 1024 * 1024):
+            with self.subTest(size=size):
+                status, headers, problem = self.server.request("POST", "/v1/datasets", b"1" * size,
+                                                               {"Content-Type": "text/csv"})
+                self.assertEqual(status, 413, problem)
+                self.assertEqual(problem["code"], "PAYLOAD_TOO_LARGE")
+
     def test_two_content_lengths_equal_or_not_are_400_and_close(self):
         for lengths in ((len(SMUGGLED), len(SMUGGLED)), (0, len(SMUGGLED)), (len(SMUGGLED), 0)):
             with self.subTest(lengths=lengths):

@@ -25,9 +25,11 @@ thread_local bool close_requested = false;
 
 /// After an answer that closes the connection: the client's unread bytes (a refused body) are
 /// read and dropped for at most this long and this much, so that closing does not reset the
-/// connection (a close with unread data sends RST, and the client may lose the answer).
-constexpr auto linger_time = std::chrono::milliseconds(1000);
-constexpr std::size_t linger_bytes = 1u << 20;
+/// connection (a close with unread data sends RST, and the client may lose the answer). An
+/// honest client that sends its whole too-large body before reading (curl without
+/// Expect: 100-continue, Python's http.client) still reads its 413 when the body fits.
+constexpr auto linger_time = std::chrono::milliseconds(2000);
+constexpr std::size_t linger_bytes = 64u << 20;
 
 /// Waits until `sock` is readable (or closed): false when `timeout` passes first.
 bool wait_readable(socket_t sock, std::chrono::milliseconds timeout) {

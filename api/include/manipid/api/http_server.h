@@ -60,7 +60,7 @@ class HttpServer : public httplib::Server {
 
   /// Called by a hook or handler on the request's own thread: the answer carries
   /// "Connection: close" and, once it is written, the connection is closed (its unread bytes
-  /// read and dropped for at most a second, so the client gets the answer before the FIN).
+  /// read and dropped for at most 2 s and 64 MiB, so the client gets the answer, not a reset).
   static void close_after_answer(httplib::Response& response);
 
   /// A body must arrive at this rate at least, after its head: its deadline is the header
