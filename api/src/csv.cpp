@@ -22,16 +22,18 @@ namespace manipid::api {
 namespace {
 
 constexpr std::string_view structure_field = "csv";
-// Quoted field text is cut to this length so a runaway field cannot flood the message.
+// Quoted field text is cut to this length so a runaway field cannot flood the message; a
+// number is cut shorter (a 300-digit number says nothing more at 20 digits than at 300).
 constexpr std::size_t max_quoted_field = 40;
+constexpr std::size_t max_quoted_number = 20;
 
 std::string line_prefix(std::size_t line) { return "line " + std::to_string(line); }
 
-std::string quote_field(std::string_view text) {
+std::string quote_field(std::string_view text, std::size_t most = max_quoted_field) {
   // Built by append: g++ 12 -O3 warns falsely (-Wrestrict, PR 105329) on "'" + std::string.
   std::string quoted(1, '\'');
-  quoted.append(text.substr(0, max_quoted_field));
-  quoted.append(text.size() > max_quoted_field ? "...'" : "'");
+  quoted.append(text.substr(0, most));
+  quoted.append(text.size() > most ? "...'" : "'");
   return quoted;
 }
 
@@ -96,10 +98,10 @@ std::string parse_number(std::string_view field, double& value) {
       value = approximate;
       return {};
     }
-    return quote_field(field) + " is out of range for a double";
+    return quote_field(field, max_quoted_number) + " is out of range for a double";
   }
-  if (error != std::errc() || end != last) return quote_field(field) + " is not a number";
-  if (!std::isfinite(value)) return quote_field(field) + " is not a finite number";
+  if (error != std::errc() || end != last) return quote_field(field, max_quoted_number) + " is not a number";
+  if (!std::isfinite(value)) return quote_field(field, max_quoted_number) + " is not a finite number";
   return {};
 }
 

@@ -44,6 +44,12 @@ std::string format_number(double value);
 /// Characters (UTF-8 code points) in a string.
 std::size_t character_count(std::string_view text);
 
+/// A request body parsed as JSON, refusing what nlohmann would take silently: a key twice in
+/// one object (nlohmann keeps the last) is InputError naming the key's path. Text that is not
+/// JSON, and numbers beyond a double (1e400), are ApiError malformed_body (field "body") saying
+/// where, in words, quoting at most 20 characters of the input.
+Json parse_request(const std::string& text);
+
 /// A JSON object read member by member. The constructor checks that the value is an object
 /// and that every key is accepted, so a typo ("max_evaluation") is an error, never ignored.
 class ObjectFields {

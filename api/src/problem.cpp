@@ -23,6 +23,7 @@ ProblemEntry entry_of(ProblemKind kind) {
     case ProblemKind::unsupported_media: return {415, "UNSUPPORTED_MEDIA", "The media type is not supported"};
     case ProblemKind::length_required: return {411, "LENGTH_REQUIRED", "A Content-Length is required"};
     case ProblemKind::payload_too_large: return {413, "PAYLOAD_TOO_LARGE", "The request body is too large"};
+    case ProblemKind::uri_too_long: return {414, "URI_TOO_LONG", "The request target is too long"};
     case ProblemKind::unauthorized: return {401, "UNAUTHORIZED", "Authentication is required"};
     case ProblemKind::not_found: return {404, "NOT_FOUND", "The resource was not found"};
     case ProblemKind::method_not_allowed: return {405, "METHOD_NOT_ALLOWED", "The method is not allowed"};
@@ -92,6 +93,19 @@ std::string valid_utf8(std::string_view text) {
   return result;
 }
 
+/// Details are sentences for people, not dumps: past this many bytes the text is cut (at a
+/// character boundary) with "...", whatever a message builder quoted.
+constexpr std::size_t max_detail_bytes = 400;
+constexpr std::size_t max_field_bytes = 120;
+
+std::string capped(std::string text, std::size_t most) {
+  if (text.size() <= most) return text;
+  std::size_t end = most - 3;
+  while (end > 0 && (static_cast<unsigned char>(text[end]) & 0xC0) == 0x80) --end;
+  text.resize(end);
+  return text + "...";
+}
+
 }  // namespace
 
 int status_of(ProblemKind kind) { return entry_of(kind).status; }
@@ -105,9 +119,9 @@ nlohmann::json problem_to_json(const Problem& problem, const std::string& instan
   body["title"] = entry.title;
   body["status"] = entry.status;
   // RFC 9457 makes detail optional, but clients print it: never leave it empty.
-  body["detail"] = problem.detail.empty() ? std::string(entry.title) : valid_utf8(problem.detail);
+  body["detail"] = problem.detail.empty() ? std::string(entry.title) : capped(valid_utf8(problem.detail), max_detail_bytes);
   body["code"] = entry.code;
-  if (!problem.field.empty()) body["field"] = valid_utf8(problem.field);
+  if (!problem.field.empty()) body["field"] = capped(valid_utf8(problem.field), max_field_bytes);
   if (!instance.empty()) body["instance"] = valid_utf8(instance);
   return body;
 }

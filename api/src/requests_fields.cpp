@@ -2,10 +2,14 @@
 // range checks with messages that name the field, say what was expected and what was found.
 #include "json_fields.h"
 
+#include "manipid/api/problem.h"
+
 #include <algorithm>
 #include <charconv>
 #include <cmath>
 #include <cstddef>
+#include <set>
+#include <utility>
 
 namespace manipid::api::fields {
 namespace {
@@ -49,6 +53,106 @@ std::string range_text(long long lowest, long long highest) {
 }
 
 }  // namespace
+
+// ---- Parsing ------------------------------------------------------------------------------
+
+namespace {
+
+/// Input quoted in a parse error: its last `most` characters (where the parser stopped).
+std::string quoted_tail(std::string_view text, std::size_t most = 20) {
+  if (text.size() <= most) return "'" + std::string(text) + "'";
+  std::size_t start = text.size() - most;
+  while (start < text.size() && (static_cast<unsigned char>(text[start]) & 0xC0) == 0x80) ++start;
+  return "'..." + std::string(text.substr(start)) + "'";
+}
+
+/// Where the parser is, as a field path, while parsing: one frame per open object or array.
+class ParsePosition {
+ public:
+  /// The path of the value being read now ("initial.m1", "q[0][3]"; "" at the top level).
+  std::string current() const {
+    if (frames_.empty()) return "";
+    const Frame& frame = frames_.back();
+    return frame.object ? member_path(frame.path, frame.key) : element_path(frame.path, frame.index);
+  }
+
+  /// nlohmann's parser callback: follows the structure and refuses a key seen twice in one object.
+  bool on_event(Json::parse_event_t event, const Json& parsed) {
+    switch (event) {
+      case Json::parse_event_t::object_start:
+      case Json::parse_event_t::array_start: {
+        std::string path = current();
+        frames_.push_back(Frame{event == Json::parse_event_t::object_start, std::move(path), {}, {}, 0});
+        break;
+      }
+      case Json::parse_event_t::key: {
+        Frame& frame = frames_.back();
+        const std::string& key = parsed.get_ref<const std::string&>();
+        if (!frame.keys.insert(key).second) {
+          const std::string field = member_path(frame.path, shortened(key));
+          throw InputError(field, "the key \"" + shortened(key) + "\" appears twice in " +
+                                      (frame.path.empty() ? std::string("the body") : frame.path) + "; send each key once");
+        }
+        frame.key = key;
+        break;
+      }
+      case Json::parse_event_t::object_end:
+      case Json::parse_event_t::array_end:
+        frames_.pop_back();
+        if (!frames_.empty() && !frames_.back().object) ++frames_.back().index;
+        break;
+      case Json::parse_event_t::value:
+        if (!frames_.empty() && !frames_.back().object) ++frames_.back().index;
+        break;
+    }
+    return true;
+  }
+
+ private:
+  struct Frame {
+    bool object;
+    std::string path;
+    std::set<std::string> keys;  ///< an object's keys so far
+    std::string key;             ///< an object's current key
+    std::size_t index;           ///< an array's current element
+  };
+  std::vector<Frame> frames_;
+};
+
+/// nlohmann's "parse error at line 1, column 5: syntax error while parsing value - invalid
+/// literal; last read: '<token>'" without its "[json.exception...]" prefix, the token cut short.
+std::string syntax_error_text(const Json::parse_error& error) {
+  std::string message = error.what();
+  if (const auto start = message.find("parse error"); start != std::string::npos) message = message.substr(start);
+  const std::string marker = "last read: '";
+  if (const auto quote = message.find(marker); quote != std::string::npos) {
+    const std::size_t token = quote + marker.size();
+    const std::size_t end = message.rfind('\'');
+    const std::string_view read = end > token ? std::string_view(message).substr(token, end - token) : std::string_view();
+    message = message.substr(0, quote) + "last read: " + quoted_tail(read) + (end > token ? message.substr(end + 1) : "");
+  }
+  return message;
+}
+
+}  // namespace
+
+Json parse_request(const std::string& text) {
+  ParsePosition position;
+  try {
+    return Json::parse(text, [&position](int, Json::parse_event_t event, Json& parsed) {
+      return position.on_event(event, parsed);
+    });
+  } catch (const Json::parse_error& error) {
+    throw ApiError(ProblemKind::malformed_body, "the body is not valid JSON: " + syntax_error_text(error), "body");
+  } catch (const Json::out_of_range&) {
+    // 406 "number overflow parsing '<token>'": the only out_of_range the parser throws.
+    const std::string where = position.current();
+    throw ApiError(ProblemKind::malformed_body,
+                   "the body is not valid JSON for this server: a number " + std::string(where.empty() ? "" : "at " + where + " ") +
+                       "is out of range (beyond about 1.8e308)",
+                   "body");
+  }
+}
 
 std::string member_path(const std::string& parent, std::string_view key) {
   if (parent.empty()) return std::string(key);

@@ -11,7 +11,7 @@
 #include "manipid/api/problem.h"
 #include "manipid/api/routes.h"
 
-#include <httplib.h>  // after the manipid headers: see api/src/http/route_state.h
+#include "manipid/api/http_server.h"  // includes httplib.h: after the manipid headers (api/src/http/route_state.h)
 
 #include <pthread.h>
 #include <signal.h>
@@ -133,9 +133,8 @@ int run_serve(const ServeOptions& options) {
   jobs::WorkerPool pool(*store, pool_options, log_line);
   jobs::JobService service(*store, pool, jobs::JobServiceOptions{options.queue_limit, log_line});
 
-  httplib::Server server;
-  const int http_threads = options.http_threads;
-  server.new_task_queue = [http_threads] { return new httplib::ThreadPool(static_cast<std::size_t>(http_threads)); };
+  api::HttpServer server;
+  server.set_http_threads(static_cast<std::size_t>(std::max(options.http_threads, 1)));
   // Without TCP_NODELAY, Nagle plus delayed ACKs hold each keep-alive answer (headers and
   // body are two writes) for ~40 ms: 360 status requests/s instead of thousands.
   server.set_tcp_nodelay(true);
@@ -143,18 +142,17 @@ int run_serve(const ServeOptions& options) {
   server.set_keep_alive_timeout(2);
   server.set_read_timeout(30);
   server.set_write_timeout(30);
+  // A request's line and headers must arrive within 10 s of their first byte: a client
+  // trickling a byte a second holds a thread 10 s, not for ever (per-read timeouts never fire).
+  server.set_header_deadline(std::chrono::seconds(10));
+  server.set_listen_backlog(128);  // 0.11.4 listens with 5
   api::RouteOptions routes;
   routes.max_body = max_body;
   routes.token = options.token;
   routes.log = log_line;
   api::register_routes(server, service, routes);
 
-  int port = options.port;
-  if (port == 0) {
-    port = server.bind_to_any_port(options.host);
-  } else if (!server.bind_to_port(options.host, port)) {
-    port = -1;
-  }
+  const int port = server.bind(options.host, options.port);
   if (port <= 0) {
     throw OutputError("cannot listen on " + options.host + ":" + std::to_string(options.port) +
                       " (address in use, or not an address of this machine)");
@@ -179,7 +177,9 @@ int run_serve(const ServeOptions& options) {
     pool.notify_changed();  // long-polls return now
     // cpp-httplib 0.11.4's stop() does nothing until listen has started.
     while (!server.is_running() && !listen_returned) std::this_thread::sleep_for(std::chrono::milliseconds(1));
-    server.stop();
+    // Stops listening and shuts every open connection down: 0.11.4's own stop() waits for
+    // each HTTP thread's client, and a trickling client never finishes.
+    server.stop_and_disconnect();
   });
 
   const bool listened = server.listen_after_bind();

@@ -306,7 +306,17 @@ JobOutcome run_job(const api::JobInfo& job, store::Store& store, LiveJob& live, 
     return failed(api::problem_to_json({api::ProblemKind::not_computable, error.what(), ""}).dump());
   } catch (const std::bad_alloc&) {
     return failed(job_failed("out of memory"));
+  } catch (const StoreError& error) {
+    // SQLite's own text ("string or blob too big", "disk I/O error") is for the log only.
+    JobOutcome outcome = failed(job_failed("the job's data could not be read or written (a storage error; see the server log)"));
+    outcome.log = std::string("storage error: ") + error.what();
+    return outcome;
+  } catch (const nlohmann::json::exception& error) {
+    JobOutcome outcome = failed(job_failed("internal error while reading the job's request or result; see the server log"));
+    outcome.log = std::string("internal error: ") + error.what();
+    return outcome;
   } catch (const std::exception& error) {
+    // The core's own messages ("simulation: the closed loop diverged near t = ..."): for people.
     return failed(job_failed(error.what()));
   } catch (...) {
     return failed(job_failed("unknown error"));

@@ -36,6 +36,7 @@ struct JobOutcome {
   std::string error;                             ///< problem JSON text
   std::vector<store::EstimateRow> estimates;
   std::string dataset_id;                        ///< the dataset used or made
+  std::string log;                               ///< what only the server log may say (SQLite's text)
 };
 
 /// Runs `job` (state running, claimed by this thread). Never throws: every failure becomes a

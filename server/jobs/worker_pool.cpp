@@ -134,6 +134,7 @@ void WorkerPool::run_one(const api::JobInfo& job) {
   const auto started = std::chrono::steady_clock::now();
 
   JobOutcome outcome = run_job(job, store_, *live, options_.runner);
+  if (!outcome.log.empty()) log_("job " + job.id + ": " + outcome.log);
   const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - started).count();
   try {
     if (outcome.requeue) {

@@ -25,6 +25,7 @@ const std::vector<ExpectedRow>& table() {
       {ProblemKind::unsupported_media, 415, "UNSUPPORTED_MEDIA"},
       {ProblemKind::length_required, 411, "LENGTH_REQUIRED"},
       {ProblemKind::payload_too_large, 413, "PAYLOAD_TOO_LARGE"},
+      {ProblemKind::uri_too_long, 414, "URI_TOO_LONG"},
       {ProblemKind::unauthorized, 401, "UNAUTHORIZED"},
       {ProblemKind::not_found, 404, "NOT_FOUND"},
       {ProblemKind::method_not_allowed, 405, "METHOD_NOT_ALLOWED"},
@@ -107,6 +108,22 @@ TEST(ProblemTable, InvalidUtf8InUserTextStillSerialises) {
   // Valid multi-byte text passes unchanged.
   const nlohmann::json good = problem_to_json(Problem{ProblemKind::invalid_field, "Ωg ≤ π", ""});
   EXPECT_EQ(good.at("detail"), "Ωg ≤ π");
+}
+
+TEST(ProblemTable, LongDetailsAreCutAtACharacterBoundary) {
+  // Whatever a message builder quoted, a detail stays a sentence: at most 400 bytes.
+  std::string accents;
+  for (int i = 0; i < 500; ++i) accents += "\xC3\xA9";  // é, two bytes each
+  for (const std::string& detail : {std::string(1000, 'a'), accents}) {
+    const nlohmann::json body = problem_to_json(Problem{ProblemKind::invalid_field, detail, "f"});
+    const std::string text = body.at("detail").get<std::string>();
+    EXPECT_LE(text.size(), 400u);
+    EXPECT_EQ(text.substr(text.size() - 3), "...");
+    EXPECT_EQ(text.substr(0, 10), detail.substr(0, 10));
+    EXPECT_NO_THROW(body.dump());  // still valid UTF-8: not cut inside a character
+  }
+  const std::string short_detail = "dt must be positive";
+  EXPECT_EQ(problem_to_json(Problem{ProblemKind::invalid_field, short_detail, "dt"}).at("detail"), short_detail);
 }
 
 TEST(ProblemTable, OutOfRangeKindIsInternal) {

@@ -7,7 +7,7 @@
 #include "manipid/api/dashboard.h"
 #include "manipid/api/routes.h"
 
-#include <httplib.h>  // after the manipid headers: httplib.h breaks Eigen if it comes first
+#include "manipid/api/http_server.h"  // includes httplib.h: after the manipid headers (it breaks Eigen if first)
 
 #include <gtest/gtest.h>
 #include <nlohmann/json.hpp>
@@ -20,6 +20,7 @@
 #include <algorithm>
 #include <atomic>
 #include <cctype>
+#include <cerrno>
 #include <chrono>
 #include <cmath>
 #include <mutex>
@@ -54,9 +55,8 @@ struct RawAnswer {
 };
 
 /// A client connection on a raw socket: each exchange sends a request as is and reads one
-/// answer, its head then Content-Length bytes of body. (Not until the server closes: 0.11.4
-/// keeps a connection open after an answer that says "Connection: close", until its
-/// keep-alive timeout.) Exchanges on one connection are served in order by one server thread.
+/// answer, its head then Content-Length bytes of body (not until the server closes, so
+/// keep-alive can be tested). Exchanges on one connection are served in order by one server thread.
 class RawConnection {
  public:
   explicit RawConnection(int port) : fd_(::socket(AF_INET, SOCK_STREAM, 0)) {
@@ -104,6 +104,17 @@ class RawConnection {
     pending_.erase(0, end + 4 + length);
     if (answer.head.rfind("http/1.1 ", 0) == 0) answer.status = std::stoi(answer.head.substr(9, 3));
     return answer;
+  }
+
+  /// Reads until the server closes the connection: true, with nothing more received.
+  bool closed_by_server() {
+    char buffer[4096];
+    for (;;) {
+      const ssize_t n = ::recv(fd_, buffer, sizeof buffer, 0);
+      if (n == 0 || (n < 0 && errno == ECONNRESET)) return pending_.empty();
+      if (n < 0) return false;  // the 30 s net: still open
+      pending_.append(buffer, static_cast<std::size_t>(n));
+    }
   }
 
  private:
@@ -202,7 +213,7 @@ std::vector<HistoryEntry> history_of(int count) {
 
 // ---- The server under test ---------------------------------------------------------------
 
-/// register_routes over a FakeService on a real httplib::Server bound to 127.0.0.1:0, served
+/// register_routes over a FakeService on the real HttpServer bound to 127.0.0.1:0, served
 /// from a thread (0.11.4 has no wait_until_ready: bind_to_any_port + listen_after_bind, then
 /// spin on is_running()).
 class RouteServer : public ::testing::Test {
@@ -221,7 +232,7 @@ class RouteServer : public ::testing::Test {
     };
     register_routes(server_, fake_, routes);
     server_.set_keep_alive_max_count(100);
-    port_ = server_.bind_to_any_port("127.0.0.1");
+    port_ = server_.bind("127.0.0.1", 0);
     ASSERT_GT(port_, 0);
     listener_ = std::thread([this] {
       server_.listen_after_bind();
@@ -258,7 +269,7 @@ class RouteServer : public ::testing::Test {
   }
 
   FakeService fake_;
-  httplib::Server server_;
+  HttpServer server_;
   int port_ = 0;
 
  private:
@@ -856,6 +867,30 @@ TEST_F(Routes, ChunkedBodyIsRefusedBeforeItIsRead) {
   EXPECT_EQ(fake_.calls(), 0);
 }
 
+TEST_F(Routes, ARefusedBodyIsNeverReadAsTheNextRequest) {
+  // cpp-httplib 0.11.4 alone read a refused request's body as the next request (smuggling).
+  const std::string smuggled = "GET /v1/jobs HTTP/1.1\r\nHost: test\r\n\r\n";
+  RawConnection connection(port_);
+  const RawAnswer answer = connection.exchange("POST /v1/datasets HTTP/1.1\r\nHost: test\r\nContent-Type: application/json\r\n"
+                                               "Content-Encoding: gzip\r\nContent-Length: " +
+                                               std::to_string(smuggled.size()) + "\r\n\r\n" + smuggled);
+  expect_problem(answer, 415, "UNSUPPORTED_MEDIA", "Content-Encoding");
+  EXPECT_TRUE(answer.has_header("Connection", "close")) << answer.head;
+  EXPECT_TRUE(connection.closed_by_server());  // and the GET never answered
+  EXPECT_EQ(fake_.calls(), 0);
+}
+
+TEST_F(Routes, TwoContentLengthsAre400AndClose) {
+  RawConnection connection(port_);
+  const RawAnswer answer = connection.exchange(
+      "POST /v1/datasets HTTP/1.1\r\nHost: test\r\nContent-Type: text/csv\r\nContent-Length: 5\r\n"
+      "Content-Length: 5\r\n\r\nt,q1\n");
+  const Json problem = expect_problem(answer, 400, "MALFORMED_BODY", "Content-Length");
+  EXPECT_EQ(problem["detail"], "send one Content-Length header, not 2");
+  EXPECT_TRUE(connection.closed_by_server());
+  EXPECT_EQ(fake_.calls(), 0);
+}
+
 TEST_F(Routes, CompressedBodyIsRefusedWith415) {
   const auto result = post("/v1/datasets", "{}", "application/json", {{"Content-Encoding", "gzip"}});
   const Json problem = expect_problem(result, 415, "UNSUPPORTED_MEDIA", "Content-Encoding");
@@ -869,7 +904,7 @@ TEST_F(Routes, BodyOverMaxBodyIs413) {
   const std::string big = "t,q1\n" + std::string(16 * 1024, '0');
   const auto result = post("/v1/datasets", big, "text/csv");
   const Json problem = expect_problem(result, 413, "PAYLOAD_TOO_LARGE", "body");
-  EXPECT_EQ(problem["detail"], "the body is larger than this server accepts (--max-body)");
+  EXPECT_EQ(problem["detail"], "the body is larger than this server accepts (--max-body 16384 bytes)");
   EXPECT_EQ(fake_.calls(), 0);
 }
 
@@ -1010,10 +1045,14 @@ TEST_F(Routes, MetricsCountRequestsByMethodAndStatus) {
 
 TEST_F(Routes, MetricsNeverEchoAMethodHttplibRefused) {
   // 0.11.4 logs a request whose method it refused (400), with that method as sent.
+  // The refusal closes its connection (what follows an unreadable request line is not
+  // trusted), after the request is logged: /metrics then comes on a new connection.
   RawConnection connection(port_);
-  const RawAnswer refused = connection.exchange("A\"}x /v1/jobs HTTP/1.1\r\nHost: test\r\n\r\n");
+  const RawAnswer refused = connection.exchange("A\"}x /v1/jobs HTTP/1.1\r\nHost: test\r\n\r\n" + "GET /metrics HTTP/1.1\r\nHost: test\r\n\r\n"s);
   expect_problem(refused, 400, "MALFORMED_BODY", "");
-  const RawAnswer answer = connection.exchange("GET /metrics HTTP/1.1\r\nHost: test\r\n\r\n");
+  EXPECT_TRUE(refused.has_header("Connection", "close")) << refused.head;
+  EXPECT_TRUE(connection.closed_by_server());
+  const RawAnswer answer = raw("GET /metrics HTTP/1.1\r\nHost: test\r\n\r\n");
   EXPECT_EQ(answer.status, 200);
   EXPECT_EQ(answer.body.find("A\"}x"), std::string::npos) << answer.body;
   EXPECT_NE(answer.body.find("manipid_http_requests_total{method=\"other\",status=\"400\"} 1\n"), std::string::npos)

@@ -1,4 +1,5 @@
 // json_fuzz.cpp — libFuzzer target for the JSON request parsers of api/requests.h:
+// fields::parse_request (the server's JSON parse: duplicate keys, number overflow), then
 // dataset_from_json, simulation_from_json and identification_from_json (and the data checks of
 // check_against_data). Every input must end in a value or a clean InputError / ApiError; any
 // other exception escapes (libFuzzer reports it as a crash), as do ASan/UBSan findings.
@@ -12,12 +13,15 @@
 #include "manipid/api/requests.h"
 #include "manipid/core/model.h"
 
+#include "json_fields.h"  // api/src: fields::parse_request
+
 #include <nlohmann/json.hpp>
 
 #include <cstddef>
 #include <cstdint>
 #include <cstdio>
 #include <cstdlib>
+#include <string>
 
 namespace {
 
@@ -61,8 +65,11 @@ void check_csv_round_trip(const manipid::Trajectory& trajectory) {
 }  // namespace
 
 extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size) {
-  const nlohmann::json body = nlohmann::json::parse(data, data + size, nullptr, /*allow_exceptions=*/false);
-  if (!body.is_object()) return 0;  // discarded (syntax error) or not an object: no parser takes it
+  // The server's one JSON parse (fields::parse_request): syntax errors, numbers beyond a double
+  // and duplicate keys are clean rejections, anything else escapes.
+  nlohmann::json body;
+  clean([&] { body = manipid::api::fields::parse_request(std::string(reinterpret_cast<const char*>(data), size)); });
+  if (!body.is_object()) return 0;  // rejected or not an object: no parser takes it
 
   clean([&] {
     const manipid::api::DatasetUpload upload = manipid::api::dataset_from_json(body);

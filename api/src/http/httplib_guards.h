@@ -1,6 +1,7 @@
 // httplib_guards.h — internal to the routes: the hooks that stand between Debian's
 // cpp-httplib 0.11.4 and the handlers. Each exists for a 0.11.4 behaviour, named beside it in
-// httplib_guards.cpp: bodies read without bound, Brotli at quality 11, its own error statuses
+// httplib_guards.cpp: bodies read without bound (or, refused, read as the next request: with
+// HttpServer, every refusal closes its connection), Brotli at quality 11, its own error statuses
 // with empty bodies (and 404 for a wrong method), invented methods passed to the logger,
 // exception text copied into a response header. The route table (route_table.cpp) installs them.
 #pragma once
@@ -18,11 +19,23 @@ bool token_matches(const std::string& given, const std::string& expected);
 /// Strikes "br" from the request's Accept-Encoding (gzip stays): 0.11.4's Brotli is quality 11.
 void refuse_brotli(const httplib::Request& request);
 
-/// The pre-routing hook: runs before any byte of the body is read. Brotli strike, bearer
-/// token on /v1, bodiless POST, PUT or PATCH (411, but a bodiless cancel is answered), chunked
-/// (411) and compressed (415) bodies refused.
+/// The pre-routing hook: runs before any byte of the body is read. Body framing (two
+/// Content-Lengths, Content-Length beside Transfer-Encoding, a body on a GET: 400) and a
+/// declared length over --max-body (413), Brotli strike, bearer token on /v1, bodiless POST,
+/// PUT or PATCH (411, but a bodiless cancel is answered), chunked (411) and compressed (415)
+/// bodies refused. Every refusal closes the connection (HttpServer::close_after_answer).
 httplib::Server::HandlerResponse before_routing(RouteState& state, const httplib::Request& request,
                                                 httplib::Response& response);
+
+/// The "Expect: 100-continue" hook: 0.11.4 answers "100 Continue" before the pre-routing hook
+/// runs, so a body that will be refused (bad framing, over --max-body) is refused here, before
+/// the client sends it (curl asks so for bodies over 1 MiB). Returns 100 or the refusal's status.
+int before_continue(const RouteState& state, const httplib::Request& request, httplib::Response& response);
+
+/// The post-routing hook (0.11.4 runs it after adding its own Connection or Keep-Alive
+/// header): an answer that closes its connection says "Connection: close" once, and no
+/// "Keep-Alive" beside it.
+void after_routing(const httplib::Request& request, httplib::Response& response);
 
 /// The request's method as a /metrics label: one of the methods httplib parses, else "other".
 std::string method_label(const std::string& method);

@@ -2,6 +2,8 @@
 // parameters (request_helpers.h).
 #include "manipid/api/problem.h"
 
+#include "json_fields.h"  // includes Eigen: before httplib.h
+
 #include "http/request_helpers.h"  // includes httplib.h, after the manipid headers
 
 #include <openssl/evp.h>
@@ -52,14 +54,7 @@ nlohmann::json json_body(const httplib::Request& request) {
     throw ApiError(ProblemKind::unsupported_media, "expected Content-Type application/json, got " + type, "Content-Type");
   }
   if (request.body.empty()) throw ApiError(ProblemKind::malformed_body, "the request body is empty; expected a JSON object", "body");
-  Json body;
-  try {
-    body = Json::parse(request.body);
-  } catch (const Json::exception& error) {  // parse_error, and out_of_range for 1e400
-    std::string message = error.what();
-    if (const auto colon = message.find("parse error"); colon != std::string::npos) message = message.substr(colon);
-    throw ApiError(ProblemKind::malformed_body, "the body is not valid JSON: " + message, "body");
-  }
+  const Json body = fields::parse_request(request.body);  // no duplicate keys, short details
   if (!body.is_object()) throw ApiError(ProblemKind::malformed_body, "expected a JSON object at the top level", "body");
   return body;
 }

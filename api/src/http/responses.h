@@ -7,6 +7,8 @@
 
 #include "http/route_state.h"  // includes httplib.h, after the manipid headers
 
+#include "manipid/api/http_server.h"
+
 #include <nlohmann/json.hpp>
 
 #include <exception>
@@ -26,6 +28,7 @@ void send_problem(httplib::Response& response, const Problem& problem, const std
 template <class Handler>
 httplib::Server::Handler guarded(std::shared_ptr<RouteState> state, Handler handler) {
   return [state, handler](const httplib::Request& request, httplib::Response& response) {
+    HttpServer::body_received();  // httplib has read the body: its deadline is met
     try {
       handler(request, response);
     } catch (const ApiError& error) {

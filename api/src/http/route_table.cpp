@@ -62,9 +62,14 @@ void register_routes(httplib::Server& server, Service& service, RouteOptions opt
     request_started = Clock::now();
     return before_routing(*state, request, response);
   });
+  server.set_expect_100_continue_handler([state](const httplib::Request& request, httplib::Response& response) {
+    request_started = Clock::now();
+    return before_continue(*state, request, response);
+  });
   server.set_error_handler(httplib::Server::HandlerWithResponse(
       [state](const httplib::Request& request, httplib::Response& response) { return on_error(*state, request, response); }));
   server.set_exception_handler(on_exception);
+  server.set_post_routing_handler(after_routing);
   server.set_logger([state](const httplib::Request& request, const httplib::Response& response) {
     {
       std::lock_guard lock(state->mutex);

@@ -21,6 +21,7 @@ enum class ProblemKind {
   unsupported_media,     ///< 415 Content-Type or Content-Encoding the route does not take
   length_required,       ///< 411 chunked or length-less upload
   payload_too_large,     ///< 413 body over --max-body
+  uri_too_long,          ///< 414 the request target is longer than the server reads
   unauthorized,          ///< 401 missing or wrong bearer token
   not_found,             ///< 404 unknown dataset, job or route
   method_not_allowed,    ///< 405
