@@ -306,7 +306,7 @@ JobOutcome run_job(const api::JobInfo& job, store::Store& store, LiveJob& live, 
     return failed(api::problem_to_json({api::ProblemKind::not_computable, error.what(), ""}).dump());
   } catch (const std::bad_alloc&) {
     return failed(job_failed("out of memory"));
-  } catch (const StoreError& error) {
+  } catch (const store::StoreError& error) {
     // SQLite's own text ("string or blob too big", "disk I/O error") is for the log only.
     JobOutcome outcome = failed(job_failed("the job's data could not be read or written (a storage error; see the server log)"));
     outcome.log = std::string("storage error: ") + error.what();

@@ -1,14 +1,16 @@
 // job_runner_test.cpp — run_job's failures as a client sees them: a store that fails (SQLite's
 // own text, "string or blob too big") ends the job with a sentence for people, the text in the log only.
-#include "job_runner.h"
+#include "jobs/job_runner.h"
 
 #include <gtest/gtest.h>
 #include <nlohmann/json.hpp>
 
 #include <string>
 
-namespace manipid::server {
+namespace manipid::server::jobs {
 namespace {
+
+using namespace manipid::server::store;  // the Store interface this fake implements
 
 /// A store whose every call fails as SQLite does when a value is over its limit.
 class FailingStore : public Store {
@@ -59,4 +61,4 @@ TEST(RunJob, AStorageErrorIsASentenceForTheClientAndSqlitesTextForTheLog) {
 }
 
 }  // namespace
-}  // namespace manipid::server
+}  // namespace manipid::server::jobs
