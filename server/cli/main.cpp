@@ -1,6 +1,7 @@
 // main.cpp — the `manipid` executable: parses the command line with CLI11, dispatches to one
 // run function per subcommand (cli/NAME.h), and turns every failure into one line on stderr
 // ("manipid: error: ...") and an exit status: 0 success, 2 usage or input error, 1 otherwise.
+#include "cli/doctor.h"
 #include "cli/excitation.h"
 #include "cli/filter.h"
 #include "cli/identify.h"
@@ -43,14 +44,16 @@ int run(int argc, char** argv) {
   IdentifyOptions identify;
   ServeOptions serve;
   ExcitationOptions excitation;
+  DoctorOptions doctor;
   CLI::App* simulate_command = add_simulate_command(app, simulate);
   CLI::App* torque_command = add_torque_command(app, torque);
   CLI::App* filter_command = add_filter_command(app, filter);
   CLI::App* identify_command = add_identify_command(app, identify);
   CLI::App* serve_command = add_serve_command(app, serve);
   CLI::App* excitation_command = add_excitation_command(app, excitation);
-  const CLI::App* commands[] = {simulate_command, torque_command, filter_command,
-                                identify_command, serve_command, excitation_command};
+  CLI::App* doctor_command = add_doctor_command(app, doctor);
+  const CLI::App* commands[] = {simulate_command, torque_command,    filter_command, identify_command,
+                                serve_command,    excitation_command, doctor_command};
 
   try {
     app.parse(argc, argv);
@@ -73,7 +76,7 @@ int run(int argc, char** argv) {
     // CLI11 calls a mistyped command an unexpected argument; say what the user meant.
     if (!in_command && argc > 1 && argv[1][0] != '-') {
       return report(std::string("unknown command '") + argv[1] +
-                        "'; expected simulate, torque, filter, identify, serve or excitation (see 'manipid --help')",
+                        "'; expected simulate, torque, filter, identify, serve, excitation or doctor (see 'manipid --help')",
                     exit_usage);
     }
     return report(std::string(error.what()) + " (see '" + help + "')", exit_usage);
@@ -85,7 +88,8 @@ int run(int argc, char** argv) {
   if (identify_command->parsed()) return run_identify(identify);
   if (serve_command->parsed()) return run_serve(serve);
   if (excitation_command->parsed()) return run_excitation(excitation);
-  return report("no command given; expected simulate, torque, filter, identify, serve or excitation (see 'manipid --help')", exit_usage);
+  if (doctor_command->parsed()) return run_doctor(doctor);
+  return report("no command given; expected simulate, torque, filter, identify, serve, excitation or doctor (see 'manipid --help')", exit_usage);
 }
 
 }  // namespace

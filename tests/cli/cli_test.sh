@@ -494,5 +494,38 @@ check "torque --robot --params: an unphysical body is named in a warning" \
 expect_error "identify: --friction needs --robot" 2 "--friction requires --robot" \
   "$manipid" identify paper.csv --friction viscous
 
+# ---- doctor, and serve refusing a damaged database ----
+python3 - <<'PY'
+import sqlite3
+database = sqlite3.connect("sound.db")
+database.execute("CREATE TABLE samples (i INTEGER PRIMARY KEY, text TEXT)")
+database.executemany("INSERT INTO samples (text) VALUES (?)", [("x" * 200,)] * 400)
+database.commit()
+database.close()
+PY
+cp sound.db damaged.db
+python3 - <<'PY'
+import sqlite3
+database = sqlite3.connect("damaged.db")
+page, size = database.execute("SELECT rootpage, (SELECT page_size FROM pragma_page_size) FROM sqlite_master "
+                              "WHERE name = 'samples'").fetchone()
+database.close()
+with open("damaged.db", "r+b") as file:  # the root page's cell count: 65535
+    file.seek((page - 1) * size + 3)
+    file.write(b"\xff\xff")
+PY
+"$manipid" doctor --db sound.db >doctor.txt 2>&1
+check "doctor: a sound file exits 0" test $? -eq 0
+check "doctor: a sound file says so" grep -q "^sound.db: sound (schema version 0;" doctor.txt
+damaged_before=$(sha256sum <damaged.db)
+"$manipid" doctor --db sqlite:damaged.db >doctor.txt 2>&1
+check "doctor: a damaged file exits 1" test $? -eq 1
+check "doctor: a damaged file lists the page" grep -q "^  - Page [0-9]*: " doctor.txt
+check "doctor: reads only" test "$(sha256sum <damaged.db)" = "$damaged_before"
+expect_error "doctor: a missing file" 2 "no database file 'missing.db'" "$manipid" doctor --db missing.db
+check "doctor: a missing file is not created" test ! -e missing.db
+expect_error "serve: a damaged database is refused at start" 2 "the database file is damaged (PRAGMA quick_check: Page" \
+  "$manipid" serve --port 0 --db damaged.db
+
 echo "$passed passed, $failed failed"
 [[ $failed -eq 0 ]]

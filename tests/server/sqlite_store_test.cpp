@@ -1,6 +1,7 @@
 // sqlite_store_test.cpp — what only the SQLite backend does (the contract every backend keeps is
 // store_contract_test.cpp): its schema version check, unusable files, waiting for another
 // connection's write lock, and open_store() choosing it from a --db value.
+#include "store/sqlite/schema.h"
 #include "store/sqlite/store.h"
 
 #include <gtest/gtest.h>
@@ -9,6 +10,7 @@
 #include <chrono>
 #include <cstdio>
 #include <filesystem>
+#include <fstream>
 #include <string>
 #include <thread>
 
@@ -23,6 +25,30 @@ NewJob identification_job() {
   job.request = R"({"upload_id":"ds_x"})";
   job.dataset_id = "ds_0123456789abcdef";
   return job;
+}
+
+/// Breaks the b-tree page header of `table`'s root page (a cell count of 65535 on a 4 KiB page) as a
+/// bad disk or a torn copy would, leaving page 1 intact so the file still opens.
+void damage_table(const std::string& path, const std::string& table) {
+  sqlite3* database = nullptr;
+  ASSERT_EQ(sqlite3_open(path.c_str(), &database), SQLITE_OK);
+  sqlite3_stmt* statement = nullptr;
+  ASSERT_EQ(sqlite3_prepare_v2(database, "SELECT rootpage, (SELECT page_size FROM pragma_page_size) FROM sqlite_master "
+                                         "WHERE name = ?1",
+                               -1, &statement, nullptr),
+            SQLITE_OK);
+  sqlite3_bind_text(statement, 1, table.c_str(), -1, SQLITE_TRANSIENT);
+  ASSERT_EQ(sqlite3_step(statement), SQLITE_ROW);
+  const long page = sqlite3_column_int64(statement, 0);
+  const long page_size = sqlite3_column_int64(statement, 1);
+  sqlite3_finalize(statement);
+  sqlite3_close(database);
+  ASSERT_GT(page, 1);
+  std::fstream file(path, std::ios::in | std::ios::out | std::ios::binary);
+  file.seekp((page - 1) * page_size + 3);  // bytes 3-4 of a b-tree page header: its cell count
+  const char cells[2] = {'\xff', '\xff'};
+  file.write(cells, 2);
+  ASSERT_TRUE(file.good());
 }
 
 class SqliteStoreTest : public ::testing::Test {
@@ -91,6 +117,39 @@ TEST_F(SqliteStoreTest, WriterWaitsForAnotherConnectionsLockInsteadOfFailing) {
   EXPECT_GE(waited, std::chrono::milliseconds(250));
   // Readers are not blocked by a writer in WAL mode.
   EXPECT_TRUE(store_->find_job(outcome.job.id));
+}
+
+TEST_F(SqliteStoreTest, ADamagedPageIsFoundAtOpenNotByAFailingReadLater) {
+  for (int i = 0; i < 5; ++i) store_->submit_job(identification_job(), std::nullopt, 0);
+  store_.reset();  // the last connection checkpoints the WAL into the file
+  damage_table(path_, "jobs");
+  try {
+    sqlite::open_store(path_);
+    ADD_FAILURE() << "expected StoreError";
+  } catch (const StoreError& error) {
+    const std::string message = error.what();
+    EXPECT_NE(message.find("the database file is damaged (PRAGMA quick_check: "), std::string::npos) << message;
+    EXPECT_NE(message.find("manipid doctor --db FILE"), std::string::npos) << message;
+  }
+}
+
+TEST_F(SqliteStoreTest, CheckFileSaysWhatIsWrongAndChangesNothing) {
+  store_->submit_job(identification_job(), std::nullopt, 0);
+  store_.reset();
+  const sqlite::FileCheck sound = sqlite::check_file(path_);
+  EXPECT_TRUE(sound.findings.empty());
+  EXPECT_EQ(sound.schema_version, sqlite::current_schema_version());
+
+  damage_table(path_, "jobs");
+  const auto size = fs::file_size(path_);
+  const sqlite::FileCheck damaged = sqlite::check_file(path_);
+  ASSERT_FALSE(damaged.findings.empty());
+  EXPECT_EQ(damaged.findings.front().rfind("Page ", 0), 0u) << damaged.findings.front();
+  EXPECT_EQ(fs::file_size(path_), size);
+  EXPECT_FALSE(fs::exists(path_ + "-wal") && fs::file_size(path_ + "-wal") > 0);
+
+  EXPECT_THROW(sqlite::check_file((directory_ / "missing.db").string()), StoreError);
+  EXPECT_FALSE(fs::exists(directory_ / "missing.db"));  // not created by looking
 }
 
 TEST_F(SqliteStoreTest, OpenStoreReadsTheDbValue) {

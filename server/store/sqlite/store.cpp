@@ -9,8 +9,10 @@
 #include "store/rules.h"
 
 #include <cstdint>
+#include <filesystem>
 #include <limits>
 #include <stdexcept>
+#include <system_error>
 
 namespace manipid::server::store::sqlite {
 
@@ -618,5 +620,18 @@ class SqliteStore final : public Store {
 }  // namespace
 
 std::unique_ptr<Store> open_store(const std::string& path) { return std::make_unique<SqliteStore>(path); }
+
+FileCheck check_file(const std::string& path) {
+  std::error_code error;
+  if (!std::filesystem::is_regular_file(path, error)) throw StoreError("no database file '" + path + "'");
+  Connection connection(path);
+  FileCheck check;
+  check.findings = integrity_findings(connection, true, 100);
+  if (check.findings.empty()) {
+    auto version = connection.prepare("PRAGMA user_version");
+    if (version.step()) check.schema_version = static_cast<int>(version.integer(0));
+  }
+  return check;
+}
 
 }  // namespace manipid::server::store::sqlite

@@ -1,0 +1,43 @@
+// doctor.cpp — `manipid doctor --db FILE`: PRAGMA integrity_check and foreign_key_check of a
+// service database (store/sqlite/store.h, check_file), for when `serve` refused a damaged file
+// or before trusting a restored backup. Reads only: no migration, no WAL switch.
+#include "cli/doctor.h"
+
+#include "cli/common.h"
+#include "store/sqlite/store.h"
+
+#include <cstdio>
+#include <string_view>
+
+namespace manipid::server::cli {
+
+CLI::App* add_doctor_command(CLI::App& app, DoctorOptions& options) {
+  CLI::App* command = app.add_subcommand(
+      "doctor", "Check a service database file in full (every page, index and reference) and say what is wrong");
+  command->add_option("--db", options.database, "The SQLite file `manipid serve --db` uses (PATH or sqlite:PATH)")
+      ->required();
+  return command;
+}
+
+int run_doctor(const DoctorOptions& options) {
+  const std::string_view text = options.database;
+  const std::string path(text.starts_with("sqlite:") ? text.substr(7) : text);
+  store::sqlite::FileCheck check;
+  try {
+    check = store::sqlite::check_file(path);
+  } catch (const store::StoreError& error) {
+    throw UsageError(std::string("--db: ") + error.what());
+  }
+  if (check.findings.empty()) {
+    std::printf("%s: sound (schema version %d; PRAGMA integrity_check and foreign_key_check found nothing)\n",
+                path.c_str(), check.schema_version);
+    return exit_success;
+  }
+  std::printf("%s: damaged, %zu finding(s)%s:\n", path.c_str(), check.findings.size(),
+              check.findings.size() >= 100 ? " (the first 100)" : "");
+  for (const std::string& finding : check.findings) std::printf("  - %s\n", finding.c_str());
+  std::printf("manipid serve will not start on it: restore the file from a backup\n");
+  return exit_failure;
+}
+
+}  // namespace manipid::server::cli
