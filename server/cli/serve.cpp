@@ -150,6 +150,7 @@ int run_serve(const ServeOptions& options) {
   routes.max_body = max_body;
   routes.token = options.token;
   routes.log = log_line;
+  routes.max_waiters = std::max(options.http_threads / 2, 1);
   api::register_routes(server, service, routes);
 
   const int port = server.bind(options.host, options.port);

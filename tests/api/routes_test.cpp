@@ -647,6 +647,29 @@ TEST_F(Routes, JobLongPollIsCappedAndValidated) {
   expect_problem(get("/v1/jobs/job_0000000000000000?wait=1"), 404, "NOT_FOUND", "id");
 }
 
+/// Every long-poll slot taken.
+class RoutesWithoutWaiters : public RouteServer {
+ protected:
+  RouteOptions options() const override {
+    RouteOptions routes = RouteServer::options();
+    routes.max_waiters = 0;
+    return routes;
+  }
+};
+
+TEST_F(RoutesWithoutWaiters, LongPollsBeyondMaxWaitersAreAnsweredAtOnceAndSaySo) {
+  fake_.add_job(job_info("job_q", JobKind::identification, JobState::running));
+  const auto result = get("/v1/jobs/job_q?wait=5");
+  ASSERT_TRUE(result);
+  EXPECT_EQ(result->status, 200);
+  EXPECT_EQ(result->get_header_value("Manipid-Wait"), "declined");
+  EXPECT_EQ(result->get_header_value("Retry-After"), "1");
+  EXPECT_TRUE(fake_.waits().empty());  // it did not wait
+  const auto plain = get("/v1/jobs/job_q?wait=0");  // a wait of 0 takes no slot
+  ASSERT_TRUE(plain);
+  EXPECT_FALSE(plain->has_header("Manipid-Wait"));
+}
+
 TEST_F(Routes, JobListFiltersAndLeavesTheRequestOut) {
   fake_.add_job(job_info("job_a", JobKind::identification, JobState::running));
   fake_.add_job(job_info("job_b", JobKind::simulation, JobState::succeeded));

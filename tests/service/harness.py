@@ -95,10 +95,12 @@ class Server:
         """Long-polls until the job is terminal; returns its JSON."""
         deadline = time.time() + timeout
         while time.time() < deadline:
-            status, _, job = self.request("GET", f"/v1/jobs/{job_id}?wait=20")
+            status, headers, job = self.request("GET", f"/v1/jobs/{job_id}?wait=20")
             assert status == 200, (status, job)
             if job["state"] in ("succeeded", "failed", "cancelled"):
                 return job
+            if headers.get("manipid-wait") == "declined":  # every long-poll slot taken: as Retry-After says
+                time.sleep(float(headers.get("retry-after", "1")))
         raise AssertionError(f"job {job_id} did not finish in {timeout} s")
 
 

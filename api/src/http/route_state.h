@@ -17,6 +17,7 @@
 
 #include <httplib.h>
 
+#include <atomic>
 #include <map>
 #include <memory>
 #include <mutex>
@@ -35,6 +36,7 @@ struct RouteState {
   std::weak_ptr<RouteState> self;  ///< for handlers called from the pre-routing hook
   std::mutex mutex;
   std::map<std::string, long> requests;  ///< "METHOD,status" → count
+  std::atomic<int> waiters{0};           ///< ?wait= long-polls waiting now (RouteOptions::max_waiters)
   /// (method, path pattern) of every route, noted by the route table: the Allow header of a 405.
   std::vector<std::pair<std::string, std::regex>> routes;
 };

@@ -34,7 +34,22 @@ void get_job(RouteState& state, const httplib::Request& request, httplib::Respon
     if (error != std::errc() || end != text.data() + text.size() || !std::isfinite(seconds) || seconds < 0) {
       throw ApiError(ProblemKind::invalid_field, "wait must be a number of seconds >= 0, got '" + text + "'", "wait");
     }
-    job = state.service.wait(id, std::min(seconds, state.options.max_wait_seconds));
+    seconds = std::min(seconds, state.options.max_wait_seconds);
+    // A waiter holds this HTTP thread: at most max_waiters at once, so /healthz, uploads and
+    // reads always find a thread; the others get the job as it stands and come back later.
+    if (seconds <= 0) {
+      job = state.service.wait(id, 0.0);
+    } else if (state.waiters.fetch_add(1) >= state.options.max_waiters) {
+      state.waiters.fetch_sub(1);
+      response.set_header("Manipid-Wait", "declined");
+      job = state.service.job(id);
+    } else {
+      struct Release {
+        std::atomic<int>& count;
+        ~Release() { count.fetch_sub(1); }
+      } release{state.waiters};
+      job = state.service.wait(id, seconds);
+    }
   } else {
     job = state.service.job(id);
   }

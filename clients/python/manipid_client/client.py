@@ -32,6 +32,7 @@ class _Resource:
     def __init__(self, client: "Client", data: Mapping[str, Any]) -> None:
         self.client = client
         self.data: dict = dict(data)
+        self._retry_after = 0.0  # > 0 after a long-poll the server declined (refresh)
 
     @property
     def id(self) -> str:
@@ -168,7 +169,12 @@ class Job:
             wait = min(float(wait), LONG_POLL_LIMIT)
             path += f"?wait={wait:g}"
             timeout = self.client.timeout + wait  # the answer may legitimately take `wait` seconds
-        self.data = self.client._request("GET", path, timeout=timeout)
+        headers: dict = {}
+        self.data = self.client._request("GET", path, timeout=timeout, answer_headers=headers)
+        # The server lets only so many long-polls wait at once; beyond that it answers at once with
+        # Manipid-Wait: declined and Retry-After, and wait() sleeps that long instead of asking again.
+        self._retry_after = (float(headers.get("retry-after", "1"))
+                             if headers.get("manipid-wait") == "declined" else 0.0)
         return self
 
     def wait(self, timeout: Optional[float] = None, progress: Union[bool, TextIO] = False) -> dict:
@@ -199,6 +205,11 @@ class Job:
                         raise JobTimeout(f"job {self.id} still {self.state} after {timeout:g} s", job=self.data)
                     step = min(step, remaining)
                 self.refresh(wait=step)
+                if self._retry_after > 0 and not self.done:
+                    pause = self._retry_after
+                    if deadline is not None:
+                        pause = min(pause, max(0.0, deadline - time.monotonic()))
+                    time.sleep(pause)
         finally:
             if display:
                 display.close()
@@ -599,9 +610,11 @@ class Client:
     def _request(self, method: str, path: str, body: Union[bytes, Mapping, None] = None, *,
                  query: Optional[Mapping[str, Any]] = None, content_type: Optional[str] = None,
                  accept: str = "application/json", headers: Optional[Mapping[str, str]] = None,
-                 timeout: Optional[float] = None, raw: bool = False) -> Any:
+                 timeout: Optional[float] = None, raw: bool = False,
+                 answer_headers: Optional[dict] = None) -> Any:
         """One request; returns parsed JSON (or text for non-JSON answers, None for 204; with
-        raw=True the body's bytes as they came)."""
+        raw=True the body's bytes as they came). `answer_headers`, when given, receives the
+        answer's headers (names in lower case)."""
         all_headers = {"Accept": accept, "User-Agent": "manipid-client-python"}
         if self.token:
             all_headers["Authorization"] = f"Bearer {self.token}"
@@ -631,6 +644,8 @@ class Client:
             status = response.status
             answer_type = response.getheader("Content-Type", "")
             retry_after = response.getheader("Retry-After")
+            if answer_headers is not None:
+                answer_headers.update({name.lower(): value for name, value in response.getheaders()})
         except (OSError, http.client.HTTPException) as error:
             kind = "timed out" if isinstance(error, socket.timeout) else "failed"
             raise ManipidConnectionError(f"{method} {self.url}{path} {kind}: {error}") from error

@@ -22,6 +22,11 @@ struct RouteOptions {
   std::size_t max_body = 64u << 20;  ///< bytes; larger bodies get 413
   std::string token;                 ///< when set, every /v1 request needs "Authorization: Bearer <token>"
   double max_wait_seconds = 30.0;    ///< cap of ?wait= long-polls
+  /// Long-polls that may wait at once; each holds an HTTP thread while it waits (cpp-httplib
+  /// 0.11.4 has no other way), so `manipid serve` gives them half its threads and keeps the
+  /// rest for everything else. Beyond it a ?wait= is answered at once with the job as it stands,
+  /// `Retry-After: 1` and `Manipid-Wait: declined`. ≤ 0: no long-poll ever waits.
+  int max_waiters = 16;
   std::function<void(const std::string& line)> log;  ///< one line per request; empty = silent
 };
 
