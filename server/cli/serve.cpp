@@ -111,7 +111,8 @@ int run_serve(const ServeOptions& options) {
   try {
     store = store::open_store(options.database);
   } catch (const store::StoreError& error) {
-    throw UsageError("--db " + options.database + ": " + error.what());
+    // Not the value itself: a database URL may carry a password (SQLite's messages name the file).
+    throw UsageError(std::string("--db: ") + error.what());
   }
   const store::RecoveryOutcome recovered = store->recover_interrupted_jobs(options.max_attempts, [](int losses) {
     return api::problem_to_json({api::ProblemKind::worker_lost,
