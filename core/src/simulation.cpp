@@ -304,6 +304,8 @@ Trajectory simulate_closed_loop(const RobotModel& model, const Parameters& param
   // the dynamics were not integrable (e.g. a candidate in an identification blew up).
   const long max_steps = std::max<long>(100'000, max_steps_per_sample * samples);
   long steps = 0;
+  const auto stop_requested = [&options] { return options.should_stop && options.should_stop(); };
+  if (stop_requested()) throw SimulationStopped(0.0, 0);
   for (Eigen::Index i = 0; i < samples; ++i) {
     const double t = static_cast<double>(i) * options.dt;
     while (stepper.current_time() < t) {
@@ -324,6 +326,7 @@ Trajectory simulate_closed_loop(const RobotModel& model, const Parameters& param
                                  number(stepper.current_time()) + " s in " + std::to_string(steps) +
                                  " steps (tolerances too tight for this model?)");
       }
+      if (stop_requested()) throw SimulationStopped(stepper.current_time(), steps);
     }
     // The state at t from the stepper's continuous extension (exact x0 at the start).
     if (i > 0) stepper.calc_state(t, x);

@@ -81,7 +81,7 @@ CLI::App* add_serve_command(CLI::App& app, ServeOptions& options) {
   command->add_option("--max-body", options.max_body, "Largest request body (e.g. 64MiB, 500k)")->capture_default_str();
   command->add_option("--token", options.token, "Bearer token every /v1 request must carry (or MANIPID_TOKEN)")
       ->envname("MANIPID_TOKEN");
-  command->add_option("--job-timeout", options.job_timeout, "Longest an identification may run, s")
+  command->add_option("--job-timeout", options.job_timeout, "Longest a job may run, s (a simulation then fails, an identification stops)")
       ->check(positive_number())
       ->capture_default_str();
   command->add_option("--http-threads", options.http_threads, "Connections served at once")

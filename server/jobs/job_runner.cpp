@@ -9,6 +9,7 @@
 #include "manipid/core/robot/excitation.h"
 #include "manipid/core/robot/identification.h"
 #include "manipid/core/identification.h"
+#include "manipid/core/simulation.h"
 
 #include <nlohmann/json.hpp>
 
@@ -17,6 +18,7 @@
 #include <cmath>
 #include <exception>
 #include <new>
+#include <sstream>
 
 namespace manipid::server::jobs {
 namespace {
@@ -36,19 +38,46 @@ JobOutcome failed(std::string error) {
   return outcome;
 }
 
+/// The job's clock: when it started and how long --job-timeout lets it run.
+struct JobClock {
+  Clock::time_point started = Clock::now();
+  double limit_seconds = 3600.0;
+
+  double elapsed() const { return std::chrono::duration<double>(Clock::now() - started).count(); }
+  bool expired() const { return elapsed() >= limit_seconds; }
+};
+
+/// A simulation stopped by its should_stop, ended the way an identification's stop is: a shutdown's
+/// cancel requeues the job, a user's cancel cancels it, and otherwise the time limit ran out.
+JobOutcome stopped_simulation(const LiveJob& live, const JobClock& clock, const SimulationStopped& stopped) {
+  JobOutcome outcome;
+  if (live.cancel.load()) {
+    outcome.requeue = live.shutdown.load();
+    outcome.state = api::JobState::cancelled;
+    return outcome;
+  }
+  std::ostringstream detail;
+  detail << "the job reached its time limit (--job-timeout " << clock.limit_seconds << " s) while simulating, at t = "
+         << stopped.time() << " s of simulated time";
+  return failed(job_failed(detail.str()));
+}
+
 /// The dataset a simulation makes, stored idempotently under the job's id so a job re-run
-/// after a crash finds the dataset its first run stored instead of making a second one.
-api::DatasetInfo store_simulated(store::Store& store, const api::JobInfo& job, const api::SimulationSpec& spec) {
+/// after a crash finds the dataset its first run stored instead of making a second one. The
+/// integration stops (SimulationStopped) when the job is cancelled or its time is up.
+api::DatasetInfo store_simulated(store::Store& store, const api::JobInfo& job, api::SimulationSpec spec,
+                                 const LiveJob& live, const JobClock& clock) {
+  spec.preset.simulation.should_stop = [&live, &clock] { return live.cancel.load(std::memory_order_relaxed) || clock.expired(); };
   const Trajectory data = api::run_simulation(spec);
   const api::IdempotencyKey key{"job-output:" + job.id, job.id};
   const std::string name = spec.name.empty() ? "simulation " + spec.preset.name + " (" + job.id + ")" : spec.name;
   return store.insert_dataset(name, data, job.id, key).dataset;
 }
 
-JobOutcome run_simulation_job(const api::JobInfo& job, store::Store& store) {
+JobOutcome run_simulation_job(const api::JobInfo& job, store::Store& store, const LiveJob& live, const JobClock& clock) {
   const auto started = Clock::now();
   const api::SimulationSpec spec = api::simulation_from_json(nlohmann::json::parse(job.request));
-  const api::DatasetInfo dataset = store_simulated(store, job, spec);
+  const api::DatasetInfo dataset = store_simulated(store, job, spec, live, clock);
   JobOutcome outcome;
   outcome.state = api::JobState::succeeded;
   outcome.dataset_id = dataset.id;
@@ -124,12 +153,13 @@ Eigen::VectorXd truth_of(store::Store& store, const api::IdentificationSpec& spe
   return api::known_truth(spec, simulation ? &*simulation : nullptr);
 }
 
-JobOutcome run_identification_job(const api::JobInfo& job, store::Store& store, LiveJob& live, const RunnerOptions& options) {
+JobOutcome run_identification_job(const api::JobInfo& job, store::Store& store, LiveJob& live, const RunnerOptions& options,
+                                  const JobClock& clock) {
   api::IdentificationSpec spec = api::identification_from_json(nlohmann::json::parse(job.request));
   std::string dataset_id = spec.dataset_id;
   std::optional<Trajectory> data;
   if (spec.simulation) {
-    dataset_id = store_simulated(store, job, *spec.simulation).id;
+    dataset_id = store_simulated(store, job, *spec.simulation, live, clock).id;
   }
   data = store.load_dataset(dataset_id);
   if (!data) {
@@ -144,7 +174,9 @@ JobOutcome run_identification_job(const api::JobInfo& job, store::Store& store, 
 
   HistoryWriter history(store, job, live, options);
   IdentificationOptions& identification = spec.options;
-  identification.max_seconds = std::min(identification.max_seconds, options.job_time_limit_seconds);
+  // The time limit is the whole job's: what a simulation first took is not given again.
+  identification.max_seconds =
+      std::min(identification.max_seconds, std::max(options.job_time_limit_seconds - clock.elapsed(), 1e-3));
   identification.cancel = &live.cancel;
   identification.on_evaluation = [&history](long index, double cost, const Eigen::VectorXd& theta) {
     history.add(index, cost, theta);
@@ -291,11 +323,14 @@ JobOutcome run_excitation_job(const api::JobInfo& job, store::Store& store, Live
 }  // namespace
 
 JobOutcome run_job(const api::JobInfo& job, store::Store& store, LiveJob& live, const RunnerOptions& options) {
+  const JobClock clock{Clock::now(), options.job_time_limit_seconds};
   try {
-    if (job.kind == api::JobKind::simulation) return run_simulation_job(job, store);
+    if (job.kind == api::JobKind::simulation) return run_simulation_job(job, store, live, clock);
     if (job.kind == api::JobKind::excitation) return run_excitation_job(job, store, live, options);
     if (!job.robot_id.empty()) return run_robot_identification_job(job, store, live);
-    return run_identification_job(job, store, live, options);
+    return run_identification_job(job, store, live, options, clock);
+  } catch (const SimulationStopped& stopped) {
+    return stopped_simulation(live, clock, stopped);
   } catch (const InputError& error) {
     // Submission validated the request against the data it knew; this catches what only the
     // run can see (a dataset replaced in between, a model that rejects the data).

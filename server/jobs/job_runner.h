@@ -17,14 +17,16 @@ namespace manipid::server::jobs {
 
 /// What other threads may see of, or do to, a running job.
 struct LiveJob {
-  std::atomic<bool> cancel{false};    ///< checked at every cost evaluation
+  std::atomic<bool> cancel{false};    ///< checked at every cost evaluation and simulation step
   std::atomic<bool> shutdown{false};  ///< the cancel came from a shutdown: requeue, don't cancel
   std::atomic<long> evaluations{0};
   std::atomic<double> best_cost{std::numeric_limits<double>::infinity()};
 };
 
 struct RunnerOptions {
-  double job_time_limit_seconds = 3600.0;  ///< caps every identification's max_seconds
+  /// Longest a job may run, s: ends a simulation (the job fails) and caps an identification's
+  /// max_seconds (less what a simulation before it took).
+  double job_time_limit_seconds = 3600.0;
   int history_batch = 512;                  ///< entries per store write
   double history_flush_seconds = 0.5;       ///< or sooner than a full batch, while running
 };

@@ -2,7 +2,7 @@
 // them (job_runner.h). The pool also keeps what only memory can hold: each running job's live
 // progress and cancel flag, and a signal that wakes long-polls when any job ends.
 //
-// Shutdown (stop()) tells running identifications to stop at their next cost evaluation and
+// Shutdown (stop()) tells running jobs to stop at their next cost evaluation or simulation step and
 // puts them back in the queue, so a restart runs them again: nothing acknowledged is lost.
 #pragma once
 
@@ -55,7 +55,7 @@ class WorkerPool {
   WorkerPool& operator=(const WorkerPool&) = delete;
 
   void start();
-  /// Stops taking jobs, interrupts running identifications (they are requeued), joins.
+  /// Stops taking jobs, interrupts running jobs (they are requeued), joins.
   void stop();
 
   /// A job was queued: wake an idle worker.

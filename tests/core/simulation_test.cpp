@@ -315,6 +315,49 @@ TEST_F(PaperScenario, SimulatesTheFullHorizon) {
   EXPECT_GT(summary_.wall_seconds, 0.0);
 }
 
+TEST_F(PaperScenario, ShouldStopEndsTheRunEarlyAndSaysSo) {
+  // Asked once before the first step, then after every accepted step: true at the k-th ask
+  // ends the run there, with SimulationStopped (not a normal end, not a numerical failure).
+  constexpr long k = 50;
+  SimulationOptions options = preset_->simulation;
+  long asked = 0;
+  options.should_stop = [&asked] { return ++asked >= k; };
+  try {
+    simulate_closed_loop(preset_->model, preset_->true_parameters, preset_->controller, *reference_, options);
+    ADD_FAILURE() << "expected SimulationStopped";
+  } catch (const SimulationStopped& stopped) {
+    EXPECT_EQ(asked, k);
+    EXPECT_EQ(stopped.steps(), k - 1);
+    EXPECT_GT(stopped.time(), 0.0);
+    EXPECT_LT(stopped.time(), 1.0);  // far from the 9.7 s horizon
+    EXPECT_NE(std::string(stopped.what()).find("stopped"), std::string::npos) << stopped.what();
+  }
+  EXPECT_LT(k - 1, summary_.steps);  // the full run takes many more steps than that
+}
+
+TEST_F(PaperScenario, ShouldStopAtOnceTakesNoStepAndFalseChangesNothing) {
+  SimulationOptions options = preset_->simulation;
+  options.should_stop = [] { return true; };
+  try {
+    simulate_closed_loop(preset_->model, preset_->true_parameters, preset_->controller, *reference_, options);
+    ADD_FAILURE() << "expected SimulationStopped";
+  } catch (const SimulationStopped& stopped) {
+    EXPECT_EQ(stopped.steps(), 0);
+    EXPECT_EQ(stopped.time(), 0.0);
+  }
+  options.duration = 0.5;
+  long asked = 0;
+  options.should_stop = [&asked] { return ++asked < 0; };
+  SimulationSummary summary;
+  const Trajectory run =
+      simulate_closed_loop(preset_->model, preset_->true_parameters, preset_->controller, *reference_, options, &summary);
+  EXPECT_EQ(run.samples(), 501);
+  EXPECT_EQ(asked, summary.steps + 1);
+  for (Eigen::Index i = 0; i < run.samples(); i += 50) {
+    for (int j = 0; j < 4; ++j) ASSERT_EQ(run.q(i, j), trajectory_->q(i, j));
+  }
+}
+
 TEST_F(PaperScenario, GravityActsFromTheStartExceptOnTheVerticalAxis) {
   // Until t = 0.8 s every reference is exactly 0. Joint 1 turns about the gravity axis and
   // is decoupled from the others at rest, so it stays at 0; joints 2..4 sag under gravity.

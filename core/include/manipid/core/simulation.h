@@ -12,6 +12,9 @@
 #include <Eigen/Core>
 
 #include <cstdint>
+#include <functional>
+#include <stdexcept>
+#include <string>
 #include <vector>
 
 namespace manipid {
@@ -55,6 +58,26 @@ struct SimulationOptions {
   double absolute_tolerance = 1e-8;
   Eigen::VectorXd q0;                 ///< initial angles (default zeros), rad
   Eigen::VectorXd qd0;                ///< initial rates (default zeros), rad/s
+  /// Asked after every accepted integrator step (and before the first); when it returns true
+  /// the run ends at once with SimulationStopped. Empty = never stop. This is how a caller
+  /// makes a long simulation answer cancel, a time limit or shutdown.
+  std::function<bool()> should_stop;
+};
+
+/// Thrown by simulate_closed_loop when options.should_stop asked it to end: not a numerical
+/// failure (deliberately not a std::runtime_error), the caller decides what the stop meant.
+class SimulationStopped : public std::exception {
+ public:
+  SimulationStopped(double t, long steps)
+      : t_(t), steps_(steps), message_("simulation: stopped on request at t = " + std::to_string(t) + " s") {}
+  const char* what() const noexcept override { return message_.c_str(); }
+  double time() const { return t_; }   ///< simulated time reached, s
+  long steps() const { return steps_; }  ///< accepted integrator steps taken
+
+ private:
+  double t_;
+  long steps_;
+  std::string message_;
 };
 
 /// Measurement effects applied to a simulated trajectory, reproducible for a given seed.
@@ -79,7 +102,8 @@ struct SimulationSummary {
 /// Simulates the closed loop; returns t, q, τ (the controller's output) and ref at every
 /// sample. Throws InputError on inconsistent sizes or settings, and std::runtime_error when
 /// the motion diverges (|q| > 1e6 rad, a non-finite state, or the step limit) — what a
-/// far-off parameter guess can do; output-error turns that into an infinite cost.
+/// far-off parameter guess can do; output-error turns that into an infinite cost. Throws
+/// SimulationStopped when options.should_stop returns true.
 Trajectory simulate_closed_loop(const RobotModel& model, const Parameters& parameters,
                                 const PdController& controller, const SampledReference& reference,
                                 const SimulationOptions& options, SimulationSummary* summary = nullptr);
