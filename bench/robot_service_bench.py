@@ -20,6 +20,7 @@ import time
 
 sys.path.insert(0, os.path.join(os.path.dirname(__file__), "..", "tests", "service"))
 import harness  # noqa: E402
+from service_bench import percentile  # noqa: E402
 
 URDF = os.path.join(os.path.dirname(__file__), "..", "examples", "robots", "panda_like.urdf")
 
@@ -69,8 +70,7 @@ def main():
                 assert job["state"] == "succeeded", job
                 latencies.append(1000 * (time.perf_counter() - started))
                 identify_seconds.append(1000 * job["result"]["wall_seconds"])
-            ordered = sorted(latencies)
-            p95 = ordered[min(len(ordered) - 1, int(round(0.95 * (len(ordered) - 1))))]
+            p95 = percentile(latencies, 0.95)
             print(f"manipid robot service bench: {arguments.workers} workers, {os.cpu_count()} CPUs, "
                   f"{dataset['samples']} samples x {dataset['joints']} joints ({len(csv) / 1e6:.1f} MB CSV), "
                   f"{arguments.runs} sequential runs")

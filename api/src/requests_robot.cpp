@@ -35,6 +35,27 @@ double band_field(const Json& value, const std::string& field) {
   throw InputError(field, field + " must be \"auto\" or a number in (0, pi] rad/sample, got " + fields::describe(value));
 }
 
+/// `friction` (an array of viscous, coulomb, offset; [] for none) and `armature`, when present,
+/// into the parameter layout: identifications and excitation designs take them alike.
+void read_layout(const fields::ObjectFields& object, robot::ParameterLayout& layout) {
+  if (const Json* friction = object.find("friction")) {
+    if (!friction->is_array()) {
+      throw InputError("friction", "friction must be an array of viscous, coulomb, offset (or [] for none), got " +
+                                       fields::describe(*friction));
+    }
+    std::vector<std::string> terms;
+    for (std::size_t i = 0; i < friction->size(); ++i) {
+      terms.push_back(fields::read_string((*friction)[i], fields::element_path("friction", i)));
+    }
+    if (terms.empty()) terms.emplace_back("none");
+    parse_friction(terms, layout, "friction");
+  }
+  if (const Json* armature = object.find("armature")) {
+    if (!armature->is_boolean()) throw InputError("armature", "armature must be true or false, got " + fields::describe(*armature));
+    layout.armature = armature->get<bool>();
+  }
+}
+
 }  // namespace
 
 RobotUpload robot_from_json(const nlohmann::json& body) {
@@ -103,22 +124,7 @@ RobotIdentificationSpec robot_identification_from_json(const nlohmann::json& bod
     spec.validation_dataset_id = read_id(*validation, "validation_dataset_id");
   }
   robot::IdentificationOptions& options = spec.options;
-  if (const Json* friction = object.find("friction")) {
-    if (!friction->is_array()) {
-      throw InputError("friction", "friction must be an array of viscous, coulomb, offset (or [] for none), got " +
-                                       fields::describe(*friction));
-    }
-    std::vector<std::string> terms;
-    for (std::size_t i = 0; i < friction->size(); ++i) {
-      terms.push_back(fields::read_string((*friction)[i], fields::element_path("friction", i)));
-    }
-    if (terms.empty()) terms.emplace_back("none");
-    parse_friction(terms, options.layout, "friction");
-  }
-  if (const Json* armature = object.find("armature")) {
-    if (!armature->is_boolean()) throw InputError("armature", "armature must be true or false, got " + fields::describe(*armature));
-    options.layout.armature = armature->get<bool>();
-  }
+  read_layout(object, options.layout);
   if (const Json* physical = object.find("physical")) {
     if (!physical->is_boolean()) throw InputError("physical", "physical must be true or false, got " + fields::describe(*physical));
     spec.physical = physical->get<bool>();
@@ -198,22 +204,7 @@ ExcitationSpec excitation_from_json(const nlohmann::json& body) {
   if (const Json* duration = object.find("duration")) {
     spec.periods = robot::whole_periods(fields::read_positive(*duration, "duration", 86'400.0, " s"), options.period);
   }
-  if (const Json* friction = object.find("friction")) {
-    if (!friction->is_array()) {
-      throw InputError("friction", "friction must be an array of viscous, coulomb, offset (or [] for none), got " +
-                                       fields::describe(*friction));
-    }
-    std::vector<std::string> terms;
-    for (std::size_t i = 0; i < friction->size(); ++i) {
-      terms.push_back(fields::read_string((*friction)[i], fields::element_path("friction", i)));
-    }
-    if (terms.empty()) terms.emplace_back("none");
-    parse_friction(terms, options.layout, "friction");
-  }
-  if (const Json* armature = object.find("armature")) {
-    if (!armature->is_boolean()) throw InputError("armature", "armature must be true or false, got " + fields::describe(*armature));
-    options.layout.armature = armature->get<bool>();
-  }
+  read_layout(object, options.layout);
   if (const Json* seed = object.find("seed")) options.seed = fields::read_unsigned(*seed, "seed");
   if (const Json* seconds = object.find("max_seconds")) options.max_seconds = fields::read_positive(*seconds, "max_seconds", 600.0, " s");
   // The budget that makes a design reproducible (max_seconds depends on the machine).

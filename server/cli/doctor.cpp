@@ -7,7 +7,7 @@
 #include "store/sqlite/store.h"
 
 #include <cstdio>
-#include <string_view>
+#include <string>
 
 namespace manipid::server::cli {
 
@@ -20,10 +20,10 @@ CLI::App* add_doctor_command(CLI::App& app, DoctorOptions& options) {
 }
 
 int run_doctor(const DoctorOptions& options) {
-  const std::string_view text = options.database;
-  const std::string path(text.starts_with("sqlite:") ? text.substr(7) : text);
+  std::string path;
   store::sqlite::FileCheck check;
   try {
+    path = store::sqlite_path(options.database);
     check = store::sqlite::check_file(path);
   } catch (const store::StoreError& error) {
     throw UsageError(std::string("--db: ") + error.what());

@@ -1,4 +1,4 @@
-// open_store.cpp — open_store(url): the one place a `--db` value becomes a backend.
+// open_store.cpp — open_store(url) and sqlite_path(url): the one place a `--db` value is read.
 #include "store/store.h"
 
 #include "store/sqlite/store.h"
@@ -7,7 +7,7 @@
 
 namespace manipid::server::store {
 
-std::unique_ptr<Store> open_store(const std::string& url) {
+std::string sqlite_path(const std::string& url) {
   const std::string_view text = url;
   if (text.starts_with("postgresql://") || text.starts_with("postgres://")) {
     // The URL is not repeated: it may carry a password.
@@ -15,7 +15,9 @@ std::unique_ptr<Store> open_store(const std::string& url) {
   }
   const std::string_view path = text.starts_with("sqlite:") ? text.substr(7) : text;
   if (path.empty()) throw StoreError("--db names no file (give a path, or sqlite:PATH)");
-  return sqlite::open_store(std::string(path));
+  return std::string(path);
 }
+
+std::unique_ptr<Store> open_store(const std::string& url) { return sqlite::open_store(sqlite_path(url)); }
 
 }  // namespace manipid::server::store

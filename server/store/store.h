@@ -169,5 +169,8 @@ class Store {
 /// missing, migrated if older); "postgresql://…" or "postgres://…" a PostgreSQL database, which
 /// this build cannot open yet (StoreError says so). Throws StoreError when it cannot be opened.
 std::unique_ptr<Store> open_store(const std::string& url);
+/// The SQLite file a `--db` value names (PATH or sqlite:PATH); StoreError for any other backend
+/// or an empty path. open_store and `manipid doctor` both read `--db` through it.
+std::string sqlite_path(const std::string& url);
 
 }  // namespace manipid::server::store
