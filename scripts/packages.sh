@@ -26,7 +26,7 @@ if [[ "${1:-}" == --sections ]]; then
   shift
 fi
 if ! $want_sections && [[ $# -eq 0 ]]; then
-  echo "usage: packages.sh [--file FILE] SECTION... | --sections   (sections: build, test, web, runtime)" >&2
+  echo "usage: packages.sh [--file FILE] SECTION... | --sections   (sections: build, test, web, runtime, proxy)" >&2
   exit 2
 fi
 [[ -r "$list" ]] || { echo "packages.sh: cannot read $list" >&2; exit 2; }

@@ -28,6 +28,17 @@ api::DeleteOutcome outcome_of(store::DeleteResult result) {
   }
 }
 
+/// A store's write; a full disk is the client's 507 (nothing was stored; retry later), not a 500.
+template <class Write>
+auto stored(Write&& write) {
+  try {
+    return write();
+  } catch (const store::StorageFull&) {
+    throw api::ApiError(api::ProblemKind::insufficient_storage,
+                        "the server's disk is full: nothing was stored; retry when space has been freed");
+  }
+}
+
 /// A store's list call; a page request it refuses is the caller's mistake (422 naming the field).
 template <class Read>
 auto page_of(Read&& read) {
@@ -43,7 +54,7 @@ auto page_of(Read&& read) {
 api::DatasetCreated JobService::create_dataset(const api::DatasetUpload& upload,
                                                const std::optional<api::IdempotencyKey>& key) {
   if (!accepting()) throw api::ApiError(api::ProblemKind::shutting_down, "the server is shutting down");
-  const store::DatasetOutcome outcome = store_.insert_dataset(upload.name, upload.trajectory, "", key);
+  const store::DatasetOutcome outcome = stored([&] { return store_.insert_dataset(upload.name, upload.trajectory, "", key); });
   if (outcome.status == store::SubmitStatus::key_reused) key_reused();
   return {outcome.dataset, outcome.status == store::SubmitStatus::replayed};
 }
@@ -54,12 +65,15 @@ api::Page<api::DatasetInfo> JobService::datasets(const api::PageRequest& page) {
   return page_of([&] { return store_.list_datasets(page); });
 }
 
-api::DeleteOutcome JobService::delete_dataset(const std::string& id) { return outcome_of(store_.delete_dataset(id)); }
+api::DeleteOutcome JobService::delete_dataset(const std::string& id) {
+  return outcome_of(stored([&] { return store_.delete_dataset(id); }));
+}
 
 api::RobotCreated JobService::create_robot(const api::RobotUpload& upload, int joints, const std::string& description,
                                            const std::optional<api::IdempotencyKey>& key) {
   if (!accepting()) throw api::ApiError(api::ProblemKind::shutting_down, "the server is shutting down");
-  const store::RobotOutcome outcome = store_.insert_robot({upload.name, upload.urdf, upload.base, upload.tip, joints, description}, key);
+  const store::RobotOutcome outcome = stored(
+      [&] { return store_.insert_robot({upload.name, upload.urdf, upload.base, upload.tip, joints, description}, key); });
   if (outcome.status == store::SubmitStatus::key_reused) key_reused();
   return {outcome.robot, outcome.status == store::SubmitStatus::replayed};
 }
@@ -69,14 +83,18 @@ std::optional<std::string> JobService::robot_urdf(const std::string& id) { retur
 api::Page<api::RobotInfo> JobService::robots(const api::PageRequest& page) {
   return page_of([&] { return store_.list_robots(page); });
 }
-api::DeleteOutcome JobService::delete_robot(const std::string& id) { return outcome_of(store_.delete_robot(id)); }
+api::DeleteOutcome JobService::delete_robot(const std::string& id) {
+  return outcome_of(stored([&] { return store_.delete_robot(id); }));
+}
 
 api::SubmitResult JobService::submit(const api::JobSubmission& submission, const std::optional<api::IdempotencyKey>& key) {
   if (!accepting()) throw api::ApiError(api::ProblemKind::shutting_down, "the server is shutting down");
   const api::JobKind kind = submission.kind;
-  const store::SubmitOutcome outcome = store_.submit_job(
-      {kind, submission.request_json, submission.dataset_id, submission.robot_id, submission.validation_dataset_id}, key,
-      options_.queue_limit);
+  const store::SubmitOutcome outcome = stored([&] {
+    return store_.submit_job(
+        {kind, submission.request_json, submission.dataset_id, submission.robot_id, submission.validation_dataset_id}, key,
+        options_.queue_limit);
+  });
   switch (outcome.status) {
     case store::SubmitStatus::key_reused: key_reused();
     case store::SubmitStatus::queue_full:
@@ -134,7 +152,7 @@ std::optional<api::HistoryOverview> JobService::history_overview(const std::stri
 }
 
 std::optional<api::JobInfo> JobService::cancel(const std::string& id) {
-  switch (store_.cancel_job(id)) {
+  switch (stored([&] { return store_.cancel_job(id); })) {
     case store::CancelOutcome::not_found: return std::nullopt;
     case store::CancelOutcome::cancelled_now:
       if (options_.log) options_.log("job " + id + ": cancelled (was queued)");
@@ -149,7 +167,14 @@ std::optional<api::JobInfo> JobService::cancel(const std::string& id) {
   return job(id);
 }
 
-api::DeleteOutcome JobService::delete_job(const std::string& id) { return outcome_of(store_.delete_job(id)); }
+api::DeleteOutcome JobService::delete_job(const std::string& id) {
+  return outcome_of(stored([&] { return store_.delete_job(id); }));
+}
+
+std::optional<std::string> JobService::degraded() const {
+  if (!store_.write_trouble()) return std::nullopt;
+  return "the disk holding the database is full: reads answer, writes are refused (507) until space is freed";
+}
 
 std::string JobService::metrics() {
   std::ostringstream out;

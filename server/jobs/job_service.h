@@ -48,6 +48,8 @@ class JobService : public api::Service {
 
   std::string metrics() override;
   bool accepting() const override { return accepting_.load(); }
+  /// The store's write trouble (a full disk), in words for /healthz.
+  std::optional<std::string> degraded() const override;
   /// Refuse new submissions from now on (shutdown has begun).
   void stop_accepting() { accepting_ = false; }
 

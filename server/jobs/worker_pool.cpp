@@ -1,6 +1,9 @@
 // worker_pool.cpp — the job threads (worker_pool.h).
 #include "jobs/worker_pool.h"
 
+#include "manipid/api/problem.h"
+
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
 
@@ -80,6 +83,45 @@ void WorkerPool::notify_changed() {
   changed_.notify_all();
 }
 
+bool WorkerPool::pause_unless_stopping(std::chrono::milliseconds delay) {
+  std::unique_lock lock(mutex_);
+  return !work_available_.wait_for(lock, delay, [&] { return stopping_; });
+}
+
+bool WorkerPool::record_end(const api::JobInfo& job, JobOutcome& outcome) {
+  // A full disk (StorageFull) keeps the end as computed: once space is freed it is written, and
+  // an hour's identification keeps its result. Any other storage failure may be the result
+  // itself (over a limit of the store): after two tries the job is recorded failed with a short
+  // error and no estimates — a far smaller write — tried until it sticks. Either way a job never
+  // stays `running` for good: it ends when the store takes a write again (a cancel cannot end it
+  // sooner: a cancel is a write too, answered 507 while the disk is full).
+  constexpr int kTriesAsComputed = 2;
+  bool as_computed = true;
+  std::chrono::milliseconds delay{250};
+  for (int attempt = 1;; ++attempt) {
+    try {
+      store_.finish_job(job.id, outcome.state, outcome.result, outcome.error, outcome.estimates, outcome.dataset_id);
+      if (attempt > 1) log_("job " + job.id + ": its end was recorded at attempt " + std::to_string(attempt));
+      return true;
+    } catch (const std::exception& error) {
+      const bool full = dynamic_cast<const store::StorageFull*>(&error) != nullptr;
+      log_("job " + job.id + ": cannot record its end (attempt " + std::to_string(attempt) + "): " + error.what());
+      if (as_computed && !full && attempt >= kTriesAsComputed) {
+        as_computed = false;
+        const std::string dataset_id = outcome.dataset_id;  // made or read: it is stored already
+        outcome = JobOutcome{};
+        outcome.state = api::JobState::failed;
+        outcome.dataset_id = dataset_id;
+        outcome.error = api::problem_to_json({api::ProblemKind::job_failed,
+                                              "the job ran, but its result could not be stored (a storage error; see the server log)", ""})
+                            .dump();
+      }
+    }
+    if (!pause_unless_stopping(delay)) return false;
+    delay = std::min(delay * 2, options_.final_write_max_backoff);
+  }
+}
+
 PoolStatistics WorkerPool::statistics() const {
   std::lock_guard lock(mutex_);
   PoolStatistics copy = statistics_;
@@ -136,15 +178,15 @@ void WorkerPool::run_one(const api::JobInfo& job) {
   JobOutcome outcome = run_job(job, store_, *live, options_.runner);
   if (!outcome.log.empty()) log_("job " + job.id + ": " + outcome.log);
   const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - started).count();
-  try {
-    if (outcome.requeue) {
+  if (outcome.requeue) {
+    try {
       store_.requeue_job(job.id);
-    } else {
-      store_.finish_job(job.id, outcome.state, outcome.result, outcome.error, outcome.estimates, outcome.dataset_id);
+    } catch (const std::exception& error) {
+      // The row stays running; the next start-up puts it back in the queue.
+      log_("job " + job.id + ": cannot put it back in the queue: " + error.what());
     }
-  } catch (const std::exception& error) {
-    // The row stays running; the next start-up puts it back in the queue.
-    log_("job " + job.id + ": cannot record its end: " + error.what());
+  } else if (!record_end(job, outcome)) {
+    outcome.requeue = true;  // stopped while its end could not be written: recovery requeues it
   }
   char duration[32];
   std::snprintf(duration, sizeof duration, "%.3f", seconds);

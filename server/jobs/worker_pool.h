@@ -29,6 +29,9 @@ struct WorkerPoolOptions {
   /// How often an idle worker looks at the store even without a submit notification (jobs
   /// recovered at start-up, or submitted by another process on the same database).
   std::chrono::milliseconds idle_poll{1000};
+  /// A job's end that cannot be written (a full disk) is written again after 250 ms, the wait
+  /// doubling up to this; see WorkerPool::record_end.
+  std::chrono::milliseconds final_write_max_backoff{10000};
 };
 
 struct LiveProgress {
@@ -76,6 +79,11 @@ class WorkerPool {
  private:
   void work();
   void run_one(const api::JobInfo& job);
+  /// Writes a job's end until it sticks; false when the pool stopped first (the row stays
+  /// running; start-up recovery puts it back in the queue).
+  bool record_end(const api::JobInfo& job, JobOutcome& outcome);
+  /// Waits `delay` unless the pool stops first; false when it stopped.
+  bool pause_unless_stopping(std::chrono::milliseconds delay);
 
   store::Store& store_;
   WorkerPoolOptions options_;

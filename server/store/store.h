@@ -32,6 +32,14 @@ class StoreError : public std::runtime_error {
   using std::runtime_error::runtime_error;
 };
 
+/// The disk (or quota) holding the database is full: nothing of the write was kept, and the
+/// same write may succeed once space is freed. The service answers 507 and retries a job's
+/// final write (worker_pool.cpp); /healthz says "degraded" until a write succeeds again.
+class StorageFull : public StoreError {
+ public:
+  using StoreError::StoreError;
+};
+
 /// A page request the store cannot serve: a negative page size, a page token it did not issue
 /// (or issued for another filter). The caller's mistake: the service answers 422 naming `field`.
 class PageRequestError : public std::invalid_argument {
@@ -163,6 +171,10 @@ class Store {
   virtual RecoveryOutcome recover_interrupted_jobs(int max_attempts,
                                                    const std::function<std::string(int losses)>& lost_error) = 0;
   virtual std::map<api::JobState, long> count_jobs_by_state() = 0;
+  /// Why writes fail now ("the disk holding the database is full"), or nullopt when the last
+  /// write transaction succeeded (or none failed): set by a StorageFull, cleared by the next
+  /// successful write. What /healthz reports as "degraded".
+  virtual std::optional<std::string> write_trouble() const = 0;
 };
 
 /// The store a `--db` value names: "sqlite:PATH" or a plain PATH is a SQLite file (created if

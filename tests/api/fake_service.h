@@ -294,6 +294,14 @@ class FakeService : public Service {
     std::lock_guard lock(mutex_);
     return accepting_;
   }
+  std::optional<std::string> degraded() const override {
+    std::lock_guard lock(mutex_);
+    return degraded_;
+  }
+  void set_degraded(std::optional<std::string> reason) {
+    std::lock_guard lock(mutex_);
+    degraded_ = std::move(reason);
+  }
 
  private:
   /// Counts the call and throws what the script asks for.
@@ -307,6 +315,7 @@ class FakeService : public Service {
   mutable std::mutex mutex_;
   Script script_;
   bool accepting_ = true;
+  std::optional<std::string> degraded_;
   int calls_ = 0;
   std::map<std::string, DatasetInfo> datasets_;
   std::map<std::string, RobotInfo> robots_;

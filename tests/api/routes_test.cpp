@@ -569,6 +569,23 @@ TEST_F(Routes, ShuttingDownAnswers503WithRetryAfter) {
   EXPECT_EQ(json_of(health), Json::parse(R"({"status": "shutting down"})"));
 }
 
+TEST_F(Routes, AFullDiskIs507WithRetryAfterAndHealthSaysDegraded) {
+  fake_.script([](Script& s) { s.submit_error = ProblemKind::insufficient_storage; });
+  const auto result = post("/v1/simulations", R"({"duration": 0.5})");
+  expect_problem(result, 507, "INSUFFICIENT_STORAGE", "");
+  ASSERT_TRUE(result);
+  EXPECT_EQ(result->get_header_value("Retry-After"), "5");
+  fake_.set_degraded("the disk holding the database is full");
+  auto health = get("/healthz");
+  ASSERT_TRUE(health);
+  EXPECT_EQ(health->status, 200);  // reads still answer
+  EXPECT_EQ(json_of(health), Json::parse(R"({"status": "degraded", "detail": "the disk holding the database is full"})"));
+  fake_.set_degraded(std::nullopt);
+  health = get("/healthz");
+  ASSERT_TRUE(health);
+  EXPECT_EQ(json_of(health), Json::parse(R"({"status": "ok"})"));
+}
+
 TEST_F(Routes, PresetsAndTheirErrors) {
   auto result = get("/v1/presets");
   ASSERT_TRUE(result);

@@ -24,7 +24,7 @@ trap 'rm -rf -- "$work"' EXIT
 
 # ---- The list parses, with the three sections, none empty --------------------------------
 if sections=$(bash "$packages" --sections 2>"$work/err"); then
-  for section in build test web runtime; do
+  for section in build test web runtime proxy; do
     if grep -qx "$section" <<<"$sections"; then pass "section [$section] exists"; else fail "section [$section] exists"; fi
     if names=$(bash "$packages" "$section" 2>"$work/err") && [[ -n "$names" ]]; then
       pass "section [$section] parses, $(wc -l <<<"$names") packages"

@@ -41,6 +41,7 @@ class FailingStore : public Store {
   std::optional<api::HistoryOverview> history_overview(const std::string&, long) override { fail(); }
   RecoveryOutcome recover_interrupted_jobs(int, const std::function<std::string(int)>&) override { fail(); }
   std::map<api::JobState, long> count_jobs_by_state() override { fail(); }
+  std::optional<std::string> write_trouble() const override { return "string or blob too big"; }
 };
 
 TEST(RunJob, AStorageErrorIsASentenceForTheClientAndSqlitesTextForTheLog) {

@@ -13,7 +13,8 @@ void send_json(httplib::Response& response, int status, const nlohmann::ordered_
 void send_problem(httplib::Response& response, const Problem& problem, const std::string& instance) {
   response.status = status_of(problem.kind);
   response.set_content(problem_to_json(problem, instance).dump(), "application/problem+json");
-  if (problem.kind == ProblemKind::queue_full || problem.kind == ProblemKind::shutting_down) {
+  if (problem.kind == ProblemKind::queue_full || problem.kind == ProblemKind::shutting_down ||
+      problem.kind == ProblemKind::insufficient_storage) {
     response.set_header("Retry-After", "5");
   }
   if (problem.kind == ProblemKind::unauthorized) response.set_header("WWW-Authenticate", "Bearer");

@@ -58,8 +58,12 @@ void openapi_document(RouteState&, const httplib::Request&, httplib::Response& r
 }
 
 void health(RouteState& state, const httplib::Request&, httplib::Response& response) {
-  const bool up = state.service.accepting();
-  send_json(response, up ? 200 : 503, {{"status", up ? "ok" : "shutting down"}});
+  if (!state.service.accepting()) return send_json(response, 503, {{"status", "shutting down"}});
+  // Degraded is still 200: reads and job status answer; only writes are refused (507).
+  if (const auto reason = state.service.degraded()) {
+    return send_json(response, 200, {{"status", "degraded"}, {"detail", *reason}});
+  }
+  send_json(response, 200, {{"status", "ok"}});
 }
 
 void metrics(RouteState& state, const httplib::Request&, httplib::Response& response) {

@@ -14,7 +14,30 @@ void throw_sqlite_error(sqlite3* database, int code, std::string_view context) {
   if (!context.empty()) message = std::string(context) + ": " + message;
   const int primary = code & 0xff;  // extended result codes are on
   if (primary == SQLITE_BUSY || primary == SQLITE_LOCKED) throw BusyError(message);
+  if (primary == SQLITE_FULL) throw StorageFull(message);
   throw StoreError(message);
+}
+
+// ---- WriteHealth ----
+
+void WriteHealth::failed(const std::string& reason) {
+  std::lock_guard lock(mutex_);
+  reason_ = reason;
+  troubled_.store(true);
+}
+
+void WriteHealth::succeeded() noexcept {
+  if (!troubled_.load()) return;
+  std::lock_guard lock(mutex_);
+  troubled_.store(false);
+  reason_.clear();
+}
+
+std::optional<std::string> WriteHealth::trouble() const {
+  if (!troubled_.load()) return std::nullopt;
+  std::lock_guard lock(mutex_);
+  if (!troubled_.load()) return std::nullopt;
+  return reason_;
 }
 
 // ---- Statement ----
@@ -156,6 +179,7 @@ void Connection::execute(const char* sql) {
   sqlite3_free(error);
   const int primary = code & 0xff;
   if (primary == SQLITE_BUSY || primary == SQLITE_LOCKED) throw BusyError(message);
+  if (primary == SQLITE_FULL) throw StorageFull(message);
   throw StoreError(message);
 }
 
@@ -166,6 +190,7 @@ void Connection::rollback_quietly() noexcept {
 // ---- ConnectionPool ----
 
 ConnectionPool::ConnectionPool(std::string path, std::unique_ptr<Connection> first) : path_(std::move(path)) {
+  first->attach(&health_);
   idle_.push_back(std::move(first));
 }
 
@@ -179,7 +204,9 @@ ConnectionPool::Lease ConnectionPool::checkout() {
     }
   }
   // Opening touches the file system: done outside the lock.
-  return Lease(this, std::make_unique<Connection>(path_));
+  auto connection = std::make_unique<Connection>(path_);
+  connection->attach(&health_);
+  return Lease(this, std::move(connection));
 }
 
 void ConnectionPool::give_back(std::unique_ptr<Connection> connection) noexcept {

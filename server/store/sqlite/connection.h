@@ -7,6 +7,7 @@
 
 #include <sqlite3.h>
 
+#include <atomic>
 #include <cstddef>
 #include <cstdint>
 #include <memory>
@@ -28,7 +29,8 @@ class BusyError : public StoreError {
   using StoreError::StoreError;
 };
 
-/// Throws BusyError for BUSY/LOCKED, StoreError (with SQLite's message) for anything else.
+/// Throws BusyError for BUSY/LOCKED, StorageFull for SQLITE_FULL (the disk or quota is full),
+/// StoreError (with SQLite's message) for anything else.
 [[noreturn]] void throw_sqlite_error(sqlite3* database, int code, std::string_view context);
 
 /// One use of a cached prepared statement. Values are bound, never spliced into the SQL.
@@ -68,6 +70,21 @@ class Statement {
   sqlite3_stmt* statement_;
 };
 
+/// Whether writes fail for want of space now (Store::write_trouble): set when a write
+/// transaction ends in StorageFull, cleared by the next write transaction that commits. One per
+/// store, shared by its connections; the clear is one atomic load when nothing failed.
+class WriteHealth {
+ public:
+  void failed(const std::string& reason);
+  void succeeded() noexcept;
+  std::optional<std::string> trouble() const;
+
+ private:
+  mutable std::mutex mutex_;
+  std::atomic<bool> troubled_{false};
+  std::string reason_;
+};
+
 /// One database connection, used by one thread at a time (it is opened NOMUTEX).
 class Connection {
  public:
@@ -87,9 +104,14 @@ class Connection {
   /// Rows changed by the last INSERT, UPDATE or DELETE on this connection.
   int changes() const { return sqlite3_changes(database_); }
   sqlite3* handle() const { return database_; }
+  /// The store's WriteHealth, told by run_transaction how each write transaction ended (none
+  /// for a connection outside a pool: start-up migrations, `manipid doctor`).
+  void attach(WriteHealth* health) noexcept { health_ = health; }
+  WriteHealth* health() const noexcept { return health_; }
 
  private:
   sqlite3* database_ = nullptr;
+  WriteHealth* health_ = nullptr;
   std::unordered_map<std::string, sqlite3_stmt*> statements_;
 };
 
@@ -121,6 +143,7 @@ class ConnectionPool {
   /// `first` is the connection the store opened (and migrated with) at start-up.
   ConnectionPool(std::string path, std::unique_ptr<Connection> first);
   Lease checkout();
+  const WriteHealth& health() const { return health_; }
 
  private:
   void give_back(std::unique_ptr<Connection> connection) noexcept;
@@ -129,6 +152,7 @@ class ConnectionPool {
   std::string path_;
   std::mutex mutex_;
   std::vector<std::unique_ptr<Connection>> idle_;
+  WriteHealth health_;
 };
 
 enum class TransactionKind {
@@ -145,7 +169,8 @@ void sleep_before_retry(int attempt);
 
 /// Runs `body` inside one transaction and commits; on BusyError anywhere (BEGIN, a statement,
 /// COMMIT) rolls back and runs the whole body again. Any other exception rolls back and
-/// propagates. `body` must therefore compute everything from the database, not from state
+/// propagates. A write transaction tells the connection's WriteHealth whether it committed or
+/// failed for want of space. `body` must therefore compute everything from the database, not from state
 /// an earlier attempt left behind.
 template <class Body>
 auto run_transaction(Connection& connection, TransactionKind kind, Body&& body) -> std::invoke_result_t<Body&> {
@@ -153,15 +178,23 @@ auto run_transaction(Connection& connection, TransactionKind kind, Body&& body) 
   for (int attempt = 1;; ++attempt) {
     try {
       connection.execute(kind == TransactionKind::write ? "BEGIN IMMEDIATE" : "BEGIN");
+      const auto commit = [&] {
+        connection.execute("COMMIT");
+        if (kind == TransactionKind::write && connection.health() != nullptr) connection.health()->succeeded();
+      };
       if constexpr (std::is_void_v<Result>) {
         body();
-        connection.execute("COMMIT");
+        commit();
         return;
       } else {
         Result result = body();
-        connection.execute("COMMIT");
+        commit();
         return result;
       }
+    } catch (const StorageFull& full) {
+      connection.rollback_quietly();
+      if (connection.health() != nullptr) connection.health()->failed(full.what());
+      throw;
     } catch (const BusyError& busy) {
       connection.rollback_quietly();
       if (attempt >= kMaxAttempts) {

@@ -607,6 +607,8 @@ class SqliteStore final : public Store {
     });
   }
 
+  std::optional<std::string> write_trouble() const override { return pool_.health().trouble(); }
+
  private:
   static std::unique_ptr<Connection> open_and_prepare(const std::string& path) {
     auto connection = std::make_unique<Connection>(path);

@@ -82,6 +82,9 @@ class Service {
   virtual std::string metrics() = 0;
   /// False once the server is shutting down.
   virtual bool accepting() const = 0;
+  /// Why the server works only in part now (e.g. "the disk holding the database is full":
+  /// reads answer, writes get 507), or nullopt when all is well. /healthz says "degraded".
+  virtual std::optional<std::string> degraded() const = 0;
 };
 
 }  // namespace manipid::api
