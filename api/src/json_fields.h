@@ -7,6 +7,7 @@
 // JSON does.
 #pragma once
 
+#include "manipid/api/limits.h"
 #include "manipid/api/requests.h"
 
 #include <Eigen/Core>
@@ -27,9 +28,8 @@ using Json = nlohmann::json;
 inline constexpr double infinity = std::numeric_limits<double>::infinity();
 /// Longest label (dataset and simulation "name"), in characters.
 inline constexpr std::size_t max_name_characters = 200;
-/// Most samples a dataset or simulation may have: what the CSV reader accepts, and what keeps
-/// one request from exhausting memory.
-inline constexpr double max_samples = 10'000'000;
+/// Most samples a dataset or simulation may have (limits.h owns it), as a double for range checks.
+inline constexpr double max_samples = static_cast<double>(limits::max_samples);
 
 /// "simulation" + "noise" → "simulation.noise"; "" + "q" → "q".
 std::string member_path(const std::string& parent, std::string_view key);

@@ -4,7 +4,9 @@
 #include "manipid/api/csv.h"
 #include "json_fields.h"
 
+#include <algorithm>
 #include <cmath>
+#include <limits>
 
 namespace manipid::api {
 namespace {
@@ -35,6 +37,7 @@ Eigen::MatrixXd read_block(const Json& value, const std::string& path, int expec
   }
   const std::size_t joints = value.size();
   if (joints == 0) throw InputError(path, path + " is empty: it needs one array of samples per joint");
+  limits::check_joints(static_cast<int>(std::min<std::size_t>(joints, std::numeric_limits<int>::max())), path, path);
   if (expected_joints > 0 && joints != static_cast<std::size_t>(expected_joints)) {
     throw InputError(path, path + " has " + std::to_string(joints) + " joints, expected " +
                                std::to_string(expected_joints) + " (as q)");
@@ -135,6 +138,8 @@ DatasetUpload dataset_from_json(const nlohmann::json& body) {
   if (const Json* qd = object.find("qd")) trajectory.qd = read_block(*qd, "qd", joints, count);
   if (const Json* qdd = object.find("qdd")) trajectory.qdd = read_block(*qdd, "qdd", joints, count);
 
+  const int blocks = static_cast<int>(object.has("tau") + object.has("ref") + object.has("qd") + object.has("qdd")) + 1;
+  limits::check_dataset_size(count.samples, joints, blocks, count.source, count.source);
   if (count.samples < 2) {
     throw InputError(count.source, "a dataset needs at least 2 samples, " + count.source + " has " +
                                        samples_text(static_cast<std::size_t>(count.samples)));
