@@ -29,6 +29,7 @@ enum class ProblemKind {
   idempotency_mismatch,  ///< 422 an Idempotency-Key reused with a different request
   queue_full,            ///< 429 the job queue is at --queue-limit (with Retry-After)
   shutting_down,         ///< 503 the server is stopping
+  memory_busy,           ///< 503 no memory for this request now: over --memory-budget, or it ran out (with Retry-After)
   internal,              ///< 500 a bug; the detail never carries internals
   // A job's `error` (the request was accepted; the run could not finish):
   job_failed,            ///< 500 the computation could not finish (a diverging simulation, a store failure)
