@@ -232,14 +232,16 @@ CsvTable parse_csv(std::string_view text, const CsvLimits& limits) {
   std::vector<double> values;
   const std::size_t line_estimate = static_cast<std::size_t>(std::count(text.begin(), text.end(), '\n')) + 1;
   const std::size_t field_estimate = text.size() / 2 + 1;
-  values.reserve(std::min({line_estimate * column_count, limits.max_rows * column_count, field_estimate}));
+  values.reserve(std::min({line_estimate * column_count, limits.max_rows * column_count, limits.max_values, field_estimate}));
 
+  // Rows beyond max_rows, or beyond max_values numbers in all for this width, are refused.
+  const std::size_t max_rows = std::min(limits.max_rows, limits.max_values / std::max<std::size_t>(column_count, 1));
   std::size_t row_count = 0;
   while (reader.next_nonblank(line, line_number)) {
-    if (row_count == limits.max_rows) {
+    if (row_count == max_rows) {
       throw InputError(std::string(structure_field),
-                       line_prefix(line_number) + ": more than " + std::to_string(limits.max_rows) +
-                           " data rows (the limit)");
+                       line_prefix(line_number) + ": more than " + std::to_string(max_rows) + " data rows (the limit" +
+                           (max_rows < limits.max_rows ? " for " + std::to_string(column_count) + " columns" : "") + ")");
     }
     const std::size_t row_start = values.size();
     values.resize(row_start + column_count);
@@ -365,6 +367,7 @@ Trajectory trajectory_from_csv(const CsvTable& table, bool require_torque) {
   if (table.column_index("t") < 0) throw InputError("t", "missing column t");
   const int joint_count = numbered_group(table, "q", 0);
   if (joint_count == 0) throw InputError("q1", "missing column q1 (joint angles q1..qn)");
+  limits::check_joints(joint_count, numbered("q", limits::max_joints + 1), "the CSV");
   const int torque_count = numbered_group(table, "tau", joint_count);
   if (require_torque && torque_count == 0) {
     throw InputError("tau1", "missing column tau1 (joint torques tau1..tau" +

@@ -7,6 +7,7 @@
 // JSON does.
 #pragma once
 
+#include "manipid/api/limits.h"
 #include "manipid/api/requests.h"
 
 #include <Eigen/Core>
@@ -27,9 +28,8 @@ using Json = nlohmann::json;
 inline constexpr double infinity = std::numeric_limits<double>::infinity();
 /// Longest label (dataset and simulation "name"), in characters.
 inline constexpr std::size_t max_name_characters = 200;
-/// Most samples a dataset or simulation may have: what the CSV reader accepts, and what keeps
-/// one request from exhausting memory.
-inline constexpr double max_samples = 10'000'000;
+/// Most samples a dataset or simulation may have (limits.h owns it), as a double for range checks.
+inline constexpr double max_samples = static_cast<double>(limits::max_samples);
 
 /// "simulation" + "noise" → "simulation.noise"; "" + "q" → "q".
 std::string member_path(const std::string& parent, std::string_view key);
@@ -49,6 +49,11 @@ std::size_t character_count(std::string_view text);
 /// JSON, and numbers beyond a double (1e400), are ApiError malformed_body (field "body") saying
 /// where, in words, quoting at most 20 characters of the input.
 Json parse_request(const std::string& text);
+/// The refusal of a key seen twice in the object at `object_path` ("" for the body).
+[[noreturn]] void throw_duplicate_key(const std::string& object_path, const std::string& key);
+/// A parser failure as parse_request answers it: a syntax error, or a number beyond a double
+/// at `where` (the path of the value being read).
+[[noreturn]] void throw_parse_failure(const nlohmann::detail::exception& error, const std::string& where);
 
 /// A JSON object read member by member. The constructor checks that the value is an object
 /// and that every key is accepted, so a typo ("max_evaluation") is an error, never ignored.

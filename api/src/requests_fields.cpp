@@ -88,11 +88,7 @@ class ParsePosition {
       case Json::parse_event_t::key: {
         Frame& frame = frames_.back();
         const std::string& key = parsed.get_ref<const std::string&>();
-        if (!frame.keys.insert(key).second) {
-          const std::string field = member_path(frame.path, shortened(key));
-          throw InputError(field, "the key \"" + shortened(key) + "\" appears twice in " +
-                                      (frame.path.empty() ? std::string("the body") : frame.path) + "; send each key once");
-        }
+        if (!frame.keys.insert(key).second) throw_duplicate_key(frame.path, key);
         frame.key = key;
         break;
       }
@@ -136,6 +132,23 @@ std::string syntax_error_text(const Json::parse_error& error) {
 
 }  // namespace
 
+void throw_duplicate_key(const std::string& object_path, const std::string& key) {
+  const std::string field = member_path(object_path, shortened(key));
+  throw InputError(field, "the key \"" + shortened(key) + "\" appears twice in " +
+                              (object_path.empty() ? std::string("the body") : object_path) + "; send each key once");
+}
+
+void throw_parse_failure(const nlohmann::detail::exception& error, const std::string& where) {
+  if (const auto* syntax = dynamic_cast<const Json::parse_error*>(&error)) {
+    throw ApiError(ProblemKind::malformed_body, "the body is not valid JSON: " + syntax_error_text(*syntax), "body");
+  }
+  // 406 "number overflow parsing '<token>'": the only other error the parser reports.
+  throw ApiError(ProblemKind::malformed_body,
+                 "the body is not valid JSON for this server: a number " + std::string(where.empty() ? "" : "at " + where + " ") +
+                     "is out of range (beyond about 1.8e308)",
+                 "body");
+}
+
 Json parse_request(const std::string& text) {
   ParsePosition position;
   try {
@@ -143,14 +156,9 @@ Json parse_request(const std::string& text) {
       return position.on_event(event, parsed);
     });
   } catch (const Json::parse_error& error) {
-    throw ApiError(ProblemKind::malformed_body, "the body is not valid JSON: " + syntax_error_text(error), "body");
-  } catch (const Json::out_of_range&) {
-    // 406 "number overflow parsing '<token>'": the only out_of_range the parser throws.
-    const std::string where = position.current();
-    throw ApiError(ProblemKind::malformed_body,
-                   "the body is not valid JSON for this server: a number " + std::string(where.empty() ? "" : "at " + where + " ") +
-                       "is out of range (beyond about 1.8e308)",
-                   "body");
+    throw_parse_failure(error, position.current());
+  } catch (const Json::out_of_range& error) {
+    throw_parse_failure(error, position.current());
   }
 }
 

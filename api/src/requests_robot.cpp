@@ -82,6 +82,7 @@ ParsedRobot parse_robot(const RobotUpload& upload) {
   options.tip = upload.tip;
   try {
     robot::ParsedUrdf parsed = robot::parse_urdf(upload.urdf, options);
+    limits::check_joints(parsed.model.joint_count(), "urdf", "the URDF chain");
     return {std::move(parsed.model), std::move(parsed.warnings)};
   } catch (const InputError& error) {
     // The core names the element ("joint j3", "link l4"): the request's field is the document, and the
@@ -222,6 +223,10 @@ ExcitationSpec excitation_from_json(const nlohmann::json& body) {
 
 void check_excitation(const ExcitationSpec& spec, const robot::Model& model) {
   (void)robot::excitation_limits(model, spec.options);  // the robot's limits leave room; per-joint sizes match
+  // The designed dataset holds t, q, qd and qdd: it must fit the store like an upload.
+  const double samples = spec.options.period * spec.periods / spec.dt + 1.0;
+  limits::check_dataset_size(static_cast<long long>(samples), model.joint_count(), 3, "duration",
+                             "the excitation's duration / dt");
 }
 
 void check_robot_data(int robot_joints, const std::string& robot_name, int data_joints, bool has_torque,

@@ -65,6 +65,9 @@ void check_sampling(const ObjectFields& object, const SimulationSpec& spec) {
     throw InputError(duration_or_dt, "duration / dt gives " + format_number(intervals + 1.0) + " samples; at most " +
                                          samples_limit_text() + " are allowed");
   }
+  // The simulated dataset holds t, q, tau and ref: it must fit the store like an upload.
+  limits::check_dataset_size(static_cast<long long>(intervals) + 1, spec.preset.model.joint_count(), 3, duration_or_dt,
+                             "duration / dt");
 
   // The reference is sampled at the same dt over its own duration, then pre-filtered.
   const Json* reference_value = object.find("reference");

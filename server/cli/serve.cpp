@@ -41,8 +41,8 @@ void log_line(const std::string& line) {
   std::fprintf(stderr, "%s.%03dZ %s\n", stamp, static_cast<int>(millis), line.c_str());
 }
 
-/// "64MiB", "1M", "500k", "1048576" → bytes.
-std::size_t parse_size(const std::string& text) {
+/// "64MiB", "1M", "500k", "1048576" → bytes; `option` names it in messages.
+std::size_t parse_size(const std::string& text, const std::string& option) {
   std::size_t digits = 0;
   while (digits < text.size() && std::isdigit(static_cast<unsigned char>(text[digits]))) ++digits;
   std::string unit = text.substr(digits);
@@ -53,10 +53,10 @@ std::size_t parse_size(const std::string& text) {
   else if (unit == "m" || unit == "mib" || unit == "mb") scale = 1u << 20;
   else if (unit == "g" || unit == "gib" || unit == "gb") scale = 1u << 30;
   if (digits == 0 || digits > 12 || scale == 0) {
-    throw UsageError("--max-body: expected a size such as 64MiB, 500k or 1048576, got '" + text + "'");
+    throw UsageError(option + ": expected a size such as 64MiB, 500k or 1048576, got '" + text + "'");
   }
   const std::size_t size = std::stoull(text.substr(0, digits)) * scale;
-  if (size < 1024) throw UsageError("--max-body: at least 1k, got '" + text + "'");
+  if (size < 1024) throw UsageError(option + ": at least 1k, got '" + text + "'");
   return size;
 }
 
@@ -79,6 +79,10 @@ CLI::App* add_serve_command(CLI::App& app, ServeOptions& options) {
       ->check(integer_between(0, 100'000'000))
       ->capture_default_str();
   command->add_option("--max-body", options.max_body, "Largest request body (e.g. 64MiB, 500k)")->capture_default_str();
+  command->add_option("--memory-budget", options.memory_budget,
+                      "Memory the request bodies being handled at once may take, 3 bytes per body byte; "
+                      "a body beyond it gets 503 and Retry-After (at least 3 x --max-body)")
+      ->capture_default_str();
   command->add_option("--token", options.token, "Bearer token every /v1 request must carry (or MANIPID_TOKEN)")
       ->envname("MANIPID_TOKEN");
   command->add_option("--job-timeout", options.job_timeout, "Longest a job may run, s (a simulation then fails, an identification stops)")
@@ -96,7 +100,13 @@ CLI::App* add_serve_command(CLI::App& app, ServeOptions& options) {
 }
 
 int run_serve(const ServeOptions& options) {
-  const std::size_t max_body = parse_size(options.max_body);
+  const std::size_t max_body = parse_size(options.max_body, "--max-body");
+  const std::size_t memory_budget = parse_size(options.memory_budget, "--memory-budget");
+  if (memory_budget / api::memory_per_body_byte < max_body) {
+    throw UsageError("--memory-budget: at least " + std::to_string(api::memory_per_body_byte) +
+                     " x --max-body, so that any body fits alone (" + std::to_string(max_body * api::memory_per_body_byte) +
+                     " bytes), got '" + options.memory_budget + "'");
+  }
   const int workers = options.workers > 0 ? options.workers : std::max(1u, std::thread::hardware_concurrency());
 
   // Signals go to one thread that waits for them; every thread started from here on
@@ -149,6 +159,7 @@ int run_serve(const ServeOptions& options) {
   server.set_listen_backlog(128);  // 0.11.4 listens with 5
   api::RouteOptions routes;
   routes.max_body = max_body;
+  routes.memory_budget = memory_budget;
   routes.token = options.token;
   routes.log = log_line;
   routes.max_waiters = std::max(options.http_threads / 2, 1);

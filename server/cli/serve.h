@@ -19,6 +19,7 @@ struct ServeOptions {
   int workers = 0;            ///< 0 = hardware threads
   int queue_limit = 10000;
   std::string max_body = "64MiB";
+  std::string memory_budget = "1GiB";  ///< request bodies at once, 3 bytes per body byte (api::RouteOptions)
   std::string token;
   double job_timeout = 3600.0;
   int http_threads = 32;

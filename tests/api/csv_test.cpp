@@ -189,6 +189,17 @@ TEST(CsvErrors, Limits) {
   const InputError rows = parse_error("a,b\n1,2\n3,4\n\n5,6\n", limits);
   EXPECT_EQ(rows.field(), "csv");
   EXPECT_TRUE(contains(rows.what(), "line 5: more than 2 data rows"));
+  // Rows are also bounded by the numbers they hold in all (a dataset's max_values).
+  limits.max_rows = 10;
+  limits.max_values = 5;
+  const InputError values = parse_error("a,b\n1,2\n3,4\n5,6\n", limits);
+  EXPECT_TRUE(contains(values.what(), "line 4: more than 2 data rows (the limit for 2 columns)"));
+}
+
+TEST(CsvErrors, DefaultsReadBackEveryDataset) {
+  // One joint limit everywhere: a dataset at max_joints with all five blocks fits the reader.
+  EXPECT_EQ(CsvLimits{}.max_columns, 1u + 5u * static_cast<std::size_t>(limits::max_joints));
+  EXPECT_LE(limits::max_dataset_bytes, 1'000'000'000 - (1 << 20));  // SQLite's default SQLITE_MAX_LENGTH, a row
 }
 
 TEST(CsvErrors, MissingColumn) {

@@ -4,6 +4,7 @@
 #include "manipid/api/requests.h"
 
 #include "manipid/api/csv.h"
+#include "manipid/api/problem.h"
 
 #include "manipid/core/resample.h"
 
@@ -50,6 +51,11 @@ void expect_identification_error(const json& body, const std::string& field, std
 void expect_dataset_error(const json& body, const std::string& field, std::string_view part = "") {
   SCOPED_TRACE(body.dump().substr(0, 200));
   expect_error([&] { dataset_from_json(body); }, field, part);
+  // The route reads the text without a document: the same error (when the text says the same:
+  // NaN has no JSON text).
+  if (body.is_object() && json::parse(body.dump()) == body) {
+    expect_error([&] { dataset_from_json_text(body.dump()); }, field, part);
+  }
 }
 
 json with(json body, const std::string& key, json value) {
@@ -290,16 +296,20 @@ TEST(DatasetJson, NameIsAtMost200Characters) {
 TEST(HostileInput, RaggedJointsAreRefusedBeforeAnythingIsAllocated) {
   json q = json::array();
   q.push_back(json(std::vector<double>(20000, 0.0)));
-  for (int joint = 1; joint < 20000; ++joint) q.push_back(json::array());
+  for (int joint = 1; joint < limits::max_joints; ++joint) q.push_back(json::array());
   expect_dataset_error({{"dt", 0.001}, {"q", q}}, "q[1]", "expected 20000 (as q[0])");
+  // Beyond the joint limit (limits.h) the count alone is refused.
+  for (int joint = limits::max_joints; joint < 20000; ++joint) q.push_back(json::array());
+  expect_dataset_error({{"dt", 0.001}, {"q", q}}, "q", "q has 20000 joints; at most 200 are allowed");
 }
 
 TEST(HostileInput, BlankLinesUnderAWideHeaderReserveNothing) {
   std::string header;
-  for (int column = 1; column <= 1024; ++column) header += (column > 1 ? ",c" : "c") + std::to_string(column);
+  const auto columns = static_cast<int>(limits::max_csv_columns);
+  for (int column = 1; column <= columns; ++column) header += (column > 1 ? ",c" : "c") + std::to_string(column);
   const CsvTable table = parse_csv(header + std::string(300000, '\n'));
   EXPECT_EQ(table.rows(), 0);
-  EXPECT_EQ(table.columns.size(), 1024u);
+  EXPECT_EQ(table.columns.size(), limits::max_csv_columns);
 }
 
 TEST(HostileInput, LongKeysAndNamesAreCheapAndQuotedShort) {
@@ -341,6 +351,49 @@ TEST(DatasetCsv, KeepsTheCsvReadersFields) {
   expect_error([] { dataset_from_csv("t,q1,q2\n0,1\n"); }, "csv", "expected 3 fields, got 2");
   expect_error([] { dataset_from_csv("t,q1,tau1,tau2\n0,1,2,3\n0.1,1,2,3\n"); }, "tau2", "no matching q2");
   expect_error([] { dataset_from_csv("t,q1\n0,1\n0,2\n"); }, "t", "not strictly increasing");
+}
+
+TEST(DatasetText, SameAsTheDocument) {
+  const json body = {{"name", "run"}, {"t", {0.0, 0.5, 1.25}}, {"q", {{1, 2, 3}, {4.5, 5, -6}}},
+                     {"tau", {{0.1, 0.2, 0.3}, {1e-300, 2, 3}}}};
+  const DatasetUpload from_text = dataset_from_json_text(body.dump());
+  const DatasetUpload from_document = dataset_from_json(body);
+  EXPECT_EQ(from_text.name, "run");
+  EXPECT_EQ(from_text.trajectory.t, from_document.trajectory.t);
+  EXPECT_EQ(from_text.trajectory.q, from_document.trajectory.q);
+  EXPECT_EQ(from_text.trajectory.tau, from_document.trajectory.tau);
+  // The order of the members does not matter: t is the sample count's source even when last.
+  expect_error([] { dataset_from_json_text(R"({"q": [[1, 2], [3]], "t": [0, 1, 2]})"); }, "q[0]",
+               "q[0] has 2 samples, expected 3 (as t)");
+}
+
+TEST(DatasetText, RefusesWhatParseRequestRefuses) {
+  const auto expect_problem = [](const std::string& text, ProblemKind kind, const std::string& field,
+                                 std::string_view part) {
+    SCOPED_TRACE(text);
+    try {
+      dataset_from_json_text(text);
+      ADD_FAILURE() << "no error";
+    } catch (const ApiError& error) {
+      EXPECT_EQ(error.problem().kind, kind);
+      EXPECT_EQ(error.problem().field, field);
+      EXPECT_TRUE(contains(error.what(), part));
+    }
+  };
+  expect_problem(R"({"dt": 0.1, "q": [[1, 2], [3, 1e400]]})", ProblemKind::malformed_body, "body",
+                 "a number at q[1][1] is out of range");
+  expect_problem(R"({"dt": 0.1, "q": [[1, 2], [3, 4]] )", ProblemKind::malformed_body, "body",
+                 "the body is not valid JSON: parse error");
+  expect_problem("[1, 2]", ProblemKind::malformed_body, "body", "expected a JSON object at the top level");
+  expect_problem(std::string(100, '[') + std::string(100, ']'), ProblemKind::malformed_body, "body",
+                 "more than 64 deep");
+  // Keys twice, in the body or deep inside a wrong value: refused while reading, named by path.
+  expect_error([] { dataset_from_json_text(R"({"dt": 0.1, "q": [[1, 2]], "dt": 0.2})"); }, "dt", "appears twice");
+  expect_error([] { dataset_from_json_text(R"({"dt": 0.1, "q": [[1, {"a": 1, "a": 2}]]})"); }, "q[0][1].a",
+               "the key \"a\" appears twice in q[0][1]");
+  // A wrong value in a sample array is described as the document path describes it.
+  expect_error([] { dataset_from_json_text(R"({"dt": 0.1, "q": [[1, [1, 2, 3], "x"]]})"); }, "q[0][1]",
+               "q[0][1] must be a number, got an array of 3 entries");
 }
 
 // ---------------------------------------------------------------- simulations

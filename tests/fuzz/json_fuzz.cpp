@@ -67,8 +67,11 @@ void check_csv_round_trip(const manipid::Trajectory& trajectory) {
 extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size) {
   // The server's one JSON parse (fields::parse_request): syntax errors, numbers beyond a double
   // and duplicate keys are clean rejections, anything else escapes.
+  const std::string text(reinterpret_cast<const char*>(data), size);
+  // The upload route's reader (SAX, no document): the same clean rejections.
+  clean([&] { (void)manipid::api::dataset_from_json_text(text); });
   nlohmann::json body;
-  clean([&] { body = manipid::api::fields::parse_request(std::string(reinterpret_cast<const char*>(data), size)); });
+  clean([&] { body = manipid::api::fields::parse_request(text); });
   if (!body.is_object()) return 0;  // rejected or not an object: no parser takes it
 
   clean([&] {

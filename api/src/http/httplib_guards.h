@@ -23,19 +23,21 @@ void refuse_brotli(const httplib::Request& request);
 /// Content-Lengths, Content-Length beside Transfer-Encoding, a body on a GET: 400) and a
 /// declared length over --max-body (413), Brotli strike, bearer token on /v1, bodiless POST,
 /// PUT or PATCH (411, but a bodiless cancel is answered), chunked (411) and compressed (415)
-/// bodies refused. Every refusal closes the connection (HttpServer::close_after_answer).
+/// bodies refused; then the body's memory reserved (RouteOptions::memory_budget; 503 when
+/// there is no room). Every refusal closes the connection (HttpServer::close_after_answer).
 httplib::Server::HandlerResponse before_routing(RouteState& state, const httplib::Request& request,
                                                 httplib::Response& response);
 
 /// The "Expect: 100-continue" hook: 0.11.4 answers "100 Continue" before the pre-routing hook
-/// runs, so a body that will be refused (bad framing, over --max-body) is refused here, before
-/// the client sends it (curl asks so for bodies over 1 MiB). Returns 100 or the refusal's status.
-int before_continue(const RouteState& state, const httplib::Request& request, httplib::Response& response);
+/// runs, so a body that will be refused (bad framing, over --max-body, no room in the memory
+/// budget) is refused here, before the client sends it (curl asks so for bodies over 1 MiB).
+/// Returns 100 or the refusal's status.
+int before_continue(RouteState& state, const httplib::Request& request, httplib::Response& response);
 
 /// The post-routing hook (0.11.4 runs it after adding its own Connection or Keep-Alive
-/// header): an answer that closes its connection says "Connection: close" once, and no
-/// "Keep-Alive" beside it.
-void after_routing(const httplib::Request& request, httplib::Response& response);
+/// header): gives back the request's memory reservation; an answer that closes its connection
+/// says "Connection: close" once, and no "Keep-Alive" beside it.
+void after_routing(RouteState& state, const httplib::Request& request, httplib::Response& response);
 
 /// The request's method as a /metrics label: one of the methods httplib parses, else "other".
 std::string method_label(const std::string& method);

@@ -46,15 +46,19 @@ bool looks_like_json(const std::string& body) {
   return first != std::string::npos && (body[first] == '{' || body[first] == '[');
 }
 
-nlohmann::json json_body(const httplib::Request& request) {
-  using Json = nlohmann::json;
+const std::string& json_text(const httplib::Request& request) {
   const std::string type = media_type(request);
   if (!(type == "application/json" || type.empty() || type == "application/x-www-form-urlencoded" ||
         (type.size() > 5 && type.compare(type.size() - 5, 5, "+json") == 0))) {
     throw ApiError(ProblemKind::unsupported_media, "expected Content-Type application/json, got " + type, "Content-Type");
   }
   if (request.body.empty()) throw ApiError(ProblemKind::malformed_body, "the request body is empty; expected a JSON object", "body");
-  const Json body = fields::parse_request(request.body);  // no duplicate keys, short details
+  return request.body;
+}
+
+nlohmann::json json_body(const httplib::Request& request) {
+  using Json = nlohmann::json;
+  const Json body = fields::parse_request(json_text(request));  // no duplicate keys, short details
   if (!body.is_object()) throw ApiError(ProblemKind::malformed_body, "expected a JSON object at the top level", "body");
   return body;
 }

@@ -21,6 +21,8 @@ std::string media_type(const httplib::Request& request);
 /// True when the body's first non-blank character opens a JSON object or array.
 bool looks_like_json(const std::string& body);
 
+/// The body's text, when its media type is JSON's (as json_body accepts) and it is not empty.
+const std::string& json_text(const httplib::Request& request);
 /// The body as a JSON object. Accepts application/json, and — because `curl -d @file` sends
 /// application/x-www-form-urlencoded unless told otherwise — an unlabelled body that is JSON.
 nlohmann::json json_body(const httplib::Request& request);

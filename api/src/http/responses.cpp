@@ -10,11 +10,15 @@ void send_json(httplib::Response& response, int status, const nlohmann::ordered_
   response.set_content(body.dump(), "application/json");
 }
 
+Problem out_of_memory() {
+  return {ProblemKind::memory_busy, "the server ran out of memory while handling this request; try again later", ""};
+}
+
 void send_problem(httplib::Response& response, const Problem& problem, const std::string& instance) {
   response.status = status_of(problem.kind);
   response.set_content(problem_to_json(problem, instance).dump(), "application/problem+json");
   if (problem.kind == ProblemKind::queue_full || problem.kind == ProblemKind::shutting_down ||
-      problem.kind == ProblemKind::insufficient_storage) {
+      problem.kind == ProblemKind::insufficient_storage || problem.kind == ProblemKind::memory_busy) {
     response.set_header("Retry-After", "5");
   }
   if (problem.kind == ProblemKind::unauthorized) response.set_header("WWW-Authenticate", "Bearer");

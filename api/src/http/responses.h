@@ -20,9 +20,12 @@ namespace manipid::api::http {
 
 void send_json(httplib::Response& response, int status, const nlohmann::ordered_json& body);
 
-/// The problem as application/problem+json with its status; Retry-After for queue_full and
-/// shutting_down, WWW-Authenticate for unauthorized.
+/// The problem as application/problem+json with its status; Retry-After for queue_full,
+/// shutting_down and memory_busy, WWW-Authenticate for unauthorized.
 void send_problem(httplib::Response& response, const Problem& problem, const std::string& instance);
+
+/// What a request that ran out of memory is answered (memory_busy: it may succeed later).
+Problem out_of_memory();
 
 /// Runs a handler; every failure becomes a problem+json answer (internal details only in the log).
 template <class Handler>
@@ -36,7 +39,7 @@ httplib::Server::Handler guarded(std::shared_ptr<RouteState> state, Handler hand
     } catch (const InputError& error) {
       send_problem(response, problem_from(error), request.path);
     } catch (const std::bad_alloc&) {
-      send_problem(response, {ProblemKind::internal, "out of memory while handling the request", ""}, request.path);
+      send_problem(response, out_of_memory(), request.path);
     } catch (const std::exception& error) {
       if (state->options.log) state->options.log(std::string("internal error on ") + request.path + ": " + error.what());
       send_problem(response, {ProblemKind::internal, "internal error; see the server log", ""}, request.path);

@@ -15,6 +15,8 @@
 #include "manipid/api/routes.h"
 #include "manipid/api/service.h"
 
+#include "http/memory_budget.h"
+
 #include <httplib.h>
 
 #include <atomic>
@@ -30,9 +32,11 @@ namespace manipid::api::http {
 
 /// Shared by every handler; lives as long as the server's handlers (captured by shared_ptr).
 struct RouteState {
-  RouteState(Service& service_, RouteOptions options_) : service(service_), options(std::move(options_)) {}
+  RouteState(Service& service_, RouteOptions options_)
+      : service(service_), options(std::move(options_)), memory(options.memory_budget) {}
   Service& service;
   RouteOptions options;
+  MemoryBudget memory;  ///< the bodies being read and handled now (RouteOptions::memory_budget)
   std::weak_ptr<RouteState> self;  ///< for handlers called from the pre-routing hook
   std::mutex mutex;
   std::map<std::string, long> requests;  ///< "METHOD,status" → count

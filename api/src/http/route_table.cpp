@@ -69,7 +69,9 @@ void register_routes(httplib::Server& server, Service& service, RouteOptions opt
   server.set_error_handler(httplib::Server::HandlerWithResponse(
       [state](const httplib::Request& request, httplib::Response& response) { return on_error(*state, request, response); }));
   server.set_exception_handler(on_exception);
-  server.set_post_routing_handler(after_routing);
+  server.set_post_routing_handler([state](const httplib::Request& request, httplib::Response& response) {
+    after_routing(*state, request, response);
+  });
   server.set_logger([state](const httplib::Request& request, const httplib::Response& response) {
     {
       std::lock_guard lock(state->mutex);

@@ -1,8 +1,9 @@
 // datasets.cpp — the /v1/datasets routes: upload (JSON or CSV), list, metadata or CSV data,
-// the samples for drawing, delete.
+// the samples for drawing, delete. A long dataset's samples are answered piece by piece.
 #include "manipid/api/csv.h"
 #include "manipid/api/plots.h"
 #include "manipid/api/problem.h"
+#include "manipid/api/records.h"
 #include "manipid/api/requests.h"
 #include "manipid/api/resources_json.h"
 
@@ -10,7 +11,121 @@
 #include "http/responses.h"
 #include "routes/handlers.h"
 
+#include <algorithm>
+#include <cmath>
+#include <functional>
+#include <memory>
+#include <utility>
+
 namespace manipid::api::http {
+namespace {
+
+/// Samples per piece of an answer. A dataset longer than this is answered piece by piece as the
+/// answer goes out (chunked), never built whole: a 10 M-sample dataset's JSON, built as one
+/// document and string, took 1.8 GB for a 221 MB answer.
+constexpr Eigen::Index samples_per_piece = 65'536;
+
+/// Answers 200 with the pieces `next` appends to its string, as long as it says more follow.
+void send_pieces(httplib::Response& response, const char* type, std::function<bool(std::string&)> next) {
+  response.status = 200;
+  response.set_chunked_content_provider(type, [next = std::move(next), more = true](std::size_t, httplib::DataSink& sink) mutable {
+    std::string piece;
+    if (more) more = next(piece);
+    if (!piece.empty() && !sink.write(piece.data(), piece.size())) return false;
+    if (!more) sink.done();
+    return true;
+  });
+}
+
+/// The rows [start, start + count) of every block.
+Trajectory rows(const Trajectory& data, Eigen::Index start, Eigen::Index count) {
+  const auto middle = [&](const Eigen::MatrixXd& block) {
+    return block.cols() == 0 ? Eigen::MatrixXd() : Eigen::MatrixXd(block.middleRows(start, count));
+  };
+  Trajectory part;
+  part.t = data.t.segment(start, count);
+  part.q = middle(data.q);
+  part.tau = middle(data.tau);
+  part.ref = middle(data.ref);
+  part.qd = middle(data.qd);
+  part.qdd = middle(data.qdd);
+  return part;
+}
+
+/// format_csv(trajectory_to_csv(data)), a piece of samples_per_piece rows at a time.
+void send_csv(httplib::Response& response, std::shared_ptr<const Trajectory> data) {
+  if (data->samples() <= samples_per_piece) {
+    response.status = 200;
+    response.set_content(format_csv(trajectory_to_csv(*data)), "text/csv");
+    return;
+  }
+  send_pieces(response, "text/csv", [data, start = Eigen::Index{0}](std::string& piece) mutable {
+    const Eigen::Index count = std::min<Eigen::Index>(samples_per_piece, data->samples() - start);
+    piece = format_csv(trajectory_to_csv(rows(*data, start, count)));
+    if (start > 0) piece.erase(0, piece.find('\n') + 1);  // the header once, at the start
+    start += count;
+    return start < data->samples();
+  });
+}
+
+/// trajectory_to_json(data).dump(), a piece of samples_per_piece numbers at a time: the text
+/// between the arrays as it is, each array's numbers as nlohmann writes them.
+void send_json_samples(httplib::Response& response, std::shared_ptr<const Trajectory> data) {
+  if (data->samples() <= samples_per_piece) {
+    send_json(response, 200, trajectory_to_json(*data));
+    return;
+  }
+  struct Part {
+    std::string text;               ///< written as it is
+    const double* values = nullptr;  ///< or these numbers, comma-separated
+    Eigen::Index count = 0;
+  };
+  auto parts = std::make_shared<std::vector<Part>>();
+  const Eigen::Index samples = data->samples();
+  parts->push_back({"{\"t\":["});
+  parts->push_back({"", data->t.data(), samples});
+  parts->push_back({"]"});
+  const auto block = [&](const char* name, const Eigen::MatrixXd& values) {
+    if (values.cols() == 0) return;
+    parts->push_back({std::string(",\"") + name + "\":["});
+    for (Eigen::Index joint = 0; joint < values.cols(); ++joint) {
+      parts->push_back({joint == 0 ? "[" : ",["});
+      parts->push_back({"", values.col(joint).data(), samples});
+      parts->push_back({"]"});
+    }
+    parts->push_back({"]"});
+  };
+  block("q", data->q);
+  block("tau", data->tau);
+  block("ref", data->ref);
+  block("qd", data->qd);
+  block("qdd", data->qdd);
+  parts->push_back({"}"});
+  send_pieces(response, "application/json",
+              [data, parts, part = std::size_t{0}, offset = Eigen::Index{0}](std::string& piece) mutable {
+                for (; part < parts->size() && !(*parts)[part].values; ++part) piece += (*parts)[part].text;
+                if (part < parts->size()) {
+                  const Part& numbers = (*parts)[part];
+                  const Eigen::Index count = std::min<Eigen::Index>(samples_per_piece, numbers.count - offset);
+                  nlohmann::ordered_json array = nlohmann::ordered_json::array();
+                  for (Eigen::Index i = offset; i < offset + count; ++i) {
+                    const double value = numbers.values[i];
+                    array.push_back(std::isfinite(value) ? nlohmann::ordered_json(value) : nlohmann::ordered_json(nullptr));
+                  }
+                  const std::string text = array.dump();
+                  if (offset > 0) piece += ',';
+                  piece.append(text, 1, text.size() - 2);
+                  offset += count;
+                  if (offset == numbers.count) {
+                    ++part;
+                    offset = 0;
+                  }
+                }
+                return part < parts->size();
+              });
+}
+
+}  // namespace
 
 void create_dataset(RouteState& state, const httplib::Request& request, httplib::Response& response) {
   const auto key = idempotency_key(request);
@@ -24,7 +139,7 @@ void create_dataset(RouteState& state, const httplib::Request& request, httplib:
     upload.name = request.get_param_value("name");  // CSV has no room for it: ?name=
     if (upload.name.size() > 200) throw ApiError(ProblemKind::invalid_field, "name is longer than 200 bytes", "name");
   } else {
-    upload = dataset_from_json(json_body(request));  // refuses other media types with 415
+    upload = dataset_from_json_text(json_text(request));  // refuses other media types with 415; no document
   }
   const DatasetCreated created = state.service.create_dataset(upload, key);
   response.set_header("Location", "/v1/datasets/" + created.dataset.id);
@@ -35,10 +150,9 @@ void create_dataset(RouteState& state, const httplib::Request& request, httplib:
 void get_dataset(RouteState& state, const httplib::Request& request, httplib::Response& response) {
   const std::string id = request.matches[1];
   if (wants_csv(request)) {
-    const auto data = state.service.dataset_data(id);
+    auto data = state.service.dataset_data(id);
     if (!data) throw ApiError(ProblemKind::not_found, "no dataset " + id, "id");
-    response.status = 200;
-    response.set_content(format_csv(trajectory_to_csv(*data)), "text/csv");
+    send_csv(response, std::make_shared<const Trajectory>(std::move(*data)));
     return;
   }
   const auto dataset = state.service.dataset(id);
@@ -49,15 +163,18 @@ void get_dataset(RouteState& state, const httplib::Request& request, httplib::Re
 void get_dataset_data(RouteState& state, const httplib::Request& request, httplib::Response& response) {
   const std::string id = request.matches[1];
   const long max_points = max_points_parameter(request, 0);  // 0: every sample
-  const auto data = state.service.dataset_data(id);
+  auto data = state.service.dataset_data(id);
   if (!data) throw ApiError(ProblemKind::not_found, "no dataset " + id, "id");
-  const Trajectory shown = thin(*data, max_points);
+  // Every sample: the stored data itself, not a copy.
+  auto shown = std::make_shared<const Trajectory>(thinning_stride(data->samples(), max_points) == 1
+                                                      ? std::move(*data)
+                                                      : thin(*data, max_points));
+  data.reset();
   if (wants_csv(request)) {
-    response.status = 200;
-    response.set_content(format_csv(trajectory_to_csv(shown)), "text/csv");
-    return;
+    send_csv(response, std::move(shown));
+  } else {
+    send_json_samples(response, std::move(shown));
   }
-  send_json(response, 200, trajectory_to_json(shown));
 }
 
 void list_datasets(RouteState& state, const httplib::Request& request, httplib::Response& response) {

@@ -28,9 +28,17 @@ void send_asset(httplib::Response& response, const std::string& path) {
   response.set_content(std::string(found->body), std::string(found->content_type).c_str());
 }
 
-/// The request counters the logger keeps (route_table.cpp), as Prometheus text.
+/// The request counters the logger keeps (route_table.cpp) and the memory budget, as Prometheus text.
 std::string request_metrics(RouteState& state) {
   std::ostringstream out;
+  out << "# HELP manipid_memory_reserved_bytes Memory reserved by the request bodies being read and handled now.\n"
+         "# TYPE manipid_memory_reserved_bytes gauge\n"
+         "manipid_memory_reserved_bytes "
+      << state.memory.reserved() << "\n"
+      << "# HELP manipid_memory_budget_bytes What they may reserve at once (--memory-budget).\n"
+         "# TYPE manipid_memory_budget_bytes gauge\n"
+         "manipid_memory_budget_bytes "
+      << state.memory.budget() << "\n";
   out << "# HELP manipid_http_requests_total HTTP requests answered, by method and status.\n"
          "# TYPE manipid_http_requests_total counter\n";
   std::lock_guard lock(state.mutex);

@@ -8,6 +8,7 @@
 // message gives the line number, so users can fix their file from the message alone.
 #pragma once
 
+#include "manipid/api/limits.h"
 #include "manipid/core/model.h"
 #include "manipid/core/trajectory.h"
 
@@ -20,9 +21,12 @@
 
 namespace manipid::api {
 
+/// What parse_csv accepts; the defaults are a dataset's limits (limits.h), so every dataset's
+/// CSV export reads back.
 struct CsvLimits {
-  std::size_t max_columns = 1024;
-  std::size_t max_rows = 10'000'000;
+  std::size_t max_columns = limits::max_csv_columns;
+  std::size_t max_rows = static_cast<std::size_t>(limits::max_samples);
+  std::size_t max_values = static_cast<std::size_t>(limits::max_values);  ///< rows × columns
 };
 
 struct CsvTable {

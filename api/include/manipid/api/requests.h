@@ -33,6 +33,10 @@ struct DatasetUpload {
 /// "tau"?: [[...], ...], "ref"?: [[...], ...], "qd"?: [[...], ...], "qdd"?: [[...], ...]} — per-joint arrays, all of one
 /// length; t strictly increasing, steps may jitter (stored as measured).
 DatasetUpload dataset_from_json(const nlohmann::json& body);
+/// The same from the body's text, read without a document of the whole body (the samples go
+/// straight into arrays of doubles): syntax errors, numbers beyond a double and keys given
+/// twice are ApiError/InputError as for any request body, every other error as above.
+DatasetUpload dataset_from_json_text(std::string_view text);
 /// CSV body: header t,q1..qn[,tau1..taun][,ref1..refn][,qd1..qdn][,qdd1..qddn] (what `manipid simulate`
 /// and `manipid excitation` write).
 DatasetUpload dataset_from_csv(std::string_view text);

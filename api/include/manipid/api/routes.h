@@ -18,8 +18,16 @@ class Server;
 
 namespace manipid::api {
 
+/// Memory a request may take per byte of its body while it is read, parsed and stored (the
+/// body itself, its numbers, the store's copy): what each body reserves of the memory budget.
+inline constexpr std::size_t memory_per_body_byte = 3;
+
 struct RouteOptions {
   std::size_t max_body = 64u << 20;  ///< bytes; larger bodies get 413
+  /// Bytes the bodies being read and handled at once may take, memory_per_body_byte × each
+  /// one's Content-Length; a body beyond it gets 503 with Retry-After (and its connection
+  /// closes, unread). At least memory_per_body_byte × max_body, so any body fits alone.
+  std::size_t memory_budget = std::size_t{1} << 30;
   std::string token;                 ///< when set, every /v1 request needs "Authorization: Bearer <token>"
   double max_wait_seconds = 30.0;    ///< cap of ?wait= long-polls
   /// Long-polls that may wait at once; each holds an HTTP thread while it waits (cpp-httplib
