@@ -29,11 +29,13 @@
 
 #include <algorithm>
 #include <cctype>
+#include <cerrno>
 #include <chrono>
 #include <cstddef>
 #include <cstdint>
 #include <cstdio>
 #include <cstdlib>
+#include <cstring>
 #include <memory>
 #include <mutex>
 #include <string>
@@ -176,9 +178,15 @@ struct Server {
   }
 };
 
+/// What the server sent on one connection until it closed it.
+struct Answers {
+  std::string bytes;
+  bool reset = false;  ///< the connection ended in a reset: the last answer may be cut short
+};
+
 /// Sends `request` on a new connection, half-closes it and returns everything the server sent
 /// until it closed (a reset ends the answer like a close: a refusal may close before reading all).
-std::string round_trip(int port, std::string_view request) {
+Answers round_trip(int port, std::string_view request) {
   const int fd = ::socket(AF_INET, SOCK_STREAM, 0);
   if (fd < 0) fail("socket() failed", {});
   timeval limit{30, 0};  // past libFuzzer's -timeout: a stuck server is reported as a timeout
@@ -191,21 +199,26 @@ std::string round_trip(int port, std::string_view request) {
   if (::connect(fd, reinterpret_cast<sockaddr*>(&address), sizeof address) != 0) fail("cannot connect to the server", {});
   for (std::size_t sent = 0; sent < request.size();) {
     const ssize_t n = ::send(fd, request.data() + sent, request.size() - sent, MSG_NOSIGNAL);
+    if (n < 0 && errno == EINTR) continue;  // libFuzzer's timer signal: SO_SNDTIMEO calls are not restarted
     if (n <= 0) break;  // the server closed early (a refusal): its answer is still read below
     sent += static_cast<std::size_t>(n);
   }
   ::shutdown(fd, SHUT_WR);
-  std::string answer;
+  Answers answer;
   char buffer[16384];
   for (;;) {
     const ssize_t n = ::recv(fd, buffer, sizeof buffer, 0);
     if (n > 0) {
-      answer.append(buffer, static_cast<std::size_t>(n));
-    } else if (n == 0 || errno == ECONNRESET) {
+      answer.bytes.append(buffer, static_cast<std::size_t>(n));
+    } else if (n == 0) {
       break;
-    } else {
+    } else if (errno == ECONNRESET) {
+      answer.reset = true;
+      break;
+    } else if (errno != EINTR) {
+      const int error = errno;
       ::close(fd);
-      fail("no end of the answer within 30 s", answer);
+      fail(error == EAGAIN ? "no end of the answer within 30 s" : std::string("recv: ") + std::strerror(error), answer.bytes);
     }
   }
   ::close(fd);
@@ -230,11 +243,16 @@ std::string header(const std::string& head, const std::string& name) {
 /// Checks each answer in `answers` (several when requests were pipelined). Answers are split
 /// by their Content-Length; an answer to HEAD has none of the body it announces, so when the
 /// bytes after a body do not start a status line, the next answer is looked for right after
-/// the head instead; when neither place starts one, the rest is left unchecked.
-void check_answers(const std::string& answers) {
+/// the head instead; when neither place starts one, the rest is left unchecked. After a reset
+/// the last answer may be cut short anywhere: what is there is checked.
+void check_answers(const Answers& received) {
+  const std::string& answers = received.bytes;
   std::size_t at = 0;
   while (at < answers.size()) {
     const std::string_view rest(answers.data() + at, answers.size() - at);
+    if (received.reset && rest.size() < 13 && std::string_view("HTTP/1.1 ").substr(0, rest.size()) == rest.substr(0, 9)) {
+      return;  // cut short by the reset
+    }
     if (rest.size() < 13 || rest.substr(0, 9) != "HTTP/1.1 " || !std::isdigit(static_cast<unsigned char>(rest[9])) ||
         !std::isdigit(static_cast<unsigned char>(rest[10])) || !std::isdigit(static_cast<unsigned char>(rest[11])) ||
         rest[12] != ' ') {
@@ -243,7 +261,10 @@ void check_answers(const std::string& answers) {
     }
     const int status = std::stoi(std::string(rest.substr(9, 3)));
     const std::size_t head_end = rest.find("\r\n\r\n");
-    if (head_end == std::string_view::npos) fail("an answer's head has no end", answers);
+    if (head_end == std::string_view::npos) {
+      if (received.reset) return;
+      fail("an answer's head has no end", answers);
+    }
     const std::string head = lower(rest.substr(0, head_end + 2));
     const std::size_t body_start = head_end + 4;
     if (status >= 500 && status != 503) fail("status " + std::to_string(status), answers);
@@ -270,7 +291,7 @@ void check_answers(const std::string& answers) {
       }
       at = next;
     } else {
-      at += body_start;  // HEAD: the head announces a body that is not sent
+      at += body_start;  // HEAD: the head announces a body that is not sent (or a reset cut it)
     }
   }
 }
