@@ -111,7 +111,7 @@ for entry in "${targets[@]}"; do
   if [[ "${status[$target]}" -ne 0 ]]; then
     failed=1
     # The sanitizer's report and the saved input.
-    grep -E -A40 '^==[0-9]+==ERROR|runtime error|^SUMMARY|deadly signal|Test unit written' "$build/$target.log" | head -60 >&2 || true
+    grep -E -A40 '^[a-z]+_fuzz: |^==[0-9]+==ERROR|runtime error|^SUMMARY|deadly signal|Test unit written' "$build/$target.log" | head -60 >&2 || true
   fi
 done
 exit "$failed"

@@ -6,10 +6,12 @@
 // send the bytes, shut the sending side, read until the server closes. Requests are read by
 // cpp-httplib itself; this file only checks what comes back:
 // - nothing, or answers that each start with an "HTTP/1.1 NNN " status line;
-// - no 5xx but 503 (the fake service throws nothing: a 500 is a handler or hook that threw);
+// - no 5xx but 503 (the fake service throws nothing: a 500 is a handler or hook that threw),
+//   in the answers and in the server's log line for each request;
 // - every error answer (4xx, 5xx) is application/problem+json whose body's "status" is the status.
 // A failed check aborts (libFuzzer saves the input as a crash), as do ASan/UBSan findings; a
-// server that never closes the connection shows as a libFuzzer timeout.
+// server that never closes the connection shows as a libFuzzer timeout. With HTTP_FUZZ_SHOW set
+// in the environment, every answer is printed (`HTTP_FUZZ_SHOW=1 build/fuzz/http_fuzz FILE`).
 //
 // The fake service is made afresh for every input, with the same fixtures (a dataset with
 // data, a queued job, a finished job with a cost history), so an input's answers never depend
@@ -23,6 +25,7 @@
 #include <nlohmann/json.hpp>
 
 #include <netinet/in.h>
+#include <poll.h>
 #include <sys/socket.h>
 #include <sys/time.h>
 #include <unistd.h>
@@ -150,6 +153,19 @@ class FreshService : public Service {
   std::shared_ptr<testing::FakeService> current_;
 };
 
+/// The server's log line for each request ("ADDRESS METHOD TARGET STATUS N bytes T ms", written
+/// whether or not the answer reached the client) and for each exception a handler let out
+/// ("internal error on PATH: WHAT"): no 5xx but 503, no internal error.
+void check_log_line(const std::string& line) {
+  if (line.rfind("internal error on ", 0) == 0) fail("the server logged: " + line, {});
+  const std::size_t bytes = line.rfind(" bytes ");
+  const std::size_t size_at = bytes == std::string::npos || bytes == 0 ? std::string::npos : line.rfind(' ', bytes - 1);
+  const std::size_t status_at = size_at == std::string::npos || size_at == 0 ? std::string::npos : line.rfind(' ', size_at - 1);
+  if (status_at == std::string::npos || size_at - status_at != 4) fail("a log line without a status: " + line, {});
+  const int status = std::atoi(line.c_str() + status_at + 1);
+  if (status >= 500 && status != 503) fail("the server logged status " + std::to_string(status) + ": " + line, {});
+}
+
 /// The server, started once: HttpServer configured as serve.cpp configures it, but small.
 struct Server {
   FreshService service;
@@ -170,6 +186,7 @@ struct Server {
     options.token = token;
     options.max_wait_seconds = 0.01;
     options.max_waiters = 1;
+    options.log = check_log_line;
     register_routes(http, service, options);
     port = http.bind("127.0.0.1", 0);
     if (port <= 0) fail("cannot bind 127.0.0.1:0", {});
@@ -203,9 +220,26 @@ Answers round_trip(int port, std::string_view request) {
     if (n <= 0) break;  // the server closed early (a refusal): its answer is still read below
     sent += static_cast<std::size_t>(n);
   }
-  ::shutdown(fd, SHUT_WR);
+  // cpp-httplib 0.11.4 writes no answer to a client it sees half-closed (its is_writable peeks
+  // the socket and takes the end of stream for a dead peer), so the sending side is shut only
+  // once the server has been quiet for `quiet`: every answer it was about to write is out first.
+  // (A handler slower than that loses its answer to the half-close; its status is still checked
+  // in the server's log line, check_log_line.)
   Answers answer;
   char buffer[16384];
+  constexpr int quiet_ms = 2;
+  for (pollfd descriptor{fd, POLLIN, 0}; ::poll(&descriptor, 1, quiet_ms) != 0; descriptor.revents = 0) {
+    const ssize_t n = ::recv(fd, buffer, sizeof buffer, 0);
+    if (n > 0) {
+      answer.bytes.append(buffer, static_cast<std::size_t>(n));
+      continue;
+    }
+    if (n < 0 && errno == EINTR) continue;
+    if (n < 0 && errno == ECONNRESET) answer.reset = true;
+    ::close(fd);  // the server closed (a refusal closes its connection)
+    return answer;
+  }
+  ::shutdown(fd, SHUT_WR);
   for (;;) {
     const ssize_t n = ::recv(fd, buffer, sizeof buffer, 0);
     if (n > 0) {
@@ -300,7 +334,10 @@ void check_answers(const Answers& received) {
 
 extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size) {
   static Server* server = new Server();  // never stopped: it serves until the process exits
+  static const bool show = std::getenv("HTTP_FUZZ_SHOW") != nullptr;  // print every answer
   server->service.reset();
-  check_answers(round_trip(server->port, std::string_view(reinterpret_cast<const char*>(data), size)));
+  const Answers answers = round_trip(server->port, std::string_view(reinterpret_cast<const char*>(data), size));
+  if (show) std::fprintf(stderr, "%s%s\n", answers.bytes.c_str(), answers.reset ? "\n(reset)" : "");
+  check_answers(answers);
   return 0;
 }

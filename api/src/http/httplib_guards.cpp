@@ -220,6 +220,11 @@ std::string allowed_methods(const RouteState& state, const std::string& path) {
 httplib::Server::HandlerResponse on_error(const RouteState& state, const httplib::Request& request,
                                           httplib::Response& response) {
   HttpServer::body_received();
+  // 0.11.4 applies the request's Range to every answer it writes, errors included (a 401 cut to
+  // its first 11 bytes, with Content-Range; found by tests/fuzz/http_fuzz): only a successful
+  // answer may be partial (RFC 9110 § 14.2). It calls this hook for every status from 400 up
+  // before it applies them, so an error drops them here (the Request is httplib's own, non-const).
+  const_cast<httplib::Request&>(request).ranges.clear();
   if (!response.body.empty()) return httplib::Server::HandlerResponse::Unhandled;  // ours already
   ProblemKind kind = ProblemKind::internal;
   std::string detail = "internal error";
