@@ -245,9 +245,13 @@ httplib::Server::HandlerResponse on_error(const RouteState& state, const httplib
     case 414: kind = ProblemKind::uri_too_long; detail = "the request target is longer than this server reads"; break;
     case 400: kind = ProblemKind::malformed_body; detail = "the request could not be read"; break;
     default:
+      // Below 500 that leaves 416, which 0.11.4 sends for a Range header it cannot parse, before
+      // reading the body: a 400 (the problem's own status, so the status line and the body agree;
+      // found by tests/fuzz/http_fuzz), and the connection closes below, the body unread.
       if (response.status < 500) {
         kind = ProblemKind::malformed_body;
-        detail = "the request could not be handled";
+        detail = response.status == 416 ? "the Range header could not be read" : "the request could not be handled";
+        response.status = status_of(kind);
       }
   }
   const int status = response.status;
