@@ -8,7 +8,7 @@
 # build/fuzz/artifacts-<target>/crash-*, oom-*, leak-* or timeout-*).
 #
 #   bash scripts/fuzz.sh [SECONDS]   explore: a random seed, SECONDS per target (default 20)
-#   bash scripts/fuzz.sh --runs N    check: seed 1, exactly N inputs per target (N / 3 for
+#   bash scripts/fuzz.sh --runs N    check: seed 1, exactly N inputs per target (N / 4 for
 #                                    http_fuzz, whose inputs each take a socket round trip) — for
 #                                    the same build and corpus the same inputs, so a red result
 #                                    points at the code, not the luck of the draw (what
@@ -24,7 +24,7 @@ usage="usage: scripts/fuzz.sh [SECONDS_PER_TARGET] | --runs INPUTS_PER_TARGET"
 if [[ "${1:-}" == "--runs" ]]; then
   mode=runs
   count=${2:-}
-  describe="$count inputs per target (http_fuzz: a third), seed 1"
+  describe="$count inputs per target (http_fuzz: a quarter), seed 1"
 else
   mode=seconds
   count=${1:-20}
@@ -46,7 +46,7 @@ echo "== fuzz: built in $((SECONDS - started)) s; fuzzing: $describe"
 # target, corpus and dictionary name, longest input in bytes, share of --runs N (N / share):
 # an http_fuzz input is a connection to a server thread, several times a parser call's cost
 # (its longest input holds a request line over cpp-httplib's 8192-byte limit).
-targets=("json_fuzz json 4096 1" "csv_fuzz csv 4096 1" "http_fuzz http 10000 3")
+targets=("json_fuzz json 4096 1" "csv_fuzz csv 4096 1" "http_fuzz http 10000 4")
 
 run_target() {
   local target=$1 name=$2 max_len=$3 share=$4
