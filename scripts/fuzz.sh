@@ -1,6 +1,7 @@
 #!/usr/bin/env bash
 # Builds the libFuzzer targets of tests/fuzz/ (JSON and CSV request parsers of api/; raw HTTP
-# bytes into the server's route layer, http_fuzz) with clang, ASan and UBSan into build/fuzz, and fuzzes each on a copy of its seed corpus
+# bytes into the server's route layer, http_fuzz) with clang, ASan and UBSan into build/fuzz,
+# and fuzzes each on a copy of its seed corpus
 # (build/fuzz/corpus-<target>; the repository's corpus is never modified), together with the
 # reproducers kept in tests/fuzz/regressions/<target>/. Targets run side by side when there
 # are at least two CPUs. Prints one summary line per target; exits non-zero if any target
