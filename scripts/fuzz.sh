@@ -1,6 +1,7 @@
 #!/usr/bin/env bash
-# Builds the libFuzzer targets of tests/fuzz/ (JSON and CSV request parsers of api/) with clang,
-# ASan and UBSan into build/fuzz, and fuzzes each on a copy of its seed corpus
+# Builds the libFuzzer targets of tests/fuzz/ (JSON and CSV request parsers of api/; raw HTTP
+# bytes into the server's route layer, http_fuzz) with clang, ASan and UBSan into build/fuzz,
+# and fuzzes each on a copy of its seed corpus
 # (build/fuzz/corpus-<target>; the repository's corpus is never modified), together with the
 # reproducers kept in tests/fuzz/regressions/<target>/. Targets run side by side when there
 # are at least two CPUs. Prints one summary line per target; exits non-zero if any target
@@ -8,10 +9,13 @@
 # build/fuzz/artifacts-<target>/crash-*, oom-*, leak-* or timeout-*).
 #
 #   bash scripts/fuzz.sh [SECONDS]   explore: a random seed, SECONDS per target (default 20)
-#   bash scripts/fuzz.sh --runs N    check: seed 1, exactly N inputs per target — for the same
-#                                    build and corpus the same inputs, so a red result points at
-#                                    the code, not the luck of the draw (what scripts/test.sh runs;
-#                                    coverage figures still vary a little between machines)
+#   bash scripts/fuzz.sh --runs N    check: seed 1, exactly N inputs per target (N / 4 for
+#                                    http_fuzz, whose inputs each take a socket round trip) — for
+#                                    the same build and corpus the same inputs, so a red result
+#                                    points at the code, not the luck of the draw (what
+#                                    scripts/test.sh runs; coverage figures still vary a little
+#                                    between machines, and more for http_fuzz, whose server
+#                                    threads interleave differently from run to run)
 # Installs nothing: run scripts/setup.sh first (needs the Debian packages clang and
 # libclang-rt-14-dev).
 set -euo pipefail
@@ -19,12 +23,12 @@ cd "$(dirname "${BASH_SOURCE[0]}")/.."
 
 usage="usage: scripts/fuzz.sh [SECONDS_PER_TARGET] | --runs INPUTS_PER_TARGET"
 if [[ "${1:-}" == "--runs" ]]; then
+  mode=runs
   count=${2:-}
-  budget=(-seed=1 -runs="$count")
-  describe="$count inputs per target, seed 1"
+  describe="$count inputs per target (http_fuzz: a quarter), seed 1"
 else
+  mode=seconds
   count=${1:-20}
-  budget=(-max_total_time="$count")
   describe="$count s per target, random seed"
 fi
 if ! [[ "$count" =~ ^[1-9][0-9]*$ ]]; then
@@ -40,11 +44,15 @@ CC=clang CXX=clang++ cmake -S tests/fuzz -B "$build" >/dev/null
 cmake --build "$build" -j "$jobs"
 echo "== fuzz: built in $((SECONDS - started)) s; fuzzing: $describe"
 
-# target, corpus and dictionary name, longest input in bytes
-targets=("json_fuzz json 4096" "csv_fuzz csv 4096")
+# target, corpus and dictionary name, longest input in bytes, share of --runs N (N / share):
+# an http_fuzz input is a connection to a server thread, several times a parser call's cost
+# (its longest input holds a request line over cpp-httplib's 8192-byte limit).
+targets=("json_fuzz json 4096 1" "csv_fuzz csv 4096 1" "http_fuzz http 10000 4")
 
 run_target() {
-  local target=$1 name=$2 max_len=$3
+  local target=$1 name=$2 max_len=$3 share=$4
+  local budget=(-max_total_time="$count")
+  if [[ "$mode" == runs ]]; then budget=(-seed=1 -runs=$((count / share > 0 ? count / share : 1))); fi
   local corpus=$build/corpus-$target artifacts=$build/artifacts-$target
   rm -rf "$corpus" "$artifacts"
   mkdir -p "$corpus" "$artifacts"
@@ -81,30 +89,30 @@ declare -A status
 if [[ "$jobs" -ge 2 ]]; then
   declare -A pid
   for entry in "${targets[@]}"; do
-    read -r target name max_len <<<"$entry"
-    run_target "$target" "$name" "$max_len" &
+    read -r target name max_len share <<<"$entry"
+    run_target "$target" "$name" "$max_len" "$share" &
     pid[$target]=$!
   done
   for entry in "${targets[@]}"; do
-    read -r target _ _ <<<"$entry"
+    read -r target _ _ _ <<<"$entry"
     if wait "${pid[$target]}"; then status[$target]=0; else status[$target]=$?; fi
   done
 else
   for entry in "${targets[@]}"; do
-    read -r target name max_len <<<"$entry"
-    if run_target "$target" "$name" "$max_len"; then status[$target]=0; else status[$target]=$?; fi
+    read -r target name max_len share <<<"$entry"
+    if run_target "$target" "$name" "$max_len" "$share"; then status[$target]=0; else status[$target]=$?; fi
   done
 fi
 
 failed=0
 echo "== fuzz: results (execs, exec/s, edge coverage, features, corpus units/bytes)"
 for entry in "${targets[@]}"; do
-  read -r target _ _ <<<"$entry"
+  read -r target _ _ _ <<<"$entry"
   summarize "$target" "${status[$target]}"
   if [[ "${status[$target]}" -ne 0 ]]; then
     failed=1
     # The sanitizer's report and the saved input.
-    grep -E -A40 '^==[0-9]+==ERROR|runtime error|^SUMMARY|deadly signal|Test unit written' "$build/$target.log" | head -60 >&2 || true
+    grep -E -A40 '^[a-z]+_fuzz: |^==[0-9]+==ERROR|runtime error|^SUMMARY|deadly signal|Test unit written' "$build/$target.log" | head -60 >&2 || true
   fi
 done
 exit "$failed"

@@ -239,6 +239,11 @@ std::string allowed_methods(const RouteState& state, const std::string& path) {
 httplib::Server::HandlerResponse on_error(const RouteState& state, const httplib::Request& request,
                                           httplib::Response& response) {
   HttpServer::body_received();
+  // 0.11.4 applies the request's Range to every answer it writes, errors included (a 401 cut to
+  // its first 11 bytes, with Content-Range; found by tests/fuzz/http_fuzz): only a successful
+  // answer may be partial (RFC 9110 § 14.2). It calls this hook for every status from 400 up
+  // before it applies them, so an error drops them here (the Request is httplib's own, non-const).
+  const_cast<httplib::Request&>(request).ranges.clear();
   if (!response.body.empty()) return httplib::Server::HandlerResponse::Unhandled;  // ours already
   ProblemKind kind = ProblemKind::internal;
   std::string detail = "internal error";
@@ -259,9 +264,13 @@ httplib::Server::HandlerResponse on_error(const RouteState& state, const httplib
     case 414: kind = ProblemKind::uri_too_long; detail = "the request target is longer than this server reads"; break;
     case 400: kind = ProblemKind::malformed_body; detail = "the request could not be read"; break;
     default:
+      // Below 500 that leaves 416, which 0.11.4 sends for a Range header it cannot parse, before
+      // reading the body: a 400 (the problem's own status, so the status line and the body agree;
+      // found by tests/fuzz/http_fuzz), and the connection closes below, the body unread.
       if (response.status < 500) {
         kind = ProblemKind::malformed_body;
-        detail = "the request could not be handled";
+        detail = response.status == 416 ? "the Range header could not be read" : "the request could not be handled";
+        response.status = status_of(kind);
       }
   }
   const int status = response.status;
