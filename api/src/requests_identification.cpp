@@ -165,11 +165,8 @@ IdentificationSpec identification_from_json(const nlohmann::json& body) {
     }
     options.algorithm = name;
   }
-  // Output-error has no gradient (identification.cpp rejects LD_* there): say so now.
-  if (options.method == IdentificationMethod::output_error && options.algorithm.rfind("LD_", 0) == 0) {
-    throw InputError("algorithm", "output-error runs derivative-free algorithms only (LN_BOBYQA, LN_NELDERMEAD, "
-                                  "LN_SBPLX), got " + options.algorithm);
-  }
+  // Output-error has no gradient (core's resolve_algorithm owns the rule): say so now.
+  resolve_algorithm(options.method, options.algorithm);
   if (const Json* free = object.find("free")) read_free(*free, joints, options.free);
   if (const Json* initial = object.find("initial")) {
     Eigen::VectorXd theta = options.initial.vector();

@@ -2,7 +2,7 @@ function job = manipid_identify(url, dataset, options, varargin)
 %MANIPID_IDENTIFY  Submit an identification of a robot's parameters; returns the queued job.
 %   JOB = MANIPID_IDENTIFY(URL, DATASET) identifies from an uploaded dataset with the
 %   paper's settings (all 8 parameters of the cedro2009 robot free, input-error
-%   method, BOBYQA, filter chosen from the data) - exactly what
+%   method, LM (least squares), filter chosen from the data) - exactly what
 %   `manipid identify run.csv` does. DATASET is a dataset id ('ds_...'), the struct
 %   manipid_upload returned, or a finished simulation job (its dataset is used).
 %   JOB = MANIPID_IDENTIFY(URL, DATASET, OPTIONS) adds the identification options:

@@ -5,6 +5,7 @@
 
 #include <Eigen/QR>
 
+#include <algorithm>
 #include <cmath>
 
 #include <string>
@@ -82,45 +83,57 @@ InputErrorCost::InputErrorCost(const RobotModel& model, const FilteredData& data
     throw InputError("weights", "joint weights need " + std::to_string(n) + " finite, non-negative entries");
   }
   const int p = products_.size();
-  // Stack the weighted regressor rows, then one product gives A (faster than n·N' rank updates).
-  Eigen::MatrixXd stacked(static_cast<Eigen::Index>(samples) * n, p);
-  Eigen::VectorXd torque(static_cast<Eigen::Index>(samples) * n);
+  // QR of the stacked weighted regressor (N'·n rows, p columns), a block of rows at a time: each
+  // block is factored below the triangle [R | z] so far, which stays in cache where one
+  // factorisation of the whole tall matrix streams it from memory p times. Orthogonal steps
+  // throughout, so R and z are those of the one-shot QR up to rounding (and row signs, which
+  // leave |R β − z|² unchanged); what each block's reflectors leave of τ below R is J⊥'s share.
+  constexpr int kBlockRows = 512;
+  const int block_samples = std::max(1, kBlockRows / n);
+  const double root_samples = std::sqrt(static_cast<double>(samples));
+  Eigen::MatrixXd work = Eigen::MatrixXd::Zero(p + static_cast<Eigen::Index>(block_samples) * n, p + 1);
   DynamicsWorkspace workspace(model);
   Eigen::MatrixXd Y(n, p);
   Eigen::VectorXd q(n), qd(n), qdd(n);
-  const Eigen::ArrayXd root_weights = weights_.array().sqrt();
-  for (int t = 0; t < samples; ++t) {
-    q = data.q.row(t).transpose();
-    qd = data.qd.row(t).transpose();
-    qdd = data.qdd.row(t).transpose();
-    regressor(model, products_, workspace, q, qd, qdd, Y);
-    stacked.middleRows(static_cast<Eigen::Index>(t) * n, n) = root_weights.matrix().asDiagonal() * Y;
-    torque.segment(static_cast<Eigen::Index>(t) * n, n) = root_weights * data.tau.row(t).transpose().array();
+  const Eigen::ArrayXd root_weights = weights_.array().sqrt() / root_samples;
+  for (int first = 0; first < samples; first += block_samples) {
+    const int count = std::min(block_samples, samples - first);
+    for (int k = 0; k < count; ++k) {
+      const int t = first + k;
+      q = data.q.row(t).transpose();
+      qd = data.qd.row(t).transpose();
+      qdd = data.qdd.row(t).transpose();
+      regressor(model, products_, workspace, q, qd, qdd, Y);
+      const Eigen::Index row = p + static_cast<Eigen::Index>(k) * n;
+      work.block(row, 0, n, p) = root_weights.matrix().asDiagonal() * Y;
+      work.block(row, p, n, 1) = (root_weights * data.tau.row(t).transpose().array()).matrix();
+    }
+    const Eigen::Index rows = p + static_cast<Eigen::Index>(count) * n;
+    const Eigen::HouseholderQR<Eigen::MatrixXd> qr(work.topLeftCorner(rows, p));
+    const Eigen::VectorXd rotated = qr.householderQ().adjoint() * work.col(p).head(rows);
+    work.topLeftCorner(p, p) = qr.matrixQR().topRows(p).triangularView<Eigen::Upper>();
+    work.col(p).head(p) = rotated.head(p);
+    orthogonal_ += rotated.tail(rows - p).squaredNorm();
   }
-  const double root_samples = std::sqrt(static_cast<double>(samples));
-  stacked /= root_samples;
-  torque /= root_samples;
-  const Eigen::HouseholderQR<Eigen::MatrixXd> qr(stacked);
-  const Eigen::VectorXd rotated = qr.householderQ().adjoint() * torque;
-  const Eigen::Index kept = std::min<Eigen::Index>(p, rotated.size());
-  triangle_ = Eigen::MatrixXd::Zero(p, p);
-  triangle_.topRows(kept) = qr.matrixQR().topRows(kept).triangularView<Eigen::Upper>();
-  rotated_ = Eigen::VectorXd::Zero(p);
-  rotated_.head(kept) = rotated.head(kept);
-  orthogonal_ = rotated.tail(rotated.size() - kept).squaredNorm();
+  triangle_ = work.topLeftCorner(p, p);
+  rotated_ = work.col(p).head(p);
   // Products the data never excite leave R singular; the rank-revealing solve finds what
   // part of z no β reaches.
   const Eigen::VectorXd best = triangle_.completeOrthogonalDecomposition().solve(rotated_);
   floor_ = orthogonal_ + (triangle_ * best - rotated_).squaredNorm();
 }
 
+Eigen::VectorXd InputErrorCost::residual(const Parameters& parameters, Eigen::MatrixXd* jacobian) const {
+  if (jacobian) *jacobian = triangle_.triangularView<Eigen::Upper>() * products_.jacobian(parameters);
+  return triangle_.triangularView<Eigen::Upper>() * products_.evaluate(parameters) - rotated_;
+}
+
 double InputErrorCost::evaluate(const Parameters& parameters, Eigen::VectorXd* gradient) const {
-  const Eigen::VectorXd residual = triangle_.triangularView<Eigen::Upper>() * products_.evaluate(parameters) - rotated_;
+  const Eigen::VectorXd r = residual(parameters);
   if (gradient) {
-    *gradient = 2.0 * products_.jacobian(parameters).transpose() *
-                (triangle_.triangularView<Eigen::Upper>().transpose() * residual);
+    *gradient = 2.0 * products_.jacobian(parameters).transpose() * (triangle_.triangularView<Eigen::Upper>().transpose() * r);
   }
-  return residual.squaredNorm() + orthogonal_;
+  return r.squaredNorm() + orthogonal_;
 }
 
 double InputErrorCost::evaluate_direct(const Parameters& parameters) const {

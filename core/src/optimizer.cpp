@@ -1,5 +1,7 @@
-// optimizer.cpp — NLopt adapter for identification (optimizer.h).
+// optimizer.cpp — NLopt adapter for identification, and the dispatch to least squares (optimizer.h).
 #include "optimizer.h"
+
+#include "least_squares.h"
 
 #include <nlopt.hpp>
 
@@ -54,7 +56,7 @@ const AlgorithmName& find_algorithm(const std::string& name) {
   for (const auto& candidate : kAlgorithms) {
     if (name == candidate.name) return candidate;
   }
-  std::string known;
+  std::string known = kLeastSquaresAlgorithm;
   for (const auto& candidate : kAlgorithms) known += std::string(known.empty() ? "" : ", ") + candidate.name;
   throw InputError("algorithm", "unknown algorithm '" + name + "' (known: " + known + ")");
 }
@@ -116,11 +118,7 @@ double objective(unsigned dimension, const double* x, double* gradient_out, void
   return cost;
 }
 
-}  // namespace
-
-bool algorithm_uses_gradient(const std::string& algorithm) { return find_algorithm(algorithm).gradient; }
-
-MinimizeOutcome minimize(const CostFunction& cost, const Eigen::VectorXd& initial, const MinimizeSettings& settings) {
+MinimizeOutcome minimize_nlopt(const CostFunction& cost, const Eigen::VectorXd& initial, const MinimizeSettings& settings) {
   const AlgorithmName& algorithm = find_algorithm(settings.algorithm);
   Context context;
   context.cost = &cost;
@@ -133,13 +131,6 @@ MinimizeOutcome minimize(const CostFunction& cost, const Eigen::VectorXd& initia
   }
   const unsigned dimension = static_cast<unsigned>(context.free_index.size());
   MinimizeOutcome outcome;
-  if (dimension == 0) {
-    outcome.theta = initial;
-    outcome.cost = outcome.initial_cost = cost(initial, nullptr);
-    outcome.evaluations = 1;
-    outcome.stop_reason = "no_free_parameters";
-    return outcome;
-  }
   context.scale.resize(dimension);
   std::vector<double> x(dimension), lower(dimension), upper(dimension);
   for (unsigned i = 0; i < dimension; ++i) {
@@ -188,6 +179,30 @@ MinimizeOutcome minimize(const CostFunction& cost, const Eigen::VectorXd& initia
   outcome.initial_cost = context.evaluations > 0 ? context.first_cost : outcome.cost;
   outcome.evaluations = context.evaluations;
   return outcome;
+}
+
+}  // namespace
+
+bool algorithm_uses_gradient(const std::string& algorithm) {
+  return algorithm == kLeastSquaresAlgorithm || find_algorithm(algorithm).gradient;
+}
+
+MinimizeOutcome minimize(const CostFunction& cost, const Eigen::VectorXd& initial, const MinimizeSettings& settings,
+                         const LeastSquaresFunction* least_squares) {
+  const bool use_least_squares = settings.algorithm == kLeastSquaresAlgorithm;
+  if (use_least_squares && !least_squares) {
+    throw InputError("algorithm", std::string(kLeastSquaresAlgorithm) + " needs a cost that is a sum of squares with its Jacobian");
+  }
+  if (!use_least_squares) find_algorithm(settings.algorithm);  // unknown names fail before any evaluation
+  if (std::none_of(settings.free.begin(), settings.free.end(), [](bool free) { return free; })) {
+    MinimizeOutcome outcome;
+    outcome.theta = initial;
+    outcome.cost = outcome.initial_cost = cost(initial, nullptr);
+    outcome.evaluations = 1;
+    outcome.stop_reason = "no_free_parameters";
+    return outcome;
+  }
+  return use_least_squares ? minimize_least_squares(*least_squares, initial, settings) : minimize_nlopt(cost, initial, settings);
 }
 
 }  // namespace manipid::detail

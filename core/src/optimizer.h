@@ -1,6 +1,7 @@
-// optimizer.h — internal: NLopt behind a small interface, for every identification method.
+// optimizer.h — internal: the minimisers behind one small interface, for every identification method.
 //
-// It owns what NLopt 2.7.1 needs handled with care: fixed parameters are removed from the
+// minimize() runs an NLopt algorithm (optimizer.cpp) or, for "LM", Levenberg–Marquardt on a cost
+// given as a sum of squares (least_squares.h); the callers do not branch on which. The NLopt path owns what NLopt 2.7.1 needs handled with care: fixed parameters are removed from the
 // vector (2.7.1 ignores force_stop when a parameter is pinned by equal bounds), the
 // nlopt::opt is built in place and never copied after its objective is set, and exceptions
 // are turned into a stop reason. Parameters are scaled by their start values so that kg and
@@ -59,6 +60,16 @@ class EvaluationLog {
 /// θ (all parameters) → cost, and ∂cost/∂θ when `gradient` is not null.
 using CostFunction = std::function<double(const Eigen::VectorXd& theta, Eigen::VectorXd* gradient)>;
 
+/// A cost of the form |r(θ)|² + offset: θ (all parameters) → r, and ∂r/∂θ (rows × all parameters) when
+/// `jacobian` is not null. Its value must equal the CostFunction's at every θ.
+struct LeastSquaresFunction {
+  std::function<void(const Eigen::VectorXd& theta, Eigen::VectorXd& residual, Eigen::MatrixXd* jacobian)> residual;
+  double offset = 0.0;
+};
+
+/// The least-squares algorithm's name (Levenberg–Marquardt, least_squares.h).
+inline constexpr const char* kLeastSquaresAlgorithm = "LM";
+
 struct MinimizeSettings {
   std::string algorithm = "LN_BOBYQA";
   std::vector<bool> free;        // per parameter
@@ -80,8 +91,10 @@ struct MinimizeOutcome {
   bool cancelled = false;
 };
 
-/// Throws InputError("algorithm") for an unknown or unsuitable algorithm name.
+/// Throws InputError("algorithm") for an unknown or unsuitable algorithm name. "LM" uses derivatives.
 bool algorithm_uses_gradient(const std::string& algorithm);
-MinimizeOutcome minimize(const CostFunction& cost, const Eigen::VectorXd& initial, const MinimizeSettings& settings);
+/// `least_squares`, when given, is the same cost as a sum of squares; "LM" needs it (InputError otherwise).
+MinimizeOutcome minimize(const CostFunction& cost, const Eigen::VectorXd& initial, const MinimizeSettings& settings,
+                         const LeastSquaresFunction* least_squares = nullptr);
 
 }  // namespace manipid::detail

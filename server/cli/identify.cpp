@@ -142,9 +142,10 @@ CLI::App* add_identify_command(CLI::App& app, IdentifyOptions& options) {
   command->add_option("--method", options.method, "input-error, output-error or two-stage")
       ->check(CLI::IsMember({"input-error", "output-error", "two-stage"}))
       ->capture_default_str();
-  command->add_option("--algorithm", options.algorithm, "NLopt algorithm")
-      ->check(CLI::IsMember(identification_algorithms()))
-      ->capture_default_str();
+  command->add_option("--algorithm", options.algorithm,
+                      "LM (Levenberg-Marquardt on the least-squares form) or an NLopt algorithm (default: LM; "
+                      "LN_BOBYQA for output-error, which needs a derivative-free one)")
+      ->check(CLI::IsMember(identification_algorithms()));
   command->add_option("--kp", options.kp,
                       "PD gains Kp, comma-separated (default: estimated from the data's tau, q and ref; without tau, "
                       "the preset's)");

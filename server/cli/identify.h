@@ -20,7 +20,7 @@ struct IdentifyOptions {
   std::vector<std::string> initial;  ///< comma lists of NAME=VALUE
   std::vector<std::string> truth;    ///< comma lists of NAME=VALUE: known true values, shown beside the estimates
   std::string method = "input-error";
-  std::string algorithm = "LN_BOBYQA";
+  std::string algorithm;             ///< empty = the method's default (LM; LN_BOBYQA for output-error)
   std::string kp, kd;                ///< comma lists; empty = the preset's
   std::string half_length = "auto";
   std::string band = "auto";

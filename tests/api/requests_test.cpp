@@ -588,7 +588,7 @@ TEST(IdentificationJson, MinimalRequestIdentifiesLikeTheCommand) {
   EXPECT_EQ(spec.preset.model.kinetic_energy, KineticEnergy::complete);
   const IdentificationOptions& options = spec.options;
   EXPECT_EQ(options.method, IdentificationMethod::input_error);
-  EXPECT_EQ(options.algorithm, "LN_BOBYQA");
+  EXPECT_EQ(options.algorithm, "");  // the method's default: LM for input-error
   EXPECT_TRUE(options.free.empty());
   EXPECT_EQ(options.initial.vector(), paper.initial_parameters.vector());
   EXPECT_EQ(options.lower.size(), 0);
@@ -752,9 +752,12 @@ TEST(IdentificationJson, MethodAndAlgorithmErrors) {
                               "expected input-error, output-error or two-stage");
   expect_identification_error(with(identify_dataset, "method", 1), "method", "must be a string");
   expect_identification_error(with(identify_dataset, "algorithm", "GN_ISRES"), "algorithm",
-                              "expected one of LN_BOBYQA, LN_NELDERMEAD, LN_SBPLX, LD_LBFGS, LD_SLSQP");
+                              "expected one of LM, LN_BOBYQA, LN_NELDERMEAD, LN_SBPLX, LD_LBFGS, LD_SLSQP");
   json output_error = with(identify_dataset, "method", "output-error");
   expect_identification_error(with(output_error, "algorithm", "LD_LBFGS"), "algorithm", "derivative-free");
+  expect_identification_error(with(output_error, "algorithm", "LM"), "algorithm", "derivative-free");
+  EXPECT_NO_THROW(identification_from_json(output_error));  // its default, LN_BOBYQA
+  EXPECT_NO_THROW(identification_from_json(with(identify_dataset, "algorithm", "LM")));
   EXPECT_NO_THROW(identification_from_json(with(output_error, "algorithm", "LN_SBPLX")));
 }
 

@@ -94,6 +94,29 @@ TEST(InputErrorCost, GradientMatchesFiniteDifferences) {
   }
 }
 
+TEST(InputErrorCost, ResidualIsTheCostAsASumOfSquaresWithItsJacobian) {
+  const Preset preset = cedro2009();
+  const FilteredData data = filter_for_input_error(paper_run(KineticEnergy::complete), {100, 0.2, 0.001}, false, std::nullopt);
+  const InputErrorCost cost(preset.model, data);
+  const Eigen::VectorXd theta = preset.initial_parameters.vector();
+  Eigen::MatrixXd jacobian;
+  const Eigen::VectorXd residual = cost.residual(preset.initial_parameters, &jacobian);
+  ASSERT_EQ(residual.size(), cost.products().size());
+  ASSERT_EQ(jacobian.rows(), residual.size());
+  ASSERT_EQ(jacobian.cols(), theta.size());
+  EXPECT_NEAR(residual.squaredNorm() + cost.orthogonal(), cost.evaluate(preset.initial_parameters),
+              1e-12 * cost.evaluate(preset.initial_parameters));
+  for (int i = 0; i < theta.size(); ++i) {
+    const double h = 1e-6 * theta[i];
+    Eigen::VectorXd plus = theta, minus = theta;
+    plus[i] += h;
+    minus[i] -= h;
+    const Eigen::VectorXd numeric =
+        (cost.residual(Parameters::from_vector(plus)) - cost.residual(Parameters::from_vector(minus))) / (2 * h);
+    EXPECT_LE((jacobian.col(i) - numeric).norm(), 1e-6 * std::max(1.0, numeric.norm())) << i;
+  }
+}
+
 TEST(InputErrorCost, ReferenceTorqueIsTheFilteredController) {
   // τ^f formed from ref and the gains equals the low-passed recorded controller torque up to
   // the filters' differences (derivative1 of q versus the low-pass of q̇): close, not equal.
@@ -118,7 +141,9 @@ TEST(Identification, ReproducesThePaper) {
   const Preset preset = cedro2009(KineticEnergy::paper);
   IdentificationOptions options = paper_options(preset);
   options.torque_source = TorqueSource::reference;
+  options.algorithm = "LN_BOBYQA";  // the paper's reproduction, as the README prints it
   const IdentificationResult result = identify(preset.model, paper_run(KineticEnergy::paper), options);
+  EXPECT_EQ(result.algorithm, "LN_BOBYQA");
   EXPECT_LE(result.final_cost, 0.0223076);  // the paper's J
   EXPECT_LE(largest_identifiable_error(result, preset.true_parameters), 0.0079);  // the paper's worst, m4
   // m1 and l1 appear only as m1·l1²: reported as such, never as two confident numbers.
@@ -184,33 +209,115 @@ TEST(Identification, GradientAlgorithmsReachTheSameMinimum) {
   IdentificationOptions options = paper_options(preset);
   options.algorithm = "LN_BOBYQA";
   const double reference = identify(preset.model, paper_run(KineticEnergy::paper), options).final_cost;
-  for (const char* algorithm : {"LD_SLSQP", "LD_LBFGS", "LN_SBPLX"}) {
+  for (const char* algorithm : {"LM", "LD_SLSQP", "LD_LBFGS", "LN_SBPLX"}) {
     options.algorithm = algorithm;
     const IdentificationResult result = identify(preset.model, paper_run(KineticEnergy::paper), options);
     EXPECT_LE(result.final_cost, reference * (1 + 1e-6)) << algorithm << ": " << result.stop_reason;
   }
 }
 
-TEST(Identification, CancellationStopsWithinOneEvaluation) {
+// The default (LM on |R β(θ) − z|²) and the paper's LN_BOBYQA find the same minimum: every
+// identifiable parameter, m1·l1², the cost and the standard errors agree within 1e-6 relative, on
+// the paper's clean and noisy cases, with the paper's filter and with the one chosen from the data.
+TEST(Identification, LeastSquaresDefaultEqualsBobyqa) {
   const Preset preset = cedro2009();
-  std::atomic<bool> cancel{false};
+  Trajectory noisy = paper_run(KineticEnergy::complete);
+  MeasurementNoise noise;
+  noise.q_sigma = 1e-4;
+  noise.quantize_bits = 16;
+  noise.tau_relative_sigma = 0.01;
+  apply_measurement_noise(noisy, noise);
+  IdentificationOptions automatic;
+  automatic.initial = preset.initial_parameters;
+  const Trajectory* clean = &paper_run(KineticEnergy::complete);
+  for (const Trajectory* run : {clean, static_cast<const Trajectory*>(&noisy)}) {
+    for (IdentificationOptions options : {paper_options(preset), automatic}) {
+      SCOPED_TRACE(std::string(run == &noisy ? "noisy" : "clean") + (options.band > 0 ? ", paper filter" : ", auto filter"));
+      const IdentificationResult lm = identify(preset.model, *run, options);
+      options.algorithm = "LN_BOBYQA";
+      const IdentificationResult bobyqa = identify(preset.model, *run, options);
+      EXPECT_EQ(lm.algorithm, "LM");
+      EXPECT_EQ(lm.stop_reason.rfind("converged: ", 0), 0u) << lm.stop_reason;
+      EXPECT_LT(lm.evaluations, 100);
+      EXPECT_LT(lm.evaluations * 10, bobyqa.evaluations);
+      EXPECT_NEAR(lm.final_cost, bobyqa.final_cost, 1e-6 * bobyqa.final_cost);
+      ASSERT_EQ(lm.identifiability.unidentifiable, (std::vector<std::string>{"m1", "l1"}));
+      ASSERT_EQ(bobyqa.identifiability.unidentifiable, lm.identifiability.unidentifiable);
+      for (int i : {1, 2, 3, 5, 6, 7}) {
+        EXPECT_NEAR(lm.estimate[i], bobyqa.estimate[i], 1e-6 * std::abs(bobyqa.estimate[i])) << lm.names[i];
+        EXPECT_NEAR(lm.std_errors[i], bobyqa.std_errors[i], 1e-6 * bobyqa.std_errors[i]) << lm.names[i];
+      }
+      ASSERT_EQ(lm.identifiability.combinations.size(), 1u);
+      ASSERT_EQ(bobyqa.identifiability.combinations.size(), 1u);
+      EXPECT_NEAR(lm.identifiability.combinations[0].value, bobyqa.identifiability.combinations[0].value,
+                  1e-6 * bobyqa.identifiability.combinations[0].value);
+    }
+  }
+}
+
+TEST(Identification, LeastSquaresKeepsFixedParametersBoundsAndBudgets) {
+  const Preset preset = cedro2009();
+  const Trajectory& run = paper_run(KineticEnergy::complete);
   IdentificationOptions options = paper_options(preset);
-  options.cancel = &cancel;
-  long seen = 0;
-  options.on_evaluation = [&](long index, double, const Eigen::VectorXd&) {
-    seen = index + 1;
-    if (index == 19) cancel = true;
-  };
-  const IdentificationResult result = identify(preset.model, paper_run(KineticEnergy::complete), options);
-  EXPECT_TRUE(result.cancelled);
-  EXPECT_EQ(result.stop_reason, "cancelled");
-  EXPECT_EQ(seen, 20);
-  EXPECT_EQ(result.evaluations, 20);
+  options.algorithm = "LM";
+  options.refine = false;  // the minimiser's own result
+  options.free = {"m2", "m3", "m4", "l3"};
+  options.lower = Eigen::VectorXd::Zero(8);
+  options.upper = Eigen::VectorXd::Constant(8, 1e3);
+  options.initial.mass[1] = 24.0;
+  options.upper[1] = 24.5;  // m2 held below its minimum (about 25)
+  const IdentificationResult bounded = identify(preset.model, run, options);
+  EXPECT_EQ(bounded.estimate[1], 24.5);
+  for (int i : {0, 4, 5, 7}) EXPECT_EQ(bounded.estimate[i], preset.initial_parameters.vector()[i]) << bounded.names[i];
+  EXPECT_EQ(bounded.stop_reason.rfind("converged: ", 0), 0u) << bounded.stop_reason;
+  // The same optimum as a gradient algorithm under the same bound.
+  options.algorithm = "LD_SLSQP";
+  const IdentificationResult slsqp = identify(preset.model, run, options);
+  EXPECT_LE(bounded.final_cost, slsqp.final_cost * (1 + 1e-9));
+  // An evaluation budget is a stop reason, never more evaluations.
+  options.algorithm = "LM";
+  options.max_evaluations = 3;
+  const IdentificationResult budget = identify(preset.model, run, options);
+  EXPECT_EQ(budget.stop_reason, "maxeval_reached");
+  EXPECT_EQ(budget.evaluations, 3);
+  EXPECT_LT(budget.final_cost, budget.initial_cost);
+  // Output-error has no Jacobian for LM: refused, naming the field.
+  options.method = IdentificationMethod::output_error;
+  try {
+    identify(preset.model, run, options);
+    ADD_FAILURE() << "output-error with LM was accepted";
+  } catch (const InputError& error) {
+    EXPECT_EQ(error.field(), "algorithm");
+  }
+  EXPECT_EQ(default_algorithm(IdentificationMethod::output_error), "LN_BOBYQA");
+  EXPECT_EQ(default_algorithm(IdentificationMethod::two_stage), "LM");
+}
+
+TEST(Identification, CancellationStopsWithinOneEvaluation) {
+  for (const char* algorithm : {"LM", "LN_BOBYQA"}) {
+    SCOPED_TRACE(algorithm);
+    const Preset preset = cedro2009();
+    std::atomic<bool> cancel{false};
+    IdentificationOptions options = paper_options(preset);
+    options.algorithm = algorithm;
+    options.cancel = &cancel;
+    long seen = 0;
+    options.on_evaluation = [&](long index, double, const Eigen::VectorXd&) {
+      seen = index + 1;
+      if (index == 4) cancel = true;
+    };
+    const IdentificationResult result = identify(preset.model, paper_run(KineticEnergy::complete), options);
+    EXPECT_TRUE(result.cancelled);
+    EXPECT_EQ(result.stop_reason, "cancelled");
+    EXPECT_EQ(seen, 5);
+    EXPECT_EQ(result.evaluations, 5);
+  }
 }
 
 TEST(Identification, HistoryIsBoundedAndKeepsFirstBestLast) {
   const Preset preset = cedro2009();
   IdentificationOptions options = paper_options(preset);
+  options.algorithm = "LN_BOBYQA";  // enough evaluations to thin (LM needs about 10)
   options.history_limit = 40;
   long total = 0;
   long best_index = -1;

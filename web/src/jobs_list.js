@@ -6,7 +6,8 @@ import { h, number, stateBadge, when } from "./dom.js";
 import { robotPath } from "./paths.js";
 
 const METHODS = ["input-error", "output-error", "two-stage"];
-const ALGORITHMS = ["LN_BOBYQA", "LN_NELDERMEAD", "LN_SBPLX", "LD_LBFGS", "LD_SLSQP"];
+// "default": the method's own (LM; LN_BOBYQA for output-error), so the field is left out of the request.
+const ALGORITHMS = ["default", "LM", "LN_BOBYQA", "LN_NELDERMEAD", "LN_SBPLX", "LD_LBFGS", "LD_SLSQP"];
 
 function field(label, input, hint) {
   const id = input.id;
@@ -41,7 +42,7 @@ function paperForm(preset, navigate) {
       h("legend", {}, "Identification"),
       h("div", { class: "fields" },
         field("Method", select("f-method", "method", METHODS, "input-error")),
-        field("Algorithm", select("f-algorithm", "algorithm", ALGORITHMS, "LN_BOBYQA")),
+        field("Algorithm", select("f-algorithm", "algorithm", ALGORITHMS, "default")),
         field("Filter half-length M", numberInput("f-half-length", "half_length", "auto"), "a number, or auto"),
         field("Band Ωg, rad/sample", numberInput("f-band", "band", "auto"), "a number, or auto"),
         field("Torque from", select("f-torque", "torque_source", ["auto", "measured", "reference"], "auto")))),
@@ -69,7 +70,7 @@ function paperForm(preset, navigate) {
     for (const name of names) initial[name] = Number(value(`f-initial-${name}`));
     const body = {
       simulation, preset: preset.name, kinetic_energy: energy,
-      method: value("f-method"), algorithm: value("f-algorithm"),
+      method: value("f-method"), algorithm: value("f-algorithm") === "default" ? undefined : value("f-algorithm"),
       half_length: autoOrNumber("f-half-length"), band: autoOrNumber("f-band"),
       torque_source: value("f-torque"),
       free: [...form.querySelectorAll("input[name=free]:checked")].map((box) => box.value),

@@ -43,8 +43,15 @@ const char* to_string(IdentificationMethod method);
 /// "input-error", "output-error" or "two-stage"; throws InputError(field) otherwise.
 IdentificationMethod parse_identification_method(const std::string& text, const std::string& field = "method");
 
-/// The NLopt algorithms offered, by NLopt's names.
+/// The algorithms offered: "LM" (Levenberg–Marquardt on the least-squares form, input-error and
+/// two-stage's first stage) and the NLopt algorithms by NLopt's names.
 std::vector<std::string> identification_algorithms();
+/// What `method` runs when no algorithm is named: "LM" for input-error and two-stage, "LN_BOBYQA"
+/// for output-error (its cost has no Jacobian short of finite differences of simulations).
+std::string default_algorithm(IdentificationMethod method);
+/// The algorithm `method` runs: `algorithm`, or the method's default when it is empty. Throws
+/// InputError("algorithm") for an unknown name, or one that needs derivatives for output-error.
+std::string resolve_algorithm(IdentificationMethod method, const std::string& algorithm);
 
 /// Where the input torque comes from.
 enum class TorqueSource {
@@ -63,9 +70,11 @@ struct IdentificationOptions {
   /// What is done to the data first: ramps trimmed, non-uniform time stamps resampled onto a
   /// uniform grid (with a warning saying so), see resample.h.
   DataPreparation preparation;
-  /// NLopt algorithm: LN_BOBYQA (default), LN_NELDERMEAD, LN_SBPLX (derivative-free),
-  /// LD_LBFGS, LD_SLSQP (exact gradient).
-  std::string algorithm = "LN_BOBYQA";
+  /// Empty (default): the method's, default_algorithm(). "LM": Levenberg–Marquardt on the cost's
+  /// least-squares form |R β(θ) − z|² with its exact Jacobian (not for output-error). NLopt's
+  /// LN_BOBYQA (the paper's reproduction), LN_NELDERMEAD, LN_SBPLX (derivative-free), LD_LBFGS,
+  /// LD_SLSQP (exact gradient).
+  std::string algorithm;
 
   /// Names of the free parameters (m1..mn, l1..ln); empty = all. The rest stay at `initial`.
   std::vector<std::string> free;
@@ -93,7 +102,7 @@ struct IdentificationOptions {
   /// the preset's; empty = such a request is refused.
   std::optional<PdController> assumed_controller;
 
-  /// Stopping rules (NLopt): relative tolerances on x and f, evaluation and time budgets.
+  /// Stopping rules (NLopt and LM alike): relative tolerances on x and f, evaluation and time budgets.
   double relative_x_tolerance = 1e-10;
   double relative_f_tolerance = 1e-14;
   int max_evaluations = 20000;
@@ -161,7 +170,7 @@ const char* to_string(GainSource source);
 
 struct IdentificationResult {
   IdentificationMethod method = IdentificationMethod::input_error;
-  std::string algorithm;
+  std::string algorithm;               ///< the one that ran (the method's default when none was named)
   std::vector<std::string> names;      ///< m1..mn, l1..ln
   std::vector<bool> free;              ///< per parameter
   Eigen::VectorXd initial, estimate;   ///< θ
@@ -176,7 +185,7 @@ struct IdentificationResult {
   long simulations = 0;                ///< closed-loop simulations run (output-error)
   int refinement_steps = 0;            ///< accepted Gauss–Newton polish steps (input-error)
   double wall_seconds = 0.0;
-  std::string stop_reason;             ///< e.g. "xtol_reached", "maxeval_reached", "cancelled"
+  std::string stop_reason;             ///< e.g. "converged: relative step below 1e-10", "xtol_reached", "maxeval_reached", "cancelled"
   bool cancelled = false;
 
   FilterSettings filter;               ///< the filter used (chosen or given)

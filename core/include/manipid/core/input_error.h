@@ -55,6 +55,11 @@ class InputErrorCost {
 
   /// J(θ) in Gram form; with `gradient`, also ∂J/∂θ (2n entries, θ order).
   double evaluate(const Parameters& parameters, Eigen::VectorXd* gradient = nullptr) const;
+  /// The same cost as a sum of squares, J(θ) = |r|² + J⊥ with r = R β(θ) − z (dim β entries); with
+  /// `jacobian`, also ∂r/∂θ = R G (dim β × 2n): what Levenberg–Marquardt works on.
+  Eigen::VectorXd residual(const Parameters& parameters, Eigen::MatrixXd* jacobian = nullptr) const;
+  /// J⊥: the part of the torque no β reaches, the constant beside |r|².
+  double orthogonal() const { return orthogonal_; }
   /// J(θ) sample by sample with inverse_dynamics: the reference the Gram form is tested against.
   double evaluate_direct(const Parameters& parameters) const;
 
