@@ -143,6 +143,7 @@ class FreshService : public Service {
   DeleteOutcome delete_job(const std::string& id) override { return fake()->delete_job(id); }
   std::string metrics() override { return fake()->metrics(); }
   bool accepting() const override { return fake()->accepting(); }
+  std::optional<std::string> degraded() const override { return fake()->degraded(); }
 
  private:
   std::shared_ptr<testing::FakeService> fake() const {
