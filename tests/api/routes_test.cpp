@@ -1033,9 +1033,13 @@ TEST_F(Routes, ServiceExceptionIs500AndLeaksNothing) {
   ASSERT_TRUE(result);
   EXPECT_FALSE(result->has_header("EXCEPTION_WHAT"));
 
+  // Out of memory is not a bug of the request: 503 with Retry-After, and the server serves on.
   fake_.script([](Script& s) { s.throw_bad_alloc = true; });
-  problem = expect_problem(get("/v1/jobs"), 500, "INTERNAL", "");
-  EXPECT_EQ(problem["detail"], "out of memory while handling the request");
+  result = get("/v1/jobs");
+  problem = expect_problem(result, 503, "MEMORY_BUSY", "");
+  EXPECT_EQ(problem["detail"], "the server ran out of memory while handling this request; try again later");
+  ASSERT_TRUE(result);
+  EXPECT_EQ(result->get_header_value("Retry-After"), "5");
 
   fake_.script([](Script&) {});
   result = get("/v1/datasets/ds_a");  // and the server serves on
