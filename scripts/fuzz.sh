@@ -21,8 +21,14 @@
 set -euo pipefail
 cd "$(dirname "${BASH_SOURCE[0]}")/.."
 
-usage="usage: scripts/fuzz.sh [SECONDS_PER_TARGET] | --runs INPUTS_PER_TARGET"
-if [[ "${1:-}" == "--runs" ]]; then
+usage="usage: scripts/fuzz.sh [SECONDS_PER_TARGET] | --runs INPUTS_PER_TARGET | --build-only"
+build_only=false
+if [[ "${1:-}" == "--build-only" ]]; then
+  # Only build the targets (scripts/test.sh builds them while the tests run).
+  build_only=true
+  count=1
+  describe=""
+elif [[ "${1:-}" == "--runs" ]]; then
   mode=runs
   count=${2:-}
   describe="$count inputs per target (http_fuzz: a quarter), seed 1"
@@ -42,6 +48,10 @@ jobs=$(nproc)
 started=$SECONDS
 CC=clang CXX=clang++ cmake -S tests/fuzz -B "$build" >/dev/null
 cmake --build "$build" -j "$jobs"
+if $build_only; then
+  echo "== fuzz: built in $((SECONDS - started)) s"
+  exit 0
+fi
 echo "== fuzz: built in $((SECONDS - started)) s; fuzzing: $describe"
 
 # target, corpus and dictionary name, longest input in bytes, share of --runs N (N / share):
