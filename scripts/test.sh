@@ -11,7 +11,8 @@ set -euo pipefail
 cd "$(dirname "${BASH_SOURCE[0]}")/.."
 bash scripts/setup.sh
 cmake --preset debug >/dev/null
-cmake --build --preset debug -j "$(nproc)"
+# One job more than processors: a compile waiting on the disk or a link leaves a processor idle.
+cmake --build --preset debug -j "$(( $(nproc) + 1 ))"
 # The fuzz targets are built while the tests run, at the lowest priority: many tests wait on
 # servers, browsers and timers, and the build takes only the processor time they leave.
 mkdir -p build
