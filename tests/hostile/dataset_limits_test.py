@@ -14,7 +14,7 @@ import sys
 import unittest
 
 sys.path.insert(0, os.path.join(os.path.dirname(__file__), "..", "service"))
-from harness import Server, temporary_directory  # noqa: E402
+from harness import SharedServerTestCase  # noqa: E402
 
 MAX_JOINTS = 200
 
@@ -36,17 +36,7 @@ def chain_urdf(joints):
     return f'<robot name="long">{links}{chain}</robot>'
 
 
-class DatasetLimits(unittest.TestCase):
-    @classmethod
-    def setUpClass(cls):
-        cls.directory = temporary_directory()
-        cls.server = Server(os.path.join(cls.directory.name, "jobs.db")).start()
-
-    @classmethod
-    def tearDownClass(cls):
-        cls.server.stop()
-        cls.directory.cleanup()
-
+class DatasetLimits(SharedServerTestCase):
     def assert_refused(self, method, path, body, field, words, headers=None):
         status, answer_headers, problem = self.server.request(method, path, body, headers)
         self.assertEqual(status, 422, problem)

@@ -20,7 +20,7 @@ import time
 import unittest
 
 sys.path.insert(0, os.path.join(os.path.dirname(__file__), "..", "service"))
-from harness import Server, binary, temporary_directory  # noqa: E402
+from harness import Server, SharedServerTestCase, binary, temporary_directory  # noqa: E402
 
 MAX_BODY = 1 << 20  # --max-body 1MiB
 BUDGET = 3 << 20    # --memory-budget 3MiB: one body of --max-body fits, not two of 600 kB
@@ -157,18 +157,8 @@ class MemoryBudgetOption(unittest.TestCase):
         self.assertIn("--memory-budget: at least 3 x --max-body", result.stderr)
 
 
-class SaxUpload(unittest.TestCase):
+class SaxUpload(SharedServerTestCase):
     """The upload read without a document answers as before (tests/api checks every message)."""
-
-    @classmethod
-    def setUpClass(cls):
-        cls.directory = temporary_directory()
-        cls.server = Server(os.path.join(cls.directory.name, "jobs.db")).start()
-
-    @classmethod
-    def tearDownClass(cls):
-        cls.server.stop()
-        cls.directory.cleanup()
 
     def test_wrong_bodies_get_the_same_problems(self):
         cases = [

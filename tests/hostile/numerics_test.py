@@ -15,7 +15,7 @@ import time
 import unittest
 
 sys.path.insert(0, os.path.join(os.path.dirname(__file__), "..", "service"))
-from harness import Server, binary, simulate_csv, temporary_directory  # noqa: E402
+from harness import Server, SharedServerTestCase, binary, simulate_csv, temporary_directory  # noqa: E402
 
 NAMES = ["m1", "m2", "m3", "m4", "l1", "l2", "l3", "l4"]
 
@@ -24,17 +24,7 @@ def every_parameter(value):
     return {name: value for name in NAMES}
 
 
-class StartingValues(unittest.TestCase):
-    @classmethod
-    def setUpClass(cls):
-        cls.directory = temporary_directory()
-        cls.server = Server(os.path.join(cls.directory.name, "jobs.db")).start()
-
-    @classmethod
-    def tearDownClass(cls):
-        cls.server.stop()
-        cls.directory.cleanup()
-
+class StartingValues(SharedServerTestCase):
     def assert_refused(self, body, field, words):
         status, headers, problem = self.server.request("POST", "/v1/identifications", body)
         self.assertEqual(status, 422, problem)

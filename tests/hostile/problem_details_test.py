@@ -12,23 +12,13 @@ import sys
 import unittest
 
 sys.path.insert(0, os.path.join(os.path.dirname(__file__), "..", "service"))
-from harness import Server, temporary_directory  # noqa: E402
+from harness import SharedServerTestCase  # noqa: E402
 
 JSON = {"Content-Type": "application/json"}
 DATASET = '"dt": 0.01, "q": [[0, 0.1, 0.2, 0.3]], "tau": [[1, 1, 1, 1]]'
 
 
-class ProblemDetails(unittest.TestCase):
-    @classmethod
-    def setUpClass(cls):
-        cls.directory = temporary_directory()
-        cls.server = Server(os.path.join(cls.directory.name, "jobs.db")).start()
-
-    @classmethod
-    def tearDownClass(cls):
-        cls.server.stop()
-        cls.directory.cleanup()
-
+class ProblemDetails(SharedServerTestCase):
     def problem(self, status, code, field, method, path, body=None, headers=None):
         answer_status, headers, problem = self.server.request(method, path, body, headers)
         self.assertEqual(answer_status, status, problem)

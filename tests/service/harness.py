@@ -13,6 +13,7 @@ import signal
 import subprocess
 import tempfile
 import time
+import unittest
 
 
 def binary():
@@ -106,6 +107,21 @@ class Server:
 
 def temporary_directory():
     return tempfile.TemporaryDirectory(prefix="manipid-service-test-")
+
+
+class SharedServerTestCase(unittest.TestCase):
+    """A test class whose tests share one `manipid serve` (cls.server) on a database in a temporary
+    directory (cls.directory), started before the first test and stopped after the last."""
+
+    @classmethod
+    def setUpClass(cls):
+        cls.directory = temporary_directory()
+        cls.server = Server(os.path.join(cls.directory.name, "jobs.db")).start()
+
+    @classmethod
+    def tearDownClass(cls):
+        cls.server.stop()
+        cls.directory.cleanup()
 
 
 def simulate_csv(path, *arguments):
