@@ -83,6 +83,10 @@ CLI::App* add_serve_command(CLI::App& app, ServeOptions& options) {
                       "Memory the request bodies being handled at once may take, 3 bytes per body byte; "
                       "a body beyond it gets 503 and Retry-After (at least 3 x --max-body)")
       ->capture_default_str();
+  command->add_option("--job-memory", options.job_memory,
+                      "Memory the running jobs may hold together, each by its estimate from its samples, joints and "
+                      "parameters; a job starts when it fits and waits otherwise, one that could never fit is refused (422)")
+      ->capture_default_str();
   command->add_option("--token", options.token, "Bearer token every /v1 request must carry (or MANIPID_TOKEN)")
       ->envname("MANIPID_TOKEN");
   command->add_option("--job-timeout", options.job_timeout, "Longest a job may run, s (a simulation then fails, an identification stops)")
@@ -107,6 +111,7 @@ int run_serve(const ServeOptions& options) {
                      " x --max-body, so that any body fits alone (" + std::to_string(max_body * api::memory_per_body_byte) +
                      " bytes), got '" + options.memory_budget + "'");
   }
+  const std::size_t job_memory = parse_size(options.job_memory, "--job-memory");
   const int workers = options.workers > 0 ? options.workers : std::max(1u, std::thread::hardware_concurrency());
 
   // Signals go to one thread that waits for them; every thread started from here on
@@ -141,6 +146,7 @@ int run_serve(const ServeOptions& options) {
   jobs::WorkerPoolOptions pool_options;
   pool_options.workers = workers;
   pool_options.runner.job_time_limit_seconds = options.job_timeout;
+  pool_options.job_memory = job_memory;
   jobs::WorkerPool pool(*store, pool_options, log_line);
   jobs::JobService service(*store, pool, jobs::JobServiceOptions{options.queue_limit, log_line});
 

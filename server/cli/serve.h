@@ -20,6 +20,7 @@ struct ServeOptions {
   int queue_limit = 10000;
   std::string max_body = "64MiB";
   std::string memory_budget = "1GiB";  ///< request bodies at once, 3 bytes per body byte (api::RouteOptions)
+  std::string job_memory = "4GiB";     ///< running jobs at once, by their estimates (jobs::WorkerPoolOptions)
   std::string token;
   double job_timeout = 3600.0;
   int http_threads = 32;

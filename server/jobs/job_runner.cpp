@@ -322,6 +322,15 @@ JobOutcome run_excitation_job(const api::JobInfo& job, store::Store& store, Live
 
 }  // namespace
 
+api::JobShape job_shape(api::JobKind kind, const std::string& request_json, store::Store& store) {
+  return api::job_shape(
+      kind, nlohmann::json::parse(request_json), [&store](const std::string& id) { return store.find_dataset(id); },
+      [&store](const std::string& id) -> std::optional<int> {
+        if (const auto robot = store.find_robot(id)) return robot->joints;
+        return std::nullopt;
+      });
+}
+
 JobOutcome run_job(const api::JobInfo& job, store::Store& store, LiveJob& live, const RunnerOptions& options) {
   const JobClock clock{Clock::now(), options.job_time_limit_seconds};
   try {

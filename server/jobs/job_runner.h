@@ -6,6 +6,7 @@
 #pragma once
 
 #include "manipid/api/records.h"
+#include "manipid/api/job_memory.h"
 #include "store/store.h"
 
 #include <atomic>
@@ -44,5 +45,9 @@ struct JobOutcome {
 /// Runs `job` (state running, claimed by this thread). Never throws: every failure becomes a
 /// failed outcome with a problem JSON that says what went wrong.
 JobOutcome run_job(const api::JobInfo& job, store::Store& store, LiveJob& live, const RunnerOptions& options);
+
+/// What a job's work is made of (api::job_shape over this store's datasets and robots): the
+/// measure its memory is estimated by. Throws what the request parsers throw.
+api::JobShape job_shape(api::JobKind kind, const std::string& request_json, store::Store& store);
 
 }  // namespace manipid::server::jobs

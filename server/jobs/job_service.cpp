@@ -90,6 +90,8 @@ api::DeleteOutcome JobService::delete_robot(const std::string& id) {
 api::SubmitResult JobService::submit(const api::JobSubmission& submission, const std::optional<api::IdempotencyKey>& key) {
   if (!accepting()) throw api::ApiError(api::ProblemKind::shutting_down, "the server is shutting down");
   const api::JobKind kind = submission.kind;
+  // A job that could never fit in --job-memory is refused now, naming what sets its size.
+  api::check_job_memory(job_shape(kind, submission.request_json, store_), pool_.job_memory_budget());
   const store::SubmitOutcome outcome = stored([&] {
     return store_.submit_job(
         {kind, submission.request_json, submission.dataset_id, submission.robot_id, submission.validation_dataset_id}, key,
@@ -187,6 +189,12 @@ std::string JobService::metrics() {
   const PoolStatistics statistics = pool_.statistics();
   out << "# HELP manipid_jobs_running Jobs this process is running now.\n# TYPE manipid_jobs_running gauge\n"
       << "manipid_jobs_running " << statistics.running << "\n";
+  out << "# HELP manipid_job_memory_reserved_bytes Memory the running jobs hold by their estimates.\n"
+         "# TYPE manipid_job_memory_reserved_bytes gauge\n"
+      << "manipid_job_memory_reserved_bytes " << statistics.job_memory_reserved << "\n"
+      << "# HELP manipid_job_memory_budget_bytes What they may hold together (--job-memory).\n"
+         "# TYPE manipid_job_memory_budget_bytes gauge\n"
+      << "manipid_job_memory_budget_bytes " << statistics.job_memory_budget << "\n";
   out << "# HELP manipid_jobs_finished_total Jobs this process finished, by kind and end state.\n"
          "# TYPE manipid_jobs_finished_total counter\n";
   for (const auto& [key, count] : statistics.finished) {

@@ -32,6 +32,7 @@ void WorkerPool::stop() {
     }
   }
   work_available_.notify_all();
+  memory_freed_.notify_all();
   for (std::thread& thread : threads_) thread.join();
   threads_.clear();
   changed_.notify_all();
@@ -46,12 +47,15 @@ void WorkerPool::notify_submitted() {
 }
 
 void WorkerPool::cancel(const std::string& id) {
-  std::lock_guard lock(mutex_);
-  if (auto found = live_.find(id); found != live_.end()) {
-    found->second->cancel = true;
-  } else {
-    pending_cancels_.insert(id);
+  {
+    std::lock_guard lock(mutex_);
+    if (auto found = live_.find(id); found != live_.end()) {
+      found->second->cancel = true;
+    } else {
+      pending_cancels_.insert(id);
+    }
   }
+  memory_freed_.notify_all();  // a job waiting for memory ends at once
 }
 
 std::optional<LiveProgress> WorkerPool::progress(const std::string& id) const {
@@ -122,10 +126,28 @@ bool WorkerPool::record_end(const api::JobInfo& job, JobOutcome& outcome) {
   }
 }
 
+bool WorkerPool::set_memory_aside(std::size_t bytes, const LiveJob& live) {
+  std::unique_lock lock(mutex_);
+  memory_freed_.wait(lock, [&] { return stopping_ || live.cancel.load() || memory_set_aside_ + bytes <= options_.job_memory; });
+  if (stopping_ || live.cancel.load()) return false;
+  memory_set_aside_ += bytes;
+  return true;
+}
+
+void WorkerPool::give_memory_back(std::size_t bytes) {
+  {
+    std::lock_guard lock(mutex_);
+    memory_set_aside_ -= bytes;
+  }
+  memory_freed_.notify_all();
+}
+
 PoolStatistics WorkerPool::statistics() const {
   std::lock_guard lock(mutex_);
   PoolStatistics copy = statistics_;
   copy.running = static_cast<long>(live_.size());
+  copy.job_memory_reserved = memory_set_aside_;
+  copy.job_memory_budget = options_.job_memory;
   return copy;
 }
 
@@ -152,6 +174,44 @@ void WorkerPool::work() {
   }
 }
 
+JobOutcome WorkerPool::run_within_memory(const api::JobInfo& job, LiveJob& live) {
+  std::size_t need = 0;
+  try {
+    need = api::job_memory_bytes(job_shape(job.kind, job.request, store_));
+  } catch (const std::exception&) {
+    // A request that no longer parses: run_job fails it with the parser's reason.
+  }
+  const std::string attempt = "attempt " + std::to_string(job.attempts);
+  if (need > options_.job_memory) {
+    // Queued before a restart with a smaller --job-memory: it could never start.
+    JobOutcome outcome;
+    outcome.error = api::problem_to_json({api::ProblemKind::job_failed,
+                                          "this job would hold about " + api::describe_bytes(need) +
+                                              " of memory while it runs; this server runs jobs within " +
+                                              api::describe_bytes(options_.job_memory) + " (--job-memory)",
+                                          ""})
+                        .dump();
+    return outcome;
+  }
+  bool waited = false;
+  {
+    std::lock_guard lock(mutex_);
+    waited = memory_set_aside_ + need > options_.job_memory;
+  }
+  if (waited) log_("job " + job.id + ": waits for " + api::describe_bytes(need) + " of --job-memory");
+  if (!set_memory_aside(need, live)) {
+    JobOutcome outcome;
+    outcome.requeue = live.shutdown.load();  // a shutdown puts it back; a user's cancel ends it
+    outcome.state = api::JobState::cancelled;
+    return outcome;
+  }
+  log_("job " + job.id + " " + api::to_string(job.kind) + ": running (" + attempt + "; holds about " +
+       api::describe_bytes(need) + " of --job-memory " + api::describe_bytes(options_.job_memory) + ")");
+  JobOutcome outcome = run_job(job, store_, live, options_.runner);
+  give_memory_back(need);
+  return outcome;
+}
+
 void WorkerPool::run_one(const api::JobInfo& job) {
   auto live = std::make_shared<LiveJob>();
   bool registered = false;
@@ -172,10 +232,8 @@ void WorkerPool::run_one(const api::JobInfo& job) {
     }
     return;
   }
-  log_("job " + job.id + " " + api::to_string(job.kind) + ": running (attempt " + std::to_string(job.attempts) + ")");
   const auto started = std::chrono::steady_clock::now();
-
-  JobOutcome outcome = run_job(job, store_, *live, options_.runner);
+  JobOutcome outcome = run_within_memory(job, *live);
   if (!outcome.log.empty()) log_("job " + job.id + ": " + outcome.log);
   const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - started).count();
   if (outcome.requeue) {

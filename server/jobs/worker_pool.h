@@ -32,6 +32,11 @@ struct WorkerPoolOptions {
   /// A job's end that cannot be written (a full disk) is written again after 250 ms, the wait
   /// doubling up to this; see WorkerPool::record_end.
   std::chrono::milliseconds final_write_max_backoff{10000};
+  /// Bytes the running jobs may hold together (--job-memory), each job counted at its estimate
+  /// (api::job_memory_bytes): a job starts when it fits beside those running and waits in the
+  /// pool otherwise; one that could never fit is refused at submission (JobService) and, if it was
+  /// queued before a restart with a smaller budget, fails with the reason instead of running.
+  std::size_t job_memory = std::size_t{4} << 30;
 };
 
 struct LiveProgress {
@@ -42,6 +47,8 @@ struct LiveProgress {
 /// Counts and durations of the jobs this process finished, for /metrics.
 struct PoolStatistics {
   long running = 0;
+  std::size_t job_memory_reserved = 0;  ///< bytes the running jobs hold by their estimates
+  std::size_t job_memory_budget = 0;    ///< --job-memory
   std::map<std::string, long> finished;      ///< by "kind,state"
   std::vector<double> duration_bucket_bounds;  ///< s, upper bounds (Prometheus "le")
   std::vector<long> duration_buckets;          ///< cumulative counts, one per bound
@@ -75,15 +82,24 @@ class WorkerPool {
   void notify_changed();
 
   PoolStatistics statistics() const;
+  /// --job-memory: what a submission's estimate must fit in (JobService refuses it otherwise).
+  std::size_t job_memory_budget() const { return options_.job_memory; }
 
  private:
   void work();
   void run_one(const api::JobInfo& job);
+  /// run_job once the job's memory estimate is set aside (waiting for room); the estimate is given
+  /// back when it ends. A job that could never fit fails; a stop or cancel while waiting ends it.
+  JobOutcome run_within_memory(const api::JobInfo& job, LiveJob& live);
   /// Writes a job's end until it sticks; false when the pool stopped first (the row stays
   /// running; start-up recovery puts it back in the queue).
   bool record_end(const api::JobInfo& job, JobOutcome& outcome);
   /// Waits `delay` unless the pool stops first; false when it stopped.
   bool pause_unless_stopping(std::chrono::milliseconds delay);
+  /// Sets `bytes` of --job-memory aside for a job, waiting until they fit beside the jobs running;
+  /// false when the pool stops or the job is cancelled first (nothing set aside then).
+  bool set_memory_aside(std::size_t bytes, const LiveJob& live);
+  void give_memory_back(std::size_t bytes);
 
   store::Store& store_;
   WorkerPoolOptions options_;
@@ -92,6 +108,8 @@ class WorkerPool {
 
   mutable std::mutex mutex_;
   std::condition_variable work_available_;
+  std::condition_variable memory_freed_;
+  std::size_t memory_set_aside_ = 0;  ///< the running jobs' estimates (set_memory_aside)
   mutable std::condition_variable changed_;
   bool stopping_ = false;
   unsigned long submissions_ = 0;

@@ -8,6 +8,11 @@ body complete or not. A JSON upload is read without a document of the whole body
 the same answers as before for what is wrong in it. How much memory an upload takes is
 measured, not asserted: bench/upload_memory.py (VmHWM).
 
+A job is admitted against --job-memory by its estimate from its samples, joints and parameters
+(api::job_memory_bytes): one that could never fit is refused at submission with 422 naming the
+field that sets its size; one that fits waits in the pool until the running jobs leave room,
+and a cancel ends it while it waits. What a job takes is measured by bench/job_memory.py.
+
 Run: MANIPID_BIN=build/debug/server/manipid python3 tests/hostile/memory_test.py -v
 """
 import json
@@ -155,6 +160,105 @@ class MemoryBudgetOption(unittest.TestCase):
                                     capture_output=True, text=True, timeout=60)
         self.assertNotEqual(result.returncode, 0)
         self.assertIn("--memory-budget: at least 3 x --max-body", result.stderr)
+
+
+STIFF = {"duration": 600, "kd": [1e5, 1e5, 1e5, 1e5]}  # minutes to simulate: a job that runs until cancelled
+
+
+def estimate_mib(detail):
+    """The estimate a 422 states ("would hold about 58 MiB of memory" or "about 5.1 GiB")."""
+    found = re.search(r"would hold about ([0-9.]+) (MiB|GiB)", detail)
+    assert found, detail
+    return float(found.group(1)) * (1024 if found.group(2) == "GiB" else 1)
+
+
+class JobMemory(unittest.TestCase):
+    @classmethod
+    def setUpClass(cls):
+        cls.directory = temporary_directory()
+
+    @classmethod
+    def tearDownClass(cls):
+        cls.directory.cleanup()
+
+    def server(self, name, job_memory, workers=2):
+        return Server(os.path.join(self.directory.name, name + ".db"), "--job-memory", job_memory, workers=workers)
+
+    def estimates(self, *requests):
+        """The server's own estimate of each simulation request, in MiB, from the 422 a 1 MiB budget gives."""
+        with self.server("probe", "1MiB") as probe:
+            found = []
+            for request in requests:
+                status, _, problem = probe.request("POST", "/v1/simulations", request)
+                self.assertEqual(status, 422, problem)
+                found.append(estimate_mib(problem["detail"]))
+            return found
+
+    def test_a_job_that_could_never_fit_is_refused_naming_the_field(self):
+        with self.server("small", "64MiB") as server:
+            for path, body, field in [("/v1/simulations", {"duration": 3600}, "duration"),
+                                      ("/v1/identifications", {"simulation": {"duration": 3600}}, "simulation")]:
+                status, _, problem = server.request("POST", path, body)
+                self.assertEqual(status, 422, problem)
+                self.assertEqual(problem["field"], field)
+                self.assertIn("--job-memory", problem["detail"])
+                self.assertIn("64 MiB", problem["detail"])
+                self.assertGreater(estimate_mib(problem["detail"]), 64)
+            status, _, jobs = server.request("GET", "/v1/jobs")
+            self.assertEqual(jobs["items"], [])  # nothing queued
+            status, _, job = server.request("POST", "/v1/simulations", {"duration": 2})
+            self.assertEqual(status, 202, job)
+            self.assertEqual(server.wait_job(job["id"])["state"], "succeeded")
+            status, _, text = server.request("GET", "/metrics")
+            self.assertIn(f"manipid_job_memory_budget_bytes {64 << 20}\n", text)
+            self.assertIn("manipid_job_memory_reserved_bytes 0\n", text)
+
+    def test_a_job_waits_for_room_and_a_cancel_ends_it_while_it_waits(self):
+        stiff, short = self.estimates(STIFF, {"duration": 2})
+        budget = f"{int(stiff + short / 2)}MiB"  # the stiff run fits alone, the short one not beside it
+        with self.server("waits", budget) as server:
+            status, _, first = server.request("POST", "/v1/simulations", STIFF)
+            self.assertEqual(status, 202, first)
+            self.wait_for(lambda: server.request("GET", f"/v1/jobs/{first['id']}")[2]["state"] == "running")
+            status, _, second = server.request("POST", "/v1/simulations", {"duration": 2})
+            self.assertEqual(status, 202, second)
+            self.wait_for(lambda: f"job {second['id']}: waits for" in server.read_log())
+            status, _, text = server.request("GET", "/metrics")
+            reserved = int(re.search(r"^manipid_job_memory_reserved_bytes (\d+)$", text, re.M).group(1))
+            self.assertAlmostEqual(reserved / 2**20, stiff, delta=1)  # the stiff run's only
+            status, _, cancelled = server.request("POST", f"/v1/jobs/{second['id']}/cancel")
+            self.assertEqual(server.wait_job(second["id"], timeout=30)["state"], "cancelled")
+            self.assertEqual(server.request("GET", f"/v1/jobs/{first['id']}")[2]["state"], "running")
+            # Another short job waits, and runs once the stiff run is cancelled.
+            status, _, third = server.request("POST", "/v1/simulations", {"duration": 2})
+            self.wait_for(lambda: f"job {third['id']}: waits for" in server.read_log())
+            server.request("POST", f"/v1/jobs/{first['id']}/cancel")
+            self.assertEqual(server.wait_job(first["id"], timeout=30)["state"], "cancelled")
+            finished = server.wait_job(third["id"], timeout=120)
+            self.assertEqual(finished["state"], "succeeded")
+            self.assertNotIn(f"job {second['id']} simulation: running", server.read_log())
+
+    def test_a_job_queued_before_a_smaller_budget_fails_with_the_reason(self):
+        db_name = "restart"
+        with self.server(db_name, "4GiB", workers=1) as server:
+            status, _, first = server.request("POST", "/v1/simulations", STIFF)
+            self.wait_for(lambda: server.request("GET", f"/v1/jobs/{first['id']}")[2]["state"] == "running")
+            status, _, queued = server.request("POST", "/v1/simulations", {"duration": 300})
+            self.assertEqual(status, 202, queued)
+            server.request("POST", f"/v1/jobs/{first['id']}/cancel")
+            server.stop()  # the second may be running or queued: either way it is queued again
+        with self.server(db_name, "16MiB", workers=1) as server:
+            job = server.wait_job(queued["id"], timeout=60)
+            self.assertEqual(job["state"], "failed", job)
+            self.assertIn("--job-memory", job["error"]["detail"])
+
+    def wait_for(self, condition, timeout=30):
+        deadline = time.time() + timeout
+        while time.time() < deadline:
+            if condition():
+                return
+            time.sleep(0.05)
+        self.fail("timed out")
 
 
 class SaxUpload(SharedServerTestCase):

@@ -11,17 +11,23 @@
 #include <algorithm>
 #include <cctype>
 #include <charconv>
+#include <initializer_list>
+#include <memory>
 #include <stdexcept>
+#include <string_view>
 
 namespace manipid::api::http {
 namespace {
 
-std::string sha256_hex(const std::string& text) {
+/// SHA-256 of the parts one after the other, in hex: the digest of their concatenation, without
+/// making it (an idempotent upload's body is not copied to be hashed).
+std::string sha256_hex(std::initializer_list<std::string_view> parts) {
+  const std::unique_ptr<EVP_MD_CTX, decltype(&EVP_MD_CTX_free)> context(EVP_MD_CTX_new(), EVP_MD_CTX_free);
+  bool ok = context && EVP_DigestInit_ex(context.get(), EVP_sha256(), nullptr) == 1;
+  for (const std::string_view part : parts) ok = ok && EVP_DigestUpdate(context.get(), part.data(), part.size()) == 1;
   unsigned char digest[EVP_MAX_MD_SIZE];
   unsigned int length = 0;
-  if (EVP_Digest(text.data(), text.size(), digest, &length, EVP_sha256(), nullptr) != 1) {
-    throw std::runtime_error("SHA-256 failed");
-  }
+  if (!ok || EVP_DigestFinal_ex(context.get(), digest, &length) != 1) throw std::runtime_error("SHA-256 failed");
   static const char* hex = "0123456789abcdef";
   std::string out;
   for (unsigned int i = 0; i < length; ++i) {
@@ -72,7 +78,7 @@ std::optional<IdempotencyKey> idempotency_key(const httplib::Request& request) {
     throw ApiError(ProblemKind::invalid_field, "Idempotency-Key must be 1 to 255 printable ASCII characters without spaces",
                    "Idempotency-Key");
   }
-  return IdempotencyKey{key, sha256_hex(request.method + " " + request.path + "\n" + media_type(request) + "\n" + request.body)};
+  return IdempotencyKey{key, sha256_hex({request.method, " ", request.path, "\n", media_type(request), "\n", request.body})};
 }
 
 long long integer_parameter(const httplib::Request& request, const std::string& name, long long fallback,
@@ -113,6 +119,6 @@ bool wants_csv(const httplib::Request& request) {
   return request.get_header_value("Accept").find("text/csv") != std::string::npos;
 }
 
-std::string etag_of(const std::string& body) { return "\"" + sha256_hex(body).substr(0, 32) + "\""; }
+std::string etag_of(const std::string& body) { return "\"" + sha256_hex({body}).substr(0, 32) + "\""; }
 
 }  // namespace manipid::api::http
