@@ -201,13 +201,23 @@ int run_serve(const ServeOptions& options) {
     server.stop_and_disconnect();
   });
 
-  const bool listened = server.listen_after_bind();
+  bool listened = false;
+  std::string failure;
+  try {
+    listened = server.listen_after_bind();
+  } catch (const std::exception& error) {
+    // Its HTTP threads could not all be started (std::system_error: a thread or memory limit).
+    failure = std::string("cannot start ") + std::to_string(options.http_threads) + " HTTP threads (" + error.what() +
+              "); lower --http-threads or raise the limit";
+    log_line("manipid: " + failure);
+  }
   listen_returned = true;
   service.stop_accepting();
   pthread_kill(signal_thread.native_handle(), SIGTERM);  // wakes sigwait if no signal came
   signal_thread.join();
   pool.stop();
   log_line("manipid: stopped");
+  if (!failure.empty()) throw OutputError(failure);
   return listened ? exit_success : exit_failure;
 }
 

@@ -11,6 +11,7 @@
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
+#include <new>
 #include <string>
 #include <thread>
 
@@ -165,6 +166,26 @@ TEST_F(SqliteStoreTest, OpenStoreReadsTheDbValue) {
   }
   EXPECT_THROW(open_store("sqlite:"), StoreError);
   EXPECT_THROW(open_store(""), StoreError);
+}
+
+/// SQLite out of memory (its hard heap limit reached) is std::bad_alloc, which the routes answer 503
+/// MEMORY_BUSY and the job runner "out of memory" — not a storage fault answered 500 — and nothing of the
+/// write is left behind: the store takes the same write once memory is back.
+TEST_F(SqliteStoreTest, OutOfMemoryIsBadAllocAndLeavesNothingHalfWritten) {
+  Trajectory data;
+  data.t = Eigen::VectorXd::LinSpaced(200000, 0.0, 199.999);
+  data.q = Eigen::MatrixXd::Random(200000, 4);
+  data.tau = Eigen::MatrixXd::Random(200000, 4);
+  struct Unlimited {
+    ~Unlimited() { sqlite3_hard_heap_limit64(0); }
+  } restore;
+  sqlite3_hard_heap_limit64(sqlite3_memory_used() + (256 << 10));
+  EXPECT_THROW(store_->insert_dataset("too large for the heap", data, "", std::nullopt), std::bad_alloc);
+  sqlite3_hard_heap_limit64(0);
+  EXPECT_EQ(store_->list_datasets({}).items.size(), 0u);
+  const DatasetOutcome stored = store_->insert_dataset("once memory is back", data, "", std::nullopt);
+  EXPECT_EQ(stored.dataset.samples, 200000);
+  EXPECT_EQ(store_->list_datasets({}).items.size(), 1u);
 }
 
 }  // namespace

@@ -58,7 +58,15 @@ void linger(socket_t sock) {
 class CountingPool : public httplib::TaskQueue {
  public:
   CountingPool(std::size_t threads, std::atomic<std::size_t>& queued) : queued_(queued) {
-    for (std::size_t i = 0; i < threads; ++i) threads_.emplace_back([this] { work(); });
+    try {
+      for (std::size_t i = 0; i < threads; ++i) threads_.emplace_back([this] { work(); });
+    } catch (...) {
+      // No thread for them all (a thread or address-space limit): the ones started must end
+      // before the members they wait on go, or destroying the condition variable waits for ever
+      // and the server listens without serving anyone.
+      shutdown();
+      throw;
+    }
   }
   ~CountingPool() override { shutdown(); }
 

@@ -5,17 +5,30 @@
 #include <algorithm>
 #include <chrono>
 #include <random>
+#include <new>
 #include <thread>
 
 namespace manipid::server::store::sqlite {
 
-void throw_sqlite_error(sqlite3* database, int code, std::string_view context) {
-  std::string message = database != nullptr ? sqlite3_errmsg(database) : sqlite3_errstr(code);
-  if (!context.empty()) message = std::string(context) + ": " + message;
+namespace {
+
+/// The one mapping of SQLite's result codes to the store's errors (connection.h).
+[[noreturn]] void throw_for(int code, const std::string& message) {
   const int primary = code & 0xff;  // extended result codes are on
   if (primary == SQLITE_BUSY || primary == SQLITE_LOCKED) throw BusyError(message);
   if (primary == SQLITE_FULL) throw StorageFull(message);
+  // Out of memory is what it says: every caller already answers std::bad_alloc (503
+  // MEMORY_BUSY for a request, "out of memory" for a job), never as a storage fault.
+  if (primary == SQLITE_NOMEM) throw std::bad_alloc();
   throw StoreError(message);
+}
+
+}  // namespace
+
+void throw_sqlite_error(sqlite3* database, int code, std::string_view context) {
+  std::string message = database != nullptr ? sqlite3_errmsg(database) : sqlite3_errstr(code);
+  if (!context.empty()) message = std::string(context) + ": " + message;
+  throw_for(code, message);
 }
 
 // ---- WriteHealth ----
@@ -175,12 +188,9 @@ void Connection::execute(const char* sql) {
   char* error = nullptr;
   const int code = sqlite3_exec(database_, sql, nullptr, nullptr, &error);
   if (code == SQLITE_OK) return;
-  std::string message = error != nullptr ? error : sqlite3_errstr(code);
+  const std::string message = error != nullptr ? error : sqlite3_errstr(code);
   sqlite3_free(error);
-  const int primary = code & 0xff;
-  if (primary == SQLITE_BUSY || primary == SQLITE_LOCKED) throw BusyError(message);
-  if (primary == SQLITE_FULL) throw StorageFull(message);
-  throw StoreError(message);
+  throw_for(code, message);
 }
 
 void Connection::rollback_quietly() noexcept {

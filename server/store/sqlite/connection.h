@@ -30,7 +30,7 @@ class BusyError : public StoreError {
 };
 
 /// Throws BusyError for BUSY/LOCKED, StorageFull for SQLITE_FULL (the disk or quota is full),
-/// StoreError (with SQLite's message) for anything else.
+/// std::bad_alloc for SQLITE_NOMEM, StoreError (with SQLite's message) for anything else.
 [[noreturn]] void throw_sqlite_error(sqlite3* database, int code, std::string_view context);
 
 /// One use of a cached prepared statement. Values are bound, never spliced into the SQL.
