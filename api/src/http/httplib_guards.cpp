@@ -285,17 +285,17 @@ httplib::Server::HandlerResponse on_error(const RouteState& state, const httplib
 void on_exception(const httplib::Request& request, httplib::Response& response, std::exception_ptr error) {
   // Handlers are guarded; this is the net under the net (and stops 0.11.4 from copying the
   // exception's text into a response header, EXCEPTION_WHAT). Reading a body into memory can
-  // run out of it here, outside any handler: that is worth trying again. Either way the body may
-  // be half read, and what is left of it is not a request: the connection closes after the answer.
-  Problem problem{ProblemKind::internal, "internal error; see the server log", ""};
+  // run out of it here, outside any handler: that is worth trying again. The body is then half
+  // read, and what is left of it is not a request: the connection closes after the answer.
   try {
     if (error) std::rethrow_exception(error);
   } catch (const std::bad_alloc&) {
-    problem = out_of_memory();
+    send_problem(response, out_of_memory(), request.path);
+    HttpServer::close_after_answer(response);
+    return;
   } catch (...) {
   }
-  send_problem(response, problem, request.path);
-  HttpServer::close_after_answer(response);
+  send_problem(response, {ProblemKind::internal, "internal error; see the server log", ""}, request.path);
 }
 
 }  // namespace manipid::api::http
