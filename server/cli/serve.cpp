@@ -84,8 +84,8 @@ CLI::App* add_serve_command(CLI::App& app, ServeOptions& options) {
                       "a body beyond it gets 503 and Retry-After (at least 3 x --max-body)")
       ->capture_default_str();
   command->add_option("--job-memory", options.job_memory,
-                      "Memory the running jobs may hold together, each by its estimate from its samples, joints and "
-                      "parameters; a job starts when it fits and waits otherwise, one that could never fit is refused (422)")
+                      "Memory the running jobs may hold together, each by its estimate from its samples, joints and kind of "
+                      "work; a job starts when it fits and waits otherwise, one that could never fit is refused (422)")
       ->capture_default_str();
   command->add_option("--token", options.token, "Bearer token every /v1 request must carry (or MANIPID_TOKEN)")
       ->envname("MANIPID_TOKEN");
