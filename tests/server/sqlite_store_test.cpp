@@ -1,6 +1,7 @@
 // sqlite_store_test.cpp — what only the SQLite backend does (the contract every backend keeps is
 // store_contract_test.cpp): its schema version check, unusable files, waiting for another
 // connection's write lock, and open_store() choosing it from a --db value.
+#include "store/sqlite/connection.h"
 #include "store/sqlite/schema.h"
 #include "store/sqlite/store.h"
 
@@ -8,6 +9,7 @@
 #include <sqlite3.h>
 
 #include <chrono>
+#include <cstdint>
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
@@ -186,6 +188,38 @@ TEST_F(SqliteStoreTest, OutOfMemoryIsBadAllocAndLeavesNothingHalfWritten) {
   const DatasetOutcome stored = store_->insert_dataset("once memory is back", data, "", std::nullopt);
   EXPECT_EQ(stored.dataset.samples, 200000);
   EXPECT_EQ(store_->list_datasets({}).items.size(), 1u);
+}
+
+TEST_F(SqliteStoreTest, OnlyAWriteThatChangedRowsClearsAFullDisk) {
+  // A file capped at its current size (PRAGMA max_page_count) fails as a full disk does
+  // (SQLITE_FULL). An idle worker's claim that finds nothing commits an empty write
+  // transaction: that proves nothing about the space and must leave /healthz degraded.
+  sqlite::WriteHealth health;
+  sqlite::Connection connection(path_);
+  connection.attach(&health);
+  connection.execute("CREATE TABLE filler (bytes BLOB)");
+  const std::int64_t pages = [&] {
+    sqlite3_stmt* statement = nullptr;
+    sqlite3_prepare_v2(connection.handle(), "PRAGMA page_count", -1, &statement, nullptr);
+    sqlite3_step(statement);
+    const auto count = sqlite3_column_int64(statement, 0);
+    sqlite3_finalize(statement);
+    return count;
+  }();
+  connection.execute(("PRAGMA max_page_count = " + std::to_string(pages)).c_str());
+  const auto insert_blob = [&](int bytes) { connection.execute(("INSERT INTO filler VALUES (zeroblob(" + std::to_string(bytes) + "))").c_str()); };
+  EXPECT_THROW(sqlite::run_transaction(connection, sqlite::TransactionKind::write, [&] { insert_blob(1 << 20); }),
+               StorageFull);
+  ASSERT_TRUE(health.trouble().has_value());
+  sqlite::run_transaction(connection, sqlite::TransactionKind::write, [&] {
+    connection.execute("UPDATE filler SET bytes = NULL WHERE 0");
+  });
+  EXPECT_TRUE(health.trouble().has_value()) << "a commit that changed nothing cleared the trouble";
+  sqlite::run_transaction(connection, sqlite::TransactionKind::read, [&] {});
+  EXPECT_TRUE(health.trouble().has_value());
+  connection.execute("PRAGMA max_page_count = 1000000");
+  sqlite::run_transaction(connection, sqlite::TransactionKind::write, [&] { insert_blob(1 << 20); });
+  EXPECT_FALSE(health.trouble().has_value());
 }
 
 }  // namespace

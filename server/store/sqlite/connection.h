@@ -71,7 +71,7 @@ class Statement {
 };
 
 /// Whether writes fail for want of space now (Store::write_trouble): set when a write
-/// transaction ends in StorageFull, cleared by the next write transaction that commits. One per
+/// transaction ends in StorageFull, cleared by the next write transaction that commits a change. One per
 /// store, shared by its connections; the clear is one atomic load when nothing failed.
 class WriteHealth {
  public:
@@ -178,9 +178,15 @@ auto run_transaction(Connection& connection, TransactionKind kind, Body&& body) 
   for (int attempt = 1;; ++attempt) {
     try {
       connection.execute(kind == TransactionKind::write ? "BEGIN IMMEDIATE" : "BEGIN");
+      // Only a commit that changed rows wrote pages, and so shows there is room again: an idle
+      // worker's claim that found nothing commits too, and must not hide a full disk.
+      const std::int64_t changes_before = sqlite3_total_changes64(connection.handle());
       const auto commit = [&] {
         connection.execute("COMMIT");
-        if (kind == TransactionKind::write && connection.health() != nullptr) connection.health()->succeeded();
+        if (kind == TransactionKind::write && connection.health() != nullptr &&
+            sqlite3_total_changes64(connection.handle()) != changes_before) {
+          connection.health()->succeeded();
+        }
       };
       if constexpr (std::is_void_v<Result>) {
         body();
