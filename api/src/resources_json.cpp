@@ -49,6 +49,7 @@ nlohmann::ordered_json job_to_json(const JobInfo& job) {
                {"started_at", text_or_null(job.started_at)},
                {"finished_at", text_or_null(job.finished_at)},
                {"attempts", job.attempts},
+               {"worker", job.state == JobState::running ? text_or_null(job.worker) : Json(nullptr)},
                {"dataset_id", text_or_null(job.dataset_id)},
                {"robot_id", text_or_null(job.robot_id)},
                {"validation_dataset_id", text_or_null(job.validation_dataset_id)},

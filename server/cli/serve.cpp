@@ -8,17 +8,18 @@
 #include "store/store.h"
 #include "jobs/worker_pool.h"
 
-#include "manipid/api/problem.h"
 #include "manipid/api/routes.h"
 
 #include "manipid/api/http_server.h"  // includes httplib.h: after the manipid headers (api/src/http/route_state.h)
 
 #include <pthread.h>
 #include <signal.h>
+#include <unistd.h>
 
 #include <algorithm>
 #include <atomic>
 #include <chrono>
+#include <cmath>
 #include <cstdio>
 #include <ctime>
 #include <mutex>
@@ -28,6 +29,13 @@ namespace manipid::server::cli {
 namespace {
 
 std::mutex log_mutex;
+
+/// "HOST:PID": who holds this process's leases (a running job's `worker`).
+std::string process_name() {
+  char host[256] = {};
+  if (gethostname(host, sizeof host - 1) != 0 || host[0] == '\0') std::snprintf(host, sizeof host, "localhost");
+  return std::string(host) + ":" + std::to_string(getpid());
+}
 
 void log_line(const std::string& line) {
   const auto now = std::chrono::system_clock::now();
@@ -96,9 +104,14 @@ CLI::App* add_serve_command(CLI::App& app, ServeOptions& options) {
       ->check(integer_between(2, 1024))
       ->capture_default_str();
   command->add_option("--max-attempts", options.max_attempts,
-                      "A job whose worker died this many times (the process crashed or was killed while "
-                      "running it) is failed at start-up instead of run again")
+                      "A job whose worker was lost this many times (the process crashed, was killed or stopped "
+                      "renewing the job's lease) is failed instead of run again")
       ->check(integer_between(1, 1000))
+      ->capture_default_str();
+  command->add_option("--lease", options.lease,
+                      "Seconds a running job's claim holds without renewal (renewed every third of it): a job whose "
+                      "process stopped renewing it runs again elsewhere after this long")
+      ->check(CLI::Range(0.1, 86400.0))
       ->capture_default_str();
   return command;
 }
@@ -129,13 +142,7 @@ int run_serve(const ServeOptions& options) {
     // Not the value itself: a database URL may carry a password (SQLite's messages name the file).
     throw UsageError(std::string("--db: ") + error.what());
   }
-  const store::RecoveryOutcome recovered = store->recover_interrupted_jobs(options.max_attempts, [](int losses) {
-    return api::problem_to_json({api::ProblemKind::worker_lost,
-                                 "the worker stopped while running this job " + std::to_string(losses) +
-                                     " times (the process crashed or was killed); it will not be run again",
-                                 ""})
-        .dump();
-  });
+  const store::RecoveryOutcome recovered = store->recover_interrupted_jobs(options.max_attempts, jobs::worker_lost_problem);
   if (recovered.requeued > 0) log_line("manipid: " + std::to_string(recovered.requeued) + " interrupted job(s) queued again");
   if (recovered.cancelled > 0) log_line("manipid: " + std::to_string(recovered.cancelled) + " interrupted job(s) cancelled as asked");
   for (const std::string& id : recovered.failed) {
@@ -147,6 +154,9 @@ int run_serve(const ServeOptions& options) {
   pool_options.workers = workers;
   pool_options.runner.job_time_limit_seconds = options.job_timeout;
   pool_options.job_memory = job_memory;
+  pool_options.owner = process_name();
+  pool_options.lease = std::chrono::milliseconds(static_cast<long>(std::lround(options.lease * 1000.0)));
+  pool_options.max_attempts = options.max_attempts;
   jobs::WorkerPool pool(*store, pool_options, log_line);
   jobs::JobService service(*store, pool, jobs::JobServiceOptions{options.queue_limit, log_line});
 

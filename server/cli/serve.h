@@ -24,7 +24,8 @@ struct ServeOptions {
   std::string token;
   double job_timeout = 3600.0;
   int http_threads = 32;
-  int max_attempts = 3;       ///< worker deaths a job may cause before it is failed for good
+  int max_attempts = 3;       ///< worker losses a job may cause before it is failed for good
+  double lease = 30.0;        ///< s a running job's claim holds without renewal (jobs::WorkerPoolOptions)
 };
 CLI::App* add_serve_command(CLI::App& app, ServeOptions& options);
 int run_serve(const ServeOptions& options);

@@ -21,6 +21,16 @@
 #include <sstream>
 
 namespace manipid::server::jobs {
+
+void heed(store::LeaseStatus status, LiveJob& live) {
+  if (status == store::LeaseStatus::lost) {
+    live.lost = true;
+    live.cancel = true;
+  } else if (status == store::LeaseStatus::cancel_requested) {
+    live.cancel = true;
+  }
+}
+
 namespace {
 
 using Clock = std::chrono::steady_clock;
@@ -96,8 +106,8 @@ JobOutcome run_simulation_job(const api::JobInfo& job, store::Store& store, cons
 /// Collects every evaluation and writes them to the store in batches.
 class HistoryWriter {
  public:
-  HistoryWriter(store::Store& store, const api::JobInfo& job, LiveJob& live, const RunnerOptions& options)
-      : store_(store), job_(job), live_(live), options_(options), last_flush_(Clock::now()) {}
+  HistoryWriter(store::Store& store, LiveJob& live, const RunnerOptions& options)
+      : store_(store), live_(live), options_(options), last_flush_(Clock::now()) {}
 
   void add(long index, double cost, const Eigen::VectorXd& theta) {
     batch_.push_back({index, cost, std::vector<double>(theta.data(), theta.data() + theta.size())});
@@ -112,16 +122,17 @@ class HistoryWriter {
   }
 
   void flush() {
+    if (live_.lost.load()) return;
     const double best = live_.best_cost.load(std::memory_order_relaxed);
-    store_.record_progress(job_.id, live_.evaluations.load(std::memory_order_relaxed),
-                           std::isfinite(best) ? std::optional<double>(best) : std::nullopt, batch_);
+    heed(store_.record_progress(live_.lease, live_.evaluations.load(std::memory_order_relaxed),
+                                std::isfinite(best) ? std::optional<double>(best) : std::nullopt, batch_),
+         live_);
     batch_.clear();
     last_flush_ = Clock::now();
   }
 
  private:
   store::Store& store_;
-  const api::JobInfo& job_;
   LiveJob& live_;
   const RunnerOptions& options_;
   std::vector<api::HistoryEntry> batch_;
@@ -172,7 +183,7 @@ JobOutcome run_identification_job(const api::JobInfo& job, store::Store& store, 
   }
   api::check_against_data(spec, data->joint_count(), data->samples(), data->has_torque(), data->has_reference());
 
-  HistoryWriter history(store, job, live, options);
+  HistoryWriter history(store, live, options);
   IdentificationOptions& identification = spec.options;
   // The time limit is the whole job's: what a simulation first took is not given again.
   identification.max_seconds =
@@ -284,10 +295,11 @@ JobOutcome run_excitation_job(const api::JobInfo& job, store::Store& store, Live
   // The design has no history to stream; its progress is stored once, so a finished job still says how
   // much work it took (the live counters vanish with the run).
   live.evaluations.store(design.summary.evaluations, std::memory_order_relaxed);
-  store.record_progress(job.id, design.summary.evaluations,
-                        std::isfinite(design.summary.final_value) ? std::optional<double>(design.summary.final_value)
-                                                                  : std::nullopt,
-                        {});
+  heed(store.record_progress(live.lease, design.summary.evaluations,
+                             std::isfinite(design.summary.final_value) ? std::optional<double>(design.summary.final_value)
+                                                                       : std::nullopt,
+                             {}),
+       live);
   JobOutcome outcome;
   if (design.summary.termination == robot::ExcitationTermination::cancelled) {
     if (live.shutdown.load()) {

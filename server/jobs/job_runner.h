@@ -18,8 +18,10 @@ namespace manipid::server::jobs {
 
 /// What other threads may see of, or do to, a running job.
 struct LiveJob {
+  store::Lease lease;                 ///< set before the job runs; every write of it carries this
   std::atomic<bool> cancel{false};    ///< checked at every cost evaluation and simulation step
   std::atomic<bool> shutdown{false};  ///< the cancel came from a shutdown: requeue, don't cancel
+  std::atomic<bool> lost{false};      ///< the lease is gone (another process took the job over): write nothing more
   std::atomic<long> evaluations{0};
   std::atomic<double> best_cost{std::numeric_limits<double>::infinity()};
 };
@@ -42,9 +44,15 @@ struct JobOutcome {
   std::string log;                               ///< what only the server log may say (SQLite's text)
 };
 
-/// Runs `job` (state running, claimed by this thread). Never throws: every failure becomes a
-/// failed outcome with a problem JSON that says what went wrong.
+/// Runs `job` (state running, claimed by this thread under `live.lease`). Never throws: every
+/// failure becomes a failed outcome with a problem JSON that says what went wrong. A progress
+/// write that finds the lease lost sets `live.lost` and stops the job; one that finds a cancel
+/// asked for (by any process) stops it as cancelled.
 JobOutcome run_job(const api::JobInfo& job, store::Store& store, LiveJob& live, const RunnerOptions& options);
+
+/// Applies what a guarded write learned to a running job: a lost lease sets `lost` and stops it
+/// (nothing more is written); a cancel asked for through any process stops it as cancelled.
+void heed(store::LeaseStatus status, LiveJob& live);
 
 /// What a job's work is made of (api::job_shape over this store's datasets and robots): the
 /// measure its memory is estimated by. Throws what the request parsers throw.

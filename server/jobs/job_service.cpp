@@ -126,6 +126,10 @@ std::optional<api::JobInfo> JobService::job(const std::string& id) {
   return with_live_progress(std::move(*found));
 }
 
+namespace {
+constexpr std::chrono::seconds kWaitPoll{1};
+}  // namespace
+
 std::optional<api::JobInfo> JobService::wait(const std::string& id, double seconds) {
   const auto deadline = std::chrono::steady_clock::now() + std::chrono::duration_cast<std::chrono::steady_clock::duration>(
                                                                 std::chrono::duration<double>(std::max(0.0, seconds)));
@@ -135,7 +139,9 @@ std::optional<api::JobInfo> JobService::wait(const std::string& id, double secon
     if (!found || api::is_terminal(found->state) || std::chrono::steady_clock::now() >= deadline || !accepting()) {
       return found;
     }
-    pool_.wait_for_change(generation, deadline);
+    // This process's workers wake the wait at once; a job another process runs on the same
+    // database is looked at again every second.
+    pool_.wait_for_change(generation, std::min(deadline, std::chrono::steady_clock::now() + kWaitPoll));
   }
 }
 

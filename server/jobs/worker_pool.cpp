@@ -9,6 +9,15 @@
 
 namespace manipid::server::jobs {
 
+std::string worker_lost_problem(int losses) {
+  return api::problem_to_json({api::ProblemKind::worker_lost,
+                               "the worker stopped while running this job " + std::to_string(losses) +
+                                   " times (the process crashed, was killed or stopped renewing its lease); it will "
+                                   "not be run again",
+                               ""})
+      .dump();
+}
+
 WorkerPool::WorkerPool(store::Store& store, WorkerPoolOptions options, Log log)
     : store_(store), options_(std::move(options)), log_(std::move(log)) {
   statistics_.duration_bucket_bounds = {0.05, 0.1, 0.25, 0.5, 1, 2.5, 5, 10, 30, 60, 300, 3600};
@@ -19,6 +28,7 @@ WorkerPool::~WorkerPool() { stop(); }
 
 void WorkerPool::start() {
   for (int i = 0; i < options_.workers; ++i) threads_.emplace_back([this] { work(); });
+  keeper_ = std::thread([this] { keep_leases(); });
 }
 
 void WorkerPool::stop() {
@@ -33,8 +43,11 @@ void WorkerPool::stop() {
   }
   work_available_.notify_all();
   memory_freed_.notify_all();
+  keeper_wake_.notify_all();
   for (std::thread& thread : threads_) thread.join();
   threads_.clear();
+  // After the workers: their jobs went back to the queue under leases the keeper no longer renews.
+  if (keeper_.joinable()) keeper_.join();
   changed_.notify_all();
 }
 
@@ -87,12 +100,64 @@ void WorkerPool::notify_changed() {
   changed_.notify_all();
 }
 
+void WorkerPool::keep_leases() {
+  const auto period = std::max(options_.lease / 3, std::chrono::milliseconds(20));
+  for (;;) {
+    {
+      std::unique_lock lock(mutex_);
+      if (keeper_wake_.wait_for(lock, period, [&] { return stopping_; })) return;
+    }
+    // Renew first: after this process was paused past its leases, its own jobs are not
+    // recovered from under it when no other process took them meanwhile.
+    renew_leases();
+    try {
+      const store::RecoveryOutcome recovered = store_.recover_expired_leases(options_.max_attempts, options_.lost_error);
+      if (recovered.requeued > 0) {
+        log_("leases: " + std::to_string(recovered.requeued) + " job(s) whose worker stopped renewing its lease queued again");
+        notify_submitted();
+      }
+      if (recovered.cancelled > 0) {
+        log_("leases: " + std::to_string(recovered.cancelled) + " job(s) whose worker stopped renewing its lease cancelled as asked");
+      }
+      for (const std::string& id : recovered.failed) {
+        log_("leases: job " + id + " failed: its worker was lost " + std::to_string(options_.max_attempts) +
+             " or more times while running it");
+      }
+      if (recovered.requeued + recovered.cancelled > 0 || !recovered.failed.empty()) notify_changed();
+    } catch (const std::exception& error) {
+      log_(std::string("leases: cannot recover expired leases: ") + error.what());
+    }
+  }
+}
+
+void WorkerPool::renew_leases() {
+  std::vector<std::shared_ptr<LiveJob>> running;
+  {
+    std::lock_guard lock(mutex_);
+    for (const auto& [id, live] : live_) {
+      if (!live->lost.load()) running.push_back(live);
+    }
+  }
+  for (const auto& live : running) {
+    try {
+      heed(store_.renew_lease(live->lease, options_.lease), *live);
+      if (live->lost.load()) {
+        log_("job " + live->lease.job_id + ": lease lost (attempt " + std::to_string(live->lease.attempt) +
+             " expired and the job was taken over); stopping it without writing anything more");
+      }
+    } catch (const std::exception& error) {
+      log_("job " + live->lease.job_id + ": cannot renew its lease: " + error.what());
+    }
+  }
+  memory_freed_.notify_all();  // a job cancelled while it waits for memory ends at once
+}
+
 bool WorkerPool::pause_unless_stopping(std::chrono::milliseconds delay) {
   std::unique_lock lock(mutex_);
   return !work_available_.wait_for(lock, delay, [&] { return stopping_; });
 }
 
-bool WorkerPool::record_end(const api::JobInfo& job, JobOutcome& outcome) {
+bool WorkerPool::record_end(const api::JobInfo& job, const store::Lease& lease, JobOutcome& outcome) {
   // A full disk (StorageFull) keeps the end as computed: once space is freed it is written, and
   // an hour's identification keeps its result. Any other storage failure may be the result
   // itself (over a limit of the store): after two tries the job is recorded failed with a short
@@ -104,7 +169,11 @@ bool WorkerPool::record_end(const api::JobInfo& job, JobOutcome& outcome) {
   std::chrono::milliseconds delay{250};
   for (int attempt = 1;; ++attempt) {
     try {
-      store_.finish_job(job.id, outcome.state, outcome.result, outcome.error, outcome.estimates, outcome.dataset_id);
+      if (!store_.finish_job(lease, outcome.state, outcome.result, outcome.error, outcome.estimates, outcome.dataset_id)) {
+        log_("job " + job.id + ": its end was not recorded: attempt " + std::to_string(lease.attempt) +
+             " no longer holds the job's lease (it was recovered, or it had ended)");
+        return true;
+      }
       if (attempt > 1) log_("job " + job.id + ": its end was recorded at attempt " + std::to_string(attempt));
       return true;
     } catch (const std::exception& error) {
@@ -161,7 +230,7 @@ void WorkerPool::work() {
     }
     std::optional<api::JobInfo> job;
     try {
-      job = store_.claim_next_job();
+      job = store_.claim_next_job(options_.owner, options_.lease);
     } catch (const std::exception& error) {
       log_(std::string("worker: cannot claim a job: ") + error.what());
     }
@@ -214,6 +283,7 @@ JobOutcome WorkerPool::run_within_memory(const api::JobInfo& job, LiveJob& live)
 
 void WorkerPool::run_one(const api::JobInfo& job) {
   auto live = std::make_shared<LiveJob>();
+  live->lease = {job.id, job.worker, job.attempts};
   bool registered = false;
   {
     std::lock_guard lock(mutex_);
@@ -226,7 +296,7 @@ void WorkerPool::run_one(const api::JobInfo& job) {
   if (!registered) {
     // Claimed while the pool was stopping: back to the queue untouched, for the next start.
     try {
-      store_.requeue_job(job.id);
+      store_.requeue_job(live->lease);
     } catch (const std::exception& error) {
       log_("job " + job.id + ": cannot requeue: " + error.what());
     }
@@ -236,21 +306,25 @@ void WorkerPool::run_one(const api::JobInfo& job) {
   JobOutcome outcome = run_within_memory(job, *live);
   if (!outcome.log.empty()) log_("job " + job.id + ": " + outcome.log);
   const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - started).count();
-  if (outcome.requeue) {
+  if (live->lost.load()) {
+    // Another process recovered the job: its attempt is the one that counts; this one wrote nothing.
+    outcome.requeue = true;
+  } else if (outcome.requeue) {
     try {
-      store_.requeue_job(job.id);
+      store_.requeue_job(live->lease);
     } catch (const std::exception& error) {
       // The row stays running; the next start-up puts it back in the queue.
       log_("job " + job.id + ": cannot put it back in the queue: " + error.what());
     }
-  } else if (!record_end(job, outcome)) {
+  } else if (!record_end(job, live->lease, outcome)) {
     outcome.requeue = true;  // stopped while its end could not be written: recovery requeues it
   }
   char duration[32];
   std::snprintf(duration, sizeof duration, "%.3f", seconds);
-  log_("job " + job.id + " " + api::to_string(job.kind) + ": " +
-       (outcome.requeue ? std::string("queued again (shutdown)") : std::string(api::to_string(outcome.state))) +
-       " after " + duration + " s");
+  const std::string end = live->lost.load() ? "stopped, its lease lost"
+                          : outcome.requeue   ? "queued again (shutdown)"
+                                              : api::to_string(outcome.state);
+  log_("job " + job.id + " " + api::to_string(job.kind) + ": " + end + " after " + duration + " s");
   {
     std::lock_guard lock(mutex_);
     live_.erase(job.id);

@@ -2,6 +2,12 @@
 // them (job_runner.h). The pool also keeps what only memory can hold: each running job's live
 // progress and cancel flag, and a signal that wakes long-polls when any job ends.
 //
+// Jobs run on leases (store.h): a claim names this process as the owner for `lease`; a keeper
+// thread renews the leases of the running jobs every lease / 3 (learning a cancel asked through
+// any process), and recovers the jobs whose lease expired — their worker died, hung or was paused —
+// in the queue again or, after --max-attempts losses, failed. A job whose lease was lost stops and
+// writes nothing more: the attempt that holds the lease is the only one whose writes count.
+//
 // Shutdown (stop()) tells running jobs to stop at their next cost evaluation or simulation step and
 // puts them back in the queue, so a restart runs them again: nothing acknowledged is lost.
 #pragma once
@@ -23,9 +29,21 @@
 
 namespace manipid::server::jobs {
 
+/// WORKER_LOST problem JSON: the job's worker died (or stopped renewing its lease) `losses`
+/// times; it is not run again.
+std::string worker_lost_problem(int losses);
+
 struct WorkerPoolOptions {
   int workers = 1;
   RunnerOptions runner;
+  /// Who claims: this process, "HOST:PID" (what a running job's `worker` shows).
+  std::string owner = "localhost:0";
+  /// How long a claim holds without renewal (--lease); renewed every lease / 3.
+  std::chrono::milliseconds lease{30000};
+  /// Worker losses (an expired lease) after which a job is failed instead of run again.
+  int max_attempts = 3;
+  /// The problem JSON of a job failed for losing its worker `losses` times.
+  std::function<std::string(int losses)> lost_error = worker_lost_problem;
   /// How often an idle worker looks at the store even without a submit notification (jobs
   /// recovered at start-up, or submitted by another process on the same database).
   std::chrono::milliseconds idle_poll{1000};
@@ -87,13 +105,16 @@ class WorkerPool {
 
  private:
   void work();
+  /// The keeper thread: renews this process's leases and recovers expired ones, every lease / 3.
+  void keep_leases();
+  void renew_leases();
   void run_one(const api::JobInfo& job);
   /// run_job once the job's memory estimate is set aside (waiting for room); the estimate is given
   /// back when it ends. A job that could never fit fails; a stop or cancel while waiting ends it.
   JobOutcome run_within_memory(const api::JobInfo& job, LiveJob& live);
   /// Writes a job's end until it sticks; false when the pool stopped first (the row stays
   /// running; start-up recovery puts it back in the queue).
-  bool record_end(const api::JobInfo& job, JobOutcome& outcome);
+  bool record_end(const api::JobInfo& job, const store::Lease& lease, JobOutcome& outcome);
   /// Waits `delay` unless the pool stops first; false when it stopped.
   bool pause_unless_stopping(std::chrono::milliseconds delay);
   /// Sets `bytes` of --job-memory aside for a job, waiting until they fit beside the jobs running;
@@ -105,10 +126,12 @@ class WorkerPool {
   WorkerPoolOptions options_;
   Log log_;
   std::vector<std::thread> threads_;
+  std::thread keeper_;
 
   mutable std::mutex mutex_;
   std::condition_variable work_available_;
   std::condition_variable memory_freed_;
+  std::condition_variable keeper_wake_;  ///< stop() ends the keeper's wait
   std::size_t memory_set_aside_ = 0;  ///< the running jobs' estimates (set_memory_aside)
   mutable std::condition_variable changed_;
   bool stopping_ = false;

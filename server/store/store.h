@@ -7,13 +7,19 @@
 //    the process (nothing acknowledged is lost).
 //  - Thread-safe: any thread may call any method at any time (backends keep their own
 //    connections per thread or a pool).
-//  - Jobs are claimed in submission order, each by exactly one worker.
+//  - Jobs are claimed in submission order, each by exactly one worker, on a lease: the claim
+//    names the owner and counts the attempt; every later write of that running job (progress,
+//    its end, putting it back) carries the Lease and changes nothing unless the job is still
+//    running under that owner and attempt. A worker that lost its lease (paused past it, or its
+//    job recovered by another process) learns so from its next write and stops; its writes never
+//    show. Times of leases are the database's clock, never a worker's.
 //  - Ids are random ("ds_"/"job_" + 16 hex digits), never reused.
 #pragma once
 
 #include "manipid/api/records.h"
 #include "manipid/core/trajectory.h"
 
+#include <chrono>
 #include <functional>
 #include <map>
 #include <memory>
@@ -103,6 +109,20 @@ struct EstimateRow {
 
 enum class CancelOutcome { not_found, cancelled_now, requested, already_finished };
 
+/// Who runs a claimed job: its owner ("HOST:PID:THREAD") and the attempt the claim counted.
+struct Lease {
+  std::string job_id;
+  std::string owner;
+  int attempt = 0;
+};
+
+/// What a guarded write of a running job learned.
+enum class LeaseStatus {
+  held,              ///< written; the job is still this worker's
+  cancel_requested,  ///< written; a client asked to cancel it (stop, then end it cancelled)
+  lost,              ///< nothing written: the job is no longer this attempt's (stop, write nothing more)
+};
+
 /// What start-up recovery did with the jobs a dead process left running.
 struct RecoveryOutcome {
   int requeued = 0;                  ///< back in the queue, to run again
@@ -140,18 +160,22 @@ class Store {
   virtual SubmitOutcome submit_job(const NewJob& job, const std::optional<api::IdempotencyKey>& key, int queue_limit) = 0;
   virtual std::optional<api::JobInfo> find_job(const std::string& id) = 0;
   virtual api::Page<api::JobInfo> list_jobs(const api::JobFilter& filter, const api::PageRequest& page) = 0;  ///< newest first
-  /// The oldest queued job, now running (started_at set, attempts + 1); nullopt when none.
-  virtual std::optional<api::JobInfo> claim_next_job() = 0;
+  /// The oldest queued job, now running under a lease of `lease` for `owner`: started_at set,
+  /// attempts + 1 (the lease's attempt), `worker` the owner. nullopt when none is queued.
+  virtual std::optional<api::JobInfo> claim_next_job(const std::string& owner, std::chrono::milliseconds lease) = 0;
+  /// Extends a held lease to now + `lease` (the heartbeat, every lease / 3).
+  virtual LeaseStatus renew_lease(const Lease& lease, std::chrono::milliseconds duration) = 0;
   /// Progress of a running job plus a batch of new history entries, in one transaction.
-  virtual void record_progress(const std::string& id, long evaluations, std::optional<double> best_cost,
-                               const std::vector<api::HistoryEntry>& batch) = 0;
+  virtual LeaseStatus record_progress(const Lease& lease, long evaluations, std::optional<double> best_cost,
+                                      const std::vector<api::HistoryEntry>& batch) = 0;
   /// A running job's end: state (succeeded, failed or cancelled), result JSON or problem
-  /// JSON, estimates (may be empty), the dataset it made or used.
-  virtual void finish_job(const std::string& id, api::JobState state, const std::string& result,
-                          const std::string& error, const std::vector<EstimateRow>& estimates,
-                          const std::string& dataset_id) = 0;
-  /// A running job back to queued with its history cleared (shutdown before it finished).
-  virtual void requeue_job(const std::string& id) = 0;
+  /// JSON, estimates (may be empty), the dataset it made or used — one transaction, written only
+  /// while the lease holds (false: lost, nothing written).
+  virtual bool finish_job(const Lease& lease, api::JobState state, const std::string& result, const std::string& error,
+                          const std::vector<EstimateRow>& estimates, const std::string& dataset_id) = 0;
+  /// A running job back to queued with its history cleared (shutdown before it finished), if
+  /// the lease still holds; cancelled instead when its cancellation was asked for.
+  virtual void requeue_job(const Lease& lease) = 0;
   /// Queued → cancelled at once; running → cancel_requested set; finished → unchanged.
   virtual CancelOutcome cancel_job(const std::string& id) = 0;
   /// Finished jobs only (in_use while queued or running); removes its history and estimates too.
@@ -163,17 +187,21 @@ class Store {
   virtual std::optional<api::HistoryOverview> history_overview(const std::string& id, long max_points) = 0;
 
   // ---- the process's life ----
-  /// At start-up: every job left running by a dead process counts one more worker loss and
-  /// goes back to queued (history cleared) — unless its cancellation had been asked for
-  /// (cancelled), or it has now lost its worker `max_attempts` times: then it is failed with
-  /// the error `lost_error(losses)` and never runs again, so a job that kills the process
-  /// cannot kill it on every restart. One transaction.
+  /// At start-up of the process that owns the file (SQLite): every job left running by a dead
+  /// process counts one more worker loss and goes back to queued (history cleared) — unless its
+  /// cancellation had been asked for (cancelled), or it has now lost its worker `max_attempts`
+  /// times: then it is failed with the error `lost_error(losses)` and never runs again, so a job
+  /// that kills the process cannot kill it on every restart. One transaction.
   virtual RecoveryOutcome recover_interrupted_jobs(int max_attempts,
                                                    const std::function<std::string(int losses)>& lost_error) = 0;
+  /// The same for the running jobs whose lease has expired (their worker died, hung or was
+  /// paused past it): what every process does every few seconds.
+  virtual RecoveryOutcome recover_expired_leases(int max_attempts,
+                                                 const std::function<std::string(int losses)>& lost_error) = 0;
   virtual std::map<api::JobState, long> count_jobs_by_state() = 0;
   /// Why writes fail now ("the disk holding the database is full"), or nullopt when the last
   /// write transaction succeeded (or none failed): set by a StorageFull, cleared by the next
-  /// successful write. What /healthz reports as "degraded".
+  /// write that commits a change (an empty commit proves nothing about the space). What /healthz reports as "degraded".
   virtual std::optional<std::string> write_trouble() const = 0;
 };
 

@@ -30,16 +30,18 @@ class FailingStore : public Store {
   SubmitOutcome submit_job(const NewJob&, const std::optional<api::IdempotencyKey>&, int) override { fail(); }
   std::optional<api::JobInfo> find_job(const std::string&) override { fail(); }
   api::Page<api::JobInfo> list_jobs(const api::JobFilter&, const api::PageRequest&) override { fail(); }
-  std::optional<api::JobInfo> claim_next_job() override { fail(); }
-  void record_progress(const std::string&, long, std::optional<double>, const std::vector<api::HistoryEntry>&) override { fail(); }
-  void finish_job(const std::string&, api::JobState, const std::string&, const std::string&, const std::vector<EstimateRow>&,
+  std::optional<api::JobInfo> claim_next_job(const std::string&, std::chrono::milliseconds) override { fail(); }
+  LeaseStatus renew_lease(const Lease&, std::chrono::milliseconds) override { fail(); }
+  LeaseStatus record_progress(const Lease&, long, std::optional<double>, const std::vector<api::HistoryEntry>&) override { fail(); }
+  bool finish_job(const Lease&, api::JobState, const std::string&, const std::string&, const std::vector<EstimateRow>&,
                   const std::string&) override { fail(); }
-  void requeue_job(const std::string&) override { fail(); }
+  void requeue_job(const Lease&) override { fail(); }
   CancelOutcome cancel_job(const std::string&) override { fail(); }
   DeleteResult delete_job(const std::string&) override { fail(); }
   std::optional<api::Page<api::HistoryEntry>> history(const std::string&, const api::PageRequest&) override { fail(); }
   std::optional<api::HistoryOverview> history_overview(const std::string&, long) override { fail(); }
   RecoveryOutcome recover_interrupted_jobs(int, const std::function<std::string(int)>&) override { fail(); }
+  RecoveryOutcome recover_expired_leases(int, const std::function<std::string(int)>&) override { fail(); }
   std::map<api::JobState, long> count_jobs_by_state() override { fail(); }
   std::optional<std::string> write_trouble() const override { return "string or blob too big"; }
 };

@@ -122,6 +122,18 @@ class StoreContract : public ::testing::TestWithParam<Backend> {
     return outcome.job.id;
   }
 
+  /// The next queued job, claimed by `owner` for `lease`.
+  std::optional<api::JobInfo> claim(const std::string& owner = "host-a:100",
+                                    std::chrono::milliseconds lease = std::chrono::seconds(30)) {
+    return store_->claim_next_job(owner, lease);
+  }
+
+  /// The lease a job is under now (owner and attempt as stored): what its worker would carry.
+  Lease held(const std::string& id) {
+    const auto job = store_->find_job(id);
+    return job ? Lease{id, job->worker, job->attempts} : Lease{id, "", 0};
+  }
+
   /// Start-up recovery as `manipid serve` does it, with the default of 3 worker deaths.
   RecoveryOutcome recover(int max_attempts = 3) {
     return store_->recover_interrupted_jobs(max_attempts,
@@ -218,9 +230,9 @@ TEST_P(StoreContract, DatasetOfAQueuedOrRunningJobIsNotDeleted) {
   job.dataset_id = dataset;
   const std::string id = submit(job);
   EXPECT_EQ(store_->delete_dataset(dataset), DeleteResult::in_use);
-  ASSERT_TRUE(store_->claim_next_job());
+  ASSERT_TRUE(claim());
   EXPECT_EQ(store_->delete_dataset(dataset), DeleteResult::in_use);
-  store_->finish_job(id, api::JobState::succeeded, "{}", "", {}, dataset);
+  store_->finish_job(held(id), api::JobState::succeeded, "{}", "", {}, dataset);
   EXPECT_EQ(store_->delete_dataset(dataset), DeleteResult::deleted);
   EXPECT_FALSE(store_->find_dataset(dataset));
   EXPECT_EQ(store_->delete_dataset(dataset), DeleteResult::not_found);
@@ -322,9 +334,9 @@ TEST_P(StoreContract, RobotsAreIdempotentPagedAndNotDeletedWhileInUse) {
   on_robot.robot_id = "rb_none";
   EXPECT_TRUE(store_->list_jobs(on_robot, {}).items.empty());
   EXPECT_EQ(store_->delete_robot(first.robot.id), DeleteResult::in_use);
-  ASSERT_TRUE(store_->claim_next_job());
+  ASSERT_TRUE(claim());
   EXPECT_EQ(store_->delete_robot(first.robot.id), DeleteResult::in_use);
-  store_->finish_job(id, api::JobState::succeeded, "{}", "", {}, "");
+  store_->finish_job(held(id), api::JobState::succeeded, "{}", "", {}, "");
   EXPECT_EQ(store_->delete_robot(first.robot.id), DeleteResult::deleted);
   EXPECT_EQ(store_->delete_robot(first.robot.id), DeleteResult::not_found);
   // Its key went with it: the same key now makes a new robot.
@@ -421,7 +433,7 @@ TEST_P(StoreContract, JobIdempotencyKey) {
   EXPECT_EQ(store_->count_jobs_by_state()[JobState::queued], 1);
 
   // A replay of a job that has since run shows its current state.
-  ASSERT_TRUE(store_->claim_next_job());
+  ASSERT_TRUE(claim());
   EXPECT_EQ(store_->submit_job(identification_job(), key, 0).job.state, JobState::running);
 }
 
@@ -440,7 +452,7 @@ TEST_P(StoreContract, QueueLimit) {
   EXPECT_EQ(store_->submit_job(identification_job(), std::nullopt, 0).status, SubmitStatus::created);
   EXPECT_EQ(store_->submit_job(identification_job(), std::nullopt, -1).status, SubmitStatus::created);
   // Running jobs do not count against the queue.
-  for (int i = 0; i < 3; ++i) ASSERT_TRUE(store_->claim_next_job());
+  for (int i = 0; i < 3; ++i) ASSERT_TRUE(claim());
   EXPECT_EQ(store_->submit_job(identification_job(), api::IdempotencyKey{"k2", "f"}, 2).status,
             SubmitStatus::created);
 }
@@ -449,14 +461,14 @@ TEST_P(StoreContract, ClaimOrderIsSubmissionOrder) {
   std::vector<std::string> submitted;
   for (int i = 0; i < 6; ++i) submitted.push_back(submit());
   for (const auto& expected : submitted) {
-    const auto claimed = store_->claim_next_job();
+    const auto claimed = claim();
     ASSERT_TRUE(claimed);
     EXPECT_EQ(claimed->id, expected);
     EXPECT_EQ(claimed->state, JobState::running);
     EXPECT_EQ(claimed->attempts, 1);
     EXPECT_TRUE(is_time(claimed->started_at));
   }
-  EXPECT_FALSE(store_->claim_next_job());
+  EXPECT_FALSE(claim());
   const auto counts = store_->count_jobs_by_state();
   EXPECT_EQ(counts.at(JobState::running), 6);
   EXPECT_EQ(counts.at(JobState::queued), 0);
@@ -473,7 +485,7 @@ TEST_P(StoreContract, EightThreadsNeverClaimTheSameJob) {
   for (int t = 0; t < 8; ++t) {
     threads.emplace_back([&, t] {
       try {
-        while (auto job = store_->claim_next_job()) claimed[t].push_back(job->id);
+        while (auto job = claim()) claimed[t].push_back(job->id);
       } catch (...) {
         ++failures;
       }
@@ -491,10 +503,10 @@ TEST_P(StoreContract, EightThreadsNeverClaimTheSameJob) {
 
 TEST_P(StoreContract, ProgressAndHistoryPaging) {
   const auto id = submit();
-  ASSERT_TRUE(store_->claim_next_job());
-  store_->record_progress(id, 60, 0.5, history_batch(0, 60));
-  store_->record_progress(id, 120, 0.25, history_batch(60, 60));
-  store_->record_progress(id, 120, 0.25, history_batch(60, 60));  // a re-sent batch is harmless
+  ASSERT_TRUE(claim());
+  store_->record_progress(held(id), 60, 0.5, history_batch(0, 60));
+  store_->record_progress(held(id), 120, 0.25, history_batch(60, 60));
+  store_->record_progress(held(id), 120, 0.25, history_batch(60, 60));  // a re-sent batch is harmless
 
   const auto job = store_->find_job(id);
   ASSERT_TRUE(job);
@@ -555,7 +567,7 @@ TEST_P(StoreContract, ProgressAndHistoryPaging) {
 
 TEST_P(StoreContract, ProgressOnlyForRunningJobs) {
   const auto id = submit();
-  store_->record_progress(id, 5, 1.0, history_batch(0, 5));  // still queued: dropped
+  EXPECT_EQ(store_->record_progress(held(id), 5, 1.0, history_batch(0, 5)), LeaseStatus::lost);  // still queued
   EXPECT_EQ(store_->find_job(id)->evaluations, 0);
   EXPECT_TRUE(store_->history(id, {})->items.empty());
 }
@@ -564,9 +576,9 @@ TEST_P(StoreContract, ProgressOnlyForRunningJobs) {
 
 TEST_P(StoreContract, FinishJobKeepsOutcome) {
   const auto id = submit();
-  ASSERT_TRUE(store_->claim_next_job());
-  store_->record_progress(id, 10, 0.1, history_batch(0, 10));
-  store_->finish_job(id, JobState::succeeded, R"({"theta":[1,2]})", "",
+  ASSERT_TRUE(claim());
+  store_->record_progress(held(id), 10, 0.1, history_batch(0, 10));
+  store_->finish_job(held(id), JobState::succeeded, R"({"theta":[1,2]})", "",
                      {{"m1", 1.5, 0.01}, {"l1", 0.3, std::nullopt}}, "ds_aaaaaaaaaaaaaaaa");
   auto job = store_->find_job(id);
   ASSERT_TRUE(job);
@@ -578,20 +590,20 @@ TEST_P(StoreContract, FinishJobKeepsOutcome) {
   EXPECT_EQ(store_->history(id, {})->items.size(), 10u);  // the history stays with the result
 
   // A second end does not overwrite the first; an empty dataset id keeps the input's.
-  store_->finish_job(id, JobState::failed, "", R"({"code":"INTERNAL"})", {}, "");
+  store_->finish_job(held(id), JobState::failed, "", R"({"code":"INTERNAL"})", {}, "");
   job = store_->find_job(id);
   EXPECT_EQ(job->state, JobState::succeeded);
   EXPECT_EQ(job->error, "");
 
   const auto failed = submit();
-  ASSERT_TRUE(store_->claim_next_job());
-  store_->finish_job(failed, JobState::failed, "", R"({"code":"INTERNAL"})", {}, "");
+  ASSERT_TRUE(claim());
+  store_->finish_job(held(failed), JobState::failed, "", R"({"code":"INTERNAL"})", {}, "");
   job = store_->find_job(failed);
   EXPECT_EQ(job->state, JobState::failed);
   EXPECT_EQ(job->error, R"({"code":"INTERNAL"})");
   EXPECT_EQ(job->dataset_id, "ds_0123456789abcdef");
 
-  EXPECT_THROW(store_->finish_job(failed, JobState::running, "", "", {}, ""), std::invalid_argument);
+  EXPECT_THROW(store_->finish_job(held(failed), JobState::running, "", "", {}, ""), std::invalid_argument);
 }
 
 TEST_P(StoreContract, CancelRules) {
@@ -603,13 +615,13 @@ TEST_P(StoreContract, CancelRules) {
   EXPECT_TRUE(is_time(job->finished_at));
   EXPECT_EQ(store_->cancel_job(queued), CancelOutcome::already_finished);
 
-  ASSERT_EQ(store_->claim_next_job()->id, running);  // the cancelled one is skipped
+  ASSERT_EQ(claim()->id, running);  // the cancelled one is skipped
   EXPECT_EQ(store_->cancel_job(running), CancelOutcome::requested);
   EXPECT_EQ(store_->cancel_job(running), CancelOutcome::requested);
   job = store_->find_job(running);
   EXPECT_EQ(job->state, JobState::running);
   EXPECT_TRUE(job->cancel_requested);
-  store_->finish_job(running, JobState::cancelled, "", "", {}, "");
+  store_->finish_job(held(running), JobState::cancelled, "", "", {}, "");
   EXPECT_EQ(store_->cancel_job(running), CancelOutcome::already_finished);
   EXPECT_EQ(store_->cancel_job("job_0000000000000000"), CancelOutcome::not_found);
 }
@@ -619,11 +631,11 @@ TEST_P(StoreContract, DeleteRules) {
   const auto queued = store_->submit_job(identification_job(), key, 0).job.id;
   EXPECT_EQ(store_->delete_job(queued), DeleteResult::in_use);
 
-  ASSERT_TRUE(store_->claim_next_job());
+  ASSERT_TRUE(claim());
   EXPECT_EQ(store_->delete_job(queued), DeleteResult::in_use);
 
-  store_->record_progress(queued, 3, 1.0, history_batch(0, 3));
-  store_->finish_job(queued, JobState::succeeded, "{}", "", {{"m1", 1.0, std::nullopt}}, "");
+  store_->record_progress(held(queued), 3, 1.0, history_batch(0, 3));
+  store_->finish_job(held(queued), JobState::succeeded, "{}", "", {{"m1", 1.0, std::nullopt}}, "");
   EXPECT_EQ(store_->delete_job(queued), DeleteResult::deleted);
   EXPECT_FALSE(store_->find_job(queued));
   EXPECT_FALSE(store_->history(queued, {}));
@@ -638,9 +650,9 @@ TEST_P(StoreContract, DeleteRules) {
 
 TEST_P(StoreContract, RequeueClearsProgressAndKeepsAttempts) {
   const auto id = submit();
-  ASSERT_TRUE(store_->claim_next_job());
-  store_->record_progress(id, 7, 0.7, history_batch(0, 7));
-  store_->requeue_job(id);
+  ASSERT_TRUE(claim());
+  store_->record_progress(held(id), 7, 0.7, history_batch(0, 7));
+  store_->requeue_job(held(id));
   auto job = store_->find_job(id);
   EXPECT_EQ(job->state, JobState::queued);
   EXPECT_EQ(job->started_at, "");
@@ -648,16 +660,16 @@ TEST_P(StoreContract, RequeueClearsProgressAndKeepsAttempts) {
   EXPECT_FALSE(job->best_cost);
   EXPECT_EQ(job->attempts, 1);
   EXPECT_TRUE(store_->history(id, {})->items.empty());
-  const auto again = store_->claim_next_job();
+  const auto again = claim();
   ASSERT_TRUE(again);
   EXPECT_EQ(again->id, id);
   EXPECT_EQ(again->attempts, 2);
 
   // A job whose cancellation was asked for is not run again.
   EXPECT_EQ(store_->cancel_job(id), CancelOutcome::requested);
-  store_->requeue_job(id);
+  store_->requeue_job(held(id));
   EXPECT_EQ(store_->find_job(id)->state, JobState::cancelled);
-  EXPECT_FALSE(store_->claim_next_job());
+  EXPECT_FALSE(claim());
 }
 
 // ---- restarts ----
@@ -666,9 +678,9 @@ TEST_P(StoreContract, RecoverInterruptedJobsAfterReopen) {
   const auto interrupted = submit();
   const auto cancelling = submit();
   const auto waiting = submit();
-  ASSERT_EQ(store_->claim_next_job()->id, interrupted);
-  ASSERT_EQ(store_->claim_next_job()->id, cancelling);
-  store_->record_progress(interrupted, 30, 0.3, history_batch(0, 30));
+  ASSERT_EQ(claim()->id, interrupted);
+  ASSERT_EQ(claim()->id, cancelling);
+  store_->record_progress(held(interrupted), 30, 0.3, history_batch(0, 30));
   ASSERT_EQ(store_->cancel_job(cancelling), CancelOutcome::requested);
 
   reopen();  // as if the process had died with the jobs running
@@ -687,11 +699,11 @@ TEST_P(StoreContract, RecoverInterruptedJobsAfterReopen) {
   EXPECT_EQ(recover().requeued, 0);
 
   // Back in submission order; the interrupted job starts its second attempt.
-  const auto first = store_->claim_next_job();
+  const auto first = claim();
   ASSERT_TRUE(first);
   EXPECT_EQ(first->id, interrupted);
   EXPECT_EQ(first->attempts, 2);
-  EXPECT_EQ(store_->claim_next_job()->id, waiting);
+  EXPECT_EQ(claim()->id, waiting);
 }
 
 TEST_P(StoreContract, AJobThatKillsItsWorkerThreeTimesIsFailedNotRunAgain) {
@@ -699,7 +711,7 @@ TEST_P(StoreContract, AJobThatKillsItsWorkerThreeTimesIsFailedNotRunAgain) {
   const auto innocent = submit();
   for (int death = 1; death <= 3; ++death) {
     SCOPED_TRACE(death);
-    const auto claimed = store_->claim_next_job();
+    const auto claimed = claim();
     ASSERT_TRUE(claimed);
     ASSERT_EQ(claimed->id, poison);  // oldest first: the poison job always comes back first
     reopen();                        // the process died while running it
@@ -718,31 +730,131 @@ TEST_P(StoreContract, AJobThatKillsItsWorkerThreeTimesIsFailedNotRunAgain) {
     }
   }
   // The queue moves on: the next claim is the innocent job, and nothing else is left.
-  const auto next = store_->claim_next_job();
+  const auto next = claim();
   ASSERT_TRUE(next);
   EXPECT_EQ(next->id, innocent);
-  EXPECT_FALSE(store_->claim_next_job());
+  EXPECT_FALSE(claim());
 }
 
 TEST_P(StoreContract, AGracefulRequeueIsNotAWorkerDeath) {
   const auto id = submit();
   for (int shutdown = 0; shutdown < 5; ++shutdown) {
-    ASSERT_EQ(store_->claim_next_job()->id, id);
-    store_->requeue_job(id);  // SIGTERM: the job was handed back, not lost
+    ASSERT_EQ(claim()->id, id);
+    store_->requeue_job(held(id));  // SIGTERM: the job was handed back, not lost
   }
-  ASSERT_EQ(store_->claim_next_job()->id, id);
+  ASSERT_EQ(claim()->id, id);
   reopen();
   const RecoveryOutcome recovered = recover();
   EXPECT_EQ(recovered.requeued, 1);  // one death so far, not six
   EXPECT_TRUE(recovered.failed.empty());
 }
 
+// ---- leases ----
+
+TEST_P(StoreContract, AClaimNamesItsOwnerAndOnlyThatAttemptWrites) {
+  const auto id = submit();
+  const auto claimed = claim("host-a:100");
+  ASSERT_TRUE(claimed);
+  EXPECT_EQ(claimed->worker, "host-a:100");
+  EXPECT_EQ(claimed->attempts, 1);
+  EXPECT_EQ(store_->find_job(id)->worker, "host-a:100");
+  const Lease lease{id, "host-a:100", 1};
+  EXPECT_EQ(store_->renew_lease(lease, std::chrono::seconds(30)), LeaseStatus::held);
+  EXPECT_EQ(store_->record_progress(lease, 4, 0.4, history_batch(0, 4)), LeaseStatus::held);
+
+  // Another owner, or an earlier attempt of the same owner, writes nothing.
+  for (const Lease& stranger : {Lease{id, "host-b:200", 1}, Lease{id, "host-a:100", 0}}) {
+    EXPECT_EQ(store_->renew_lease(stranger, std::chrono::seconds(30)), LeaseStatus::lost);
+    EXPECT_EQ(store_->record_progress(stranger, 9, 0.1, history_batch(4, 5)), LeaseStatus::lost);
+    EXPECT_FALSE(store_->finish_job(stranger, JobState::succeeded, "{}", "", {{"m1", 1.0, std::nullopt}}, ""));
+    store_->requeue_job(stranger);
+  }
+  auto job = store_->find_job(id);
+  EXPECT_EQ(job->state, JobState::running);
+  EXPECT_EQ(job->evaluations, 4);
+  EXPECT_EQ(store_->history(id, {})->items.size(), 4u);
+
+  // A cancel asked for through any process reaches the holder on its next write.
+  EXPECT_EQ(store_->cancel_job(id), CancelOutcome::requested);
+  EXPECT_EQ(store_->renew_lease(lease, std::chrono::seconds(30)), LeaseStatus::cancel_requested);
+  EXPECT_EQ(store_->record_progress(lease, 5, 0.3, history_batch(4, 1)), LeaseStatus::cancel_requested);
+  EXPECT_TRUE(store_->finish_job(lease, JobState::cancelled, "", "", {}, ""));
+  job = store_->find_job(id);
+  EXPECT_EQ(job->state, JobState::cancelled);
+  EXPECT_EQ(job->worker, "");  // only a running job has a worker
+  EXPECT_EQ(store_->renew_lease(lease, std::chrono::seconds(30)), LeaseStatus::lost);
+}
+
+TEST_P(StoreContract, ExpiredLeasesAreRecoveredAndTheOldAttemptIsShutOut) {
+  const auto expiring = submit();
+  const auto renewed = submit();
+  const auto held_long = submit();
+  ASSERT_EQ(claim("host-a:100", std::chrono::milliseconds(150))->id, expiring);
+  ASSERT_EQ(claim("host-a:100", std::chrono::milliseconds(150))->id, renewed);
+  ASSERT_EQ(claim("host-b:200", std::chrono::seconds(30))->id, held_long);
+  const Lease old_attempt = held(expiring);
+  ASSERT_EQ(store_->record_progress(old_attempt, 3, 0.3, history_batch(0, 3)), LeaseStatus::held);
+  const auto lost_error = [](int losses) { return "{\"lost\": " + std::to_string(losses) + "}"; };
+  EXPECT_EQ(store_->recover_expired_leases(3, lost_error).requeued, 0);  // nothing has expired yet
+
+  std::this_thread::sleep_for(std::chrono::milliseconds(100));
+  ASSERT_EQ(store_->renew_lease(held(renewed), std::chrono::seconds(30)), LeaseStatus::held);
+  std::this_thread::sleep_for(std::chrono::milliseconds(100));
+  const RecoveryOutcome recovered = store_->recover_expired_leases(3, lost_error);
+  EXPECT_EQ(recovered.requeued, 1);
+  EXPECT_EQ(recovered.cancelled, 0);
+  EXPECT_TRUE(recovered.failed.empty());
+  auto job = store_->find_job(expiring);
+  EXPECT_EQ(job->state, JobState::queued);
+  EXPECT_EQ(job->worker, "");
+  EXPECT_EQ(job->evaluations, 0);
+  EXPECT_TRUE(store_->history(expiring, {})->items.empty());
+  EXPECT_EQ(store_->find_job(renewed)->state, JobState::running);
+  EXPECT_EQ(store_->find_job(held_long)->state, JobState::running);
+
+  // The paused worker wakes up: none of its writes show, before or after the next claim.
+  EXPECT_EQ(store_->record_progress(old_attempt, 6, 0.2, history_batch(3, 3)), LeaseStatus::lost);
+  const auto again = claim("host-c:300");
+  ASSERT_TRUE(again);
+  EXPECT_EQ(again->id, expiring);
+  EXPECT_EQ(again->attempts, 2);
+  EXPECT_EQ(store_->record_progress(old_attempt, 6, 0.2, history_batch(3, 3)), LeaseStatus::lost);
+  EXPECT_FALSE(store_->finish_job(old_attempt, JobState::succeeded, "{\"old\": true}", "", {}, ""));
+  EXPECT_TRUE(store_->finish_job(held(expiring), JobState::succeeded, "{\"new\": true}", "", {}, ""));
+  job = store_->find_job(expiring);
+  EXPECT_EQ(job->result, "{\"new\": true}");
+  EXPECT_TRUE(store_->history(expiring, {})->items.empty());
+}
+
+TEST_P(StoreContract, AJobWhoseLeaseExpiresMaxAttemptsTimesIsFailed) {
+  const auto poison = submit();
+  const auto lost_error = [](int losses) { return "{\"lost\": " + std::to_string(losses) + "}"; };
+  for (int loss = 1; loss <= 2; ++loss) {
+    ASSERT_EQ(claim("host-a:100", std::chrono::milliseconds(1))->id, poison);
+    std::this_thread::sleep_for(std::chrono::milliseconds(20));
+    EXPECT_EQ(store_->recover_expired_leases(2, lost_error).requeued, loss == 1 ? 1 : 0);
+  }
+  const auto job = store_->find_job(poison);
+  EXPECT_EQ(job->state, JobState::failed);
+  EXPECT_EQ(job->error, "{\"lost\": 2}");
+  EXPECT_EQ(job->attempts, 2);
+  EXPECT_FALSE(claim());
+
+  // A running job whose cancellation was asked for ends cancelled, not queued again.
+  const auto cancelling = submit();
+  ASSERT_EQ(claim("host-a:100", std::chrono::milliseconds(1))->id, cancelling);
+  ASSERT_EQ(store_->cancel_job(cancelling), CancelOutcome::requested);
+  std::this_thread::sleep_for(std::chrono::milliseconds(20));
+  EXPECT_EQ(store_->recover_expired_leases(2, lost_error).cancelled, 1);
+  EXPECT_EQ(store_->find_job(cancelling)->state, JobState::cancelled);
+}
+
 TEST_P(StoreContract, EverythingSurvivesReopen) {
   const auto data = make_trajectory(50, 2, true, true);
   const auto dataset = store_->insert_dataset("kept", data, "", api::IdempotencyKey{"d", "f"}).dataset.id;
   const auto job = store_->submit_job(identification_job(), api::IdempotencyKey{"j", "f"}, 0).job.id;
-  ASSERT_TRUE(store_->claim_next_job());
-  store_->record_progress(job, 12, 0.12, history_batch(0, 12));
+  ASSERT_TRUE(claim());
+  store_->record_progress(held(job), 12, 0.12, history_batch(0, 12));
 
   reopen();
   const auto loaded = store_->load_dataset(dataset);
@@ -770,7 +882,7 @@ TEST_P(StoreContract, ListJobsNewestFirstWithFilters) {
   simulation.kind = api::JobKind::simulation;
   std::vector<std::string> ids;
   for (int i = 0; i < 7; ++i) ids.push_back(submit(i % 2 == 0 ? simulation : identification_job()));
-  ASSERT_EQ(store_->claim_next_job()->id, ids[0]);  // a running simulation
+  ASSERT_EQ(claim()->id, ids[0]);  // a running simulation
 
   std::vector<std::string> seen;
   api::PageRequest request{3, ""};
@@ -809,7 +921,7 @@ TEST_P(StoreContract, CountJobsByStateHasAllStates) {
   submit();
   submit();
   store_->cancel_job(cancelled);
-  store_->claim_next_job();
+  claim();
   counts = store_->count_jobs_by_state();
   EXPECT_EQ(counts.at(JobState::queued), 1);
   EXPECT_EQ(counts.at(JobState::running), 1);

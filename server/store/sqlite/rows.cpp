@@ -8,7 +8,7 @@ namespace manipid::server::store::sqlite {
 
 const std::string kJobColumns =
     "id, kind, state, created_at, started_at, finished_at, request, dataset_id, evaluations, best_cost, "
-    "cancel_requested, attempts, result, error, robot_id, validation_dataset_id, seq";
+    "cancel_requested, attempts, result, error, robot_id, validation_dataset_id, worker, seq";
 const std::string kDatasetColumns =
     "id, name, created_at, source_job, joints, samples, dt, has_torque, has_reference, uniform, has_rates, "
     "has_accelerations, seq";
@@ -35,6 +35,7 @@ api::JobInfo read_job(const Statement& row) {
   job.error = row.text(13);
   job.robot_id = row.text(14);
   job.validation_dataset_id = row.text(15);
+  job.worker = row.text(16);
   return job;
 }
 

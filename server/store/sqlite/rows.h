@@ -14,7 +14,7 @@ namespace manipid::server::store::sqlite {
 
 /// Column lists for whole records, in the order read_job / read_dataset expect; seq last.
 extern const std::string kJobColumns;
-inline constexpr int kJobSeqColumn = 16;
+inline constexpr int kJobSeqColumn = 17;
 /// Only the description: the sample blobs stay on disk.
 extern const std::string kDatasetColumns;
 inline constexpr int kDatasetSeqColumn = 12;

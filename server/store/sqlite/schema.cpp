@@ -11,7 +11,7 @@ namespace manipid::server::store::sqlite {
 namespace {
 
 // kMigrations[i] takes user_version i to i + 1, and sets it.
-constexpr std::array<const char*, 3> kMigrations = {
+constexpr std::array<const char*, 4> kMigrations = {
     // 0 → 1: the first schema.
     R"sql(
     -- seq orders datasets newest first for keyset paging; AUTOINCREMENT never hands out a
@@ -185,6 +185,17 @@ constexpr std::array<const char*, 3> kMigrations = {
     CREATE INDEX idempotency_keys_by_resource ON idempotency_keys (resource_id);
 
     PRAGMA user_version = 3;
+    )sql",
+
+    // 3 → 4: leases. A claim names its owner ("HOST:PID") and when the lease ends (Unix seconds,
+    // the database's clock); every write of a running job checks owner and attempt, and any
+    // process recovers the running jobs whose lease has ended. Jobs running in the old file have no
+    // lease: start-up recovery (the only way they could be running) puts them back in the queue.
+    R"sql(
+    ALTER TABLE jobs ADD COLUMN worker TEXT;
+    ALTER TABLE jobs ADD COLUMN lease_expires_at REAL;
+    CREATE INDEX jobs_by_lease ON jobs (lease_expires_at) WHERE state = 'running';
+    PRAGMA user_version = 4;
     )sql",
 };
 

@@ -364,15 +364,16 @@ class SqliteStore final : public Store {
     });
   }
 
-  std::optional<api::JobInfo> claim_next_job() override {
+  std::optional<api::JobInfo> claim_next_job(const std::string& owner, std::chrono::milliseconds lease) override {
     auto connection = pool_.checkout();
     return sqlite::run_transaction(*connection, TransactionKind::write, [&]() -> std::optional<api::JobInfo> {
       // One statement under the write lock: no other connection can claim the same row.
       auto claim = connection->prepare(
-          "UPDATE jobs SET state = 'running', started_at = ?1, attempts = attempts + 1 "
+          "UPDATE jobs SET state = 'running', started_at = ?1, attempts = attempts + 1, worker = ?2, "
+          "lease_expires_at = " + kNowSeconds + " + ?3 "
           "WHERE seq = (SELECT seq FROM jobs WHERE state = 'queued' ORDER BY seq LIMIT 1) RETURNING " +
           kJobColumns);
-      claim.bind_text(1, now_rfc3339());
+      claim.bind_text(1, now_rfc3339()).bind_text(2, owner).bind_real(3, seconds(lease));
       if (!claim.step()) return std::nullopt;
       auto job = read_job(claim);
       claim.run();  // finish the statement before COMMIT
@@ -380,71 +381,81 @@ class SqliteStore final : public Store {
     });
   }
 
-  void record_progress(const std::string& id, long evaluations, std::optional<double> best_cost,
-                       const std::vector<api::HistoryEntry>& batch) override {
+  LeaseStatus renew_lease(const Lease& lease, std::chrono::milliseconds duration) override {
+    auto connection = pool_.checkout();
+    return sqlite::run_transaction(*connection, TransactionKind::write,
+                                   [&] { return extend(*connection, lease, duration, nullptr); });
+  }
+
+  LeaseStatus record_progress(const Lease& lease, long evaluations, std::optional<double> best_cost,
+                              const std::vector<api::HistoryEntry>& batch) override {
     std::vector<std::vector<unsigned char>> thetas;
     thetas.reserve(batch.size());
     for (const auto& entry : batch) thetas.push_back(sqlite::encode_doubles(entry.theta.data(), entry.theta.size()));
 
     auto connection = pool_.checkout();
-    sqlite::run_transaction(*connection, TransactionKind::write, [&] {
-      // Only a running job takes progress: a late batch after requeue or finish is dropped.
-      auto update =
-          connection->prepare("UPDATE jobs SET evaluations = ?2, best_cost = ?3 WHERE id = ?1 AND state = 'running'");
-      update.bind_text(1, id).bind_integer(2, evaluations).bind_real_or_null(3, best_cost);
-      update.run();
-      if (connection->changes() == 0) return;
+    return sqlite::run_transaction(*connection, TransactionKind::write, [&] {
+      // The guarded update first: a batch of an attempt that lost its lease is dropped whole.
+      const Progress progress{evaluations, best_cost};
+      const LeaseStatus status = extend(*connection, lease, std::nullopt, &progress);
+      if (status == LeaseStatus::lost) return status;
       for (std::size_t i = 0; i < batch.size(); ++i) {
         auto insert = connection->prepare(
             "INSERT OR REPLACE INTO job_history (job_id, idx, cost, theta) VALUES (?1, ?2, ?3, ?4)");
-        insert.bind_text(1, id).bind_integer(2, batch[i].index).bind_real(3, batch[i].cost);
+        insert.bind_text(1, lease.job_id).bind_integer(2, batch[i].index).bind_real(3, batch[i].cost);
         insert.bind_blob_or_null(4, thetas[i]);  // an empty θ is NULL and reads back empty
         insert.run();
       }
+      return status;
     });
   }
 
-  void finish_job(const std::string& id, api::JobState state, const std::string& result, const std::string& error,
+  bool finish_job(const Lease& lease, api::JobState state, const std::string& result, const std::string& error,
                   const std::vector<EstimateRow>& estimates, const std::string& dataset_id) override {
     if (!api::is_terminal(state)) throw std::invalid_argument("finish_job needs succeeded, failed or cancelled");
     auto connection = pool_.checkout();
-    sqlite::run_transaction(*connection, TransactionKind::write, [&] {
-      // A finished job keeps its first outcome; queued is accepted too (ended before it ran).
+    return sqlite::run_transaction(*connection, TransactionKind::write, [&] {
+      // Only the attempt that holds the lease ends the job, and only once.
       auto update = connection->prepare(
-          "UPDATE jobs SET state = ?2, finished_at = ?3, result = ?4, error = ?5, "
-          "dataset_id = coalesce(?6, dataset_id) WHERE id = ?1 AND state IN ('queued', 'running')");
-      update.bind_text(1, id)
-          .bind_text(2, sqlite::state_text(state))
-          .bind_text(3, now_rfc3339())
-          .bind_text_or_null(4, result)
-          .bind_text_or_null(5, error)
-          .bind_text_or_null(6, dataset_id);
+          "UPDATE jobs SET state = ?4, finished_at = ?5, result = ?6, error = ?7, "
+          "dataset_id = coalesce(?8, dataset_id), worker = NULL, lease_expires_at = NULL " +
+          kHeldBy);
+      bind_lease(update, lease)
+          .bind_text(4, sqlite::state_text(state))
+          .bind_text(5, now_rfc3339())
+          .bind_text_or_null(6, result)
+          .bind_text_or_null(7, error)
+          .bind_text_or_null(8, dataset_id);
       update.run();
-      if (connection->changes() == 0) return;
+      if (connection->changes() == 0) return false;
       auto clear = connection->prepare("DELETE FROM estimates WHERE job_id = ?1");
-      clear.bind_text(1, id);
+      clear.bind_text(1, lease.job_id);
       clear.run();
       for (const auto& estimate : estimates) {
         auto insert = connection->prepare(
             "INSERT OR REPLACE INTO estimates (job_id, name, value, std_error) VALUES (?1, ?2, ?3, ?4)");
-        insert.bind_text(1, id).bind_text(2, estimate.name).bind_real(3, estimate.value).bind_real_or_null(
+        insert.bind_text(1, lease.job_id).bind_text(2, estimate.name).bind_real(3, estimate.value).bind_real_or_null(
             4, estimate.std_error);
         insert.run();
       }
+      return true;
     });
   }
 
-  void requeue_job(const std::string& id) override {
+  void requeue_job(const Lease& lease) override {
     auto connection = pool_.checkout();
     sqlite::run_transaction(*connection, TransactionKind::write, [&] {
-      auto running = connection->prepare("SELECT cancel_requested FROM jobs WHERE id = ?1 AND state = 'running'");
-      running.bind_text(1, id);
+      auto running = connection->prepare("SELECT cancel_requested FROM jobs " + kHeldBy);
+      bind_lease(running, lease);
       if (!running.step()) return;
       const bool cancel_requested = running.integer(0) != 0;
       running.run();
+      const std::string& id = lease.job_id;
       if (cancel_requested) {
         // The client asked to cancel it: running it again would ignore that.
-        auto cancel = connection->prepare("UPDATE jobs SET state = 'cancelled', finished_at = ?2 WHERE id = ?1");
+        auto cancel = connection->prepare(
+            "UPDATE jobs SET state = 'cancelled', finished_at = ?2, worker = NULL, lease_expires_at = NULL "
+            "WHERE id = ?1");
         cancel.bind_text(1, id).bind_text(2, now_rfc3339());
         cancel.run();
         return;
@@ -452,7 +463,7 @@ class SqliteStore final : public Store {
       clear_progress(*connection, id);
       auto requeue = connection->prepare(
           "UPDATE jobs SET state = 'queued', started_at = NULL, cancel_requested = 0, evaluations = 0, "
-          "best_cost = NULL WHERE id = ?1");
+          "best_cost = NULL, worker = NULL, lease_expires_at = NULL WHERE id = ?1");
       requeue.bind_text(1, id);
       requeue.run();
     });
@@ -553,39 +564,22 @@ class SqliteStore final : public Store {
                                            const std::function<std::string(int losses)>& lost_error) override {
     auto connection = pool_.checkout();
     return sqlite::run_transaction(*connection, TransactionKind::write, [&] {
-      RecoveryOutcome outcome;
-      const std::string now = now_rfc3339();
-      // Cancellation was asked for before the crash: honour it rather than run the job again.
-      auto cancel = connection->prepare(
-          "UPDATE jobs SET state = 'cancelled', finished_at = ?1 WHERE state = 'running' AND cancel_requested = 1");
-      cancel.bind_text(1, now);
-      cancel.run();
-      outcome.cancelled = connection->changes();
-      connection->prepare("UPDATE jobs SET worker_losses = worker_losses + 1 WHERE state = 'running'").run();
-      // The attempt that died leaves nothing behind: its history and estimates go.
+      connection->execute("CREATE TEMP TABLE IF NOT EXISTS lost_jobs (id TEXT PRIMARY KEY) WITHOUT ROWID");
+      connection->prepare("INSERT INTO temp.lost_jobs SELECT id FROM jobs WHERE state = 'running'").run();
+      return recover_lost(*connection, max_attempts, lost_error);
+    });
+  }
+
+  RecoveryOutcome recover_expired_leases(int max_attempts,
+                                         const std::function<std::string(int losses)>& lost_error) override {
+    auto connection = pool_.checkout();
+    return sqlite::run_transaction(*connection, TransactionKind::write, [&] {
+      connection->execute("CREATE TEMP TABLE IF NOT EXISTS lost_jobs (id TEXT PRIMARY KEY) WITHOUT ROWID");
       connection
-          ->prepare("DELETE FROM job_history WHERE job_id IN (SELECT id FROM jobs WHERE state = 'running')")
+          ->prepare("INSERT INTO temp.lost_jobs SELECT id FROM jobs WHERE state = 'running' "
+                    "AND (lease_expires_at IS NULL OR lease_expires_at < " + kNowSeconds + ")")
           .run();
-      connection->prepare("DELETE FROM estimates WHERE job_id IN (SELECT id FROM jobs WHERE state = 'running')").run();
-      // A job that took its worker down max_attempts times is failed, never run again.
-      std::vector<std::pair<std::string, int>> lost;
-      auto poisoned = connection->prepare("SELECT id, worker_losses FROM jobs WHERE state = 'running' AND worker_losses >= ?1");
-      poisoned.bind_integer(1, max_attempts);
-      while (poisoned.step()) lost.emplace_back(poisoned.text(0), static_cast<int>(poisoned.integer(1)));
-      for (const auto& [id, losses] : lost) {
-        auto fail = connection->prepare(
-            "UPDATE jobs SET state = 'failed', finished_at = ?2, error = ?3 WHERE id = ?1 AND state = 'running'");
-        fail.bind_text(1, id).bind_text(2, now).bind_text(3, lost_error(losses));
-        fail.run();
-        outcome.failed.push_back(id);
-      }
-      connection
-          ->prepare(
-              "UPDATE jobs SET state = 'queued', started_at = NULL, evaluations = 0, best_cost = NULL "
-              "WHERE state = 'running'")
-          .run();
-      outcome.requeued = connection->changes();
-      return outcome;
+      return recover_lost(*connection, max_attempts, lost_error);
     });
   }
 
@@ -610,6 +604,79 @@ class SqliteStore final : public Store {
   std::optional<std::string> write_trouble() const override { return pool_.health().trouble(); }
 
  private:
+  /// Now on the database's clock, Unix seconds with the fraction (julianday('now') is ms-exact).
+  static inline const std::string kNowSeconds = "((julianday('now') - 2440587.5) * 86400.0)";
+  /// The guard of every write of a running job: ?1 id, ?2 owner, ?3 attempt.
+  static inline const std::string kHeldBy = "WHERE id = ?1 AND state = 'running' AND worker = ?2 AND attempts = ?3";
+
+  struct Progress {
+    long evaluations = 0;
+    std::optional<double> best_cost;
+  };
+
+  static double seconds(std::chrono::milliseconds duration) { return static_cast<double>(duration.count()) / 1000.0; }
+
+  static Statement& bind_lease(Statement& statement, const Lease& lease) {
+    return statement.bind_text(1, lease.job_id).bind_text(2, lease.owner).bind_integer(3, lease.attempt);
+  }
+
+  /// The guarded update of a held lease: progress and/or a new expiry; what it learned.
+  static LeaseStatus extend(Connection& connection, const Lease& lease, std::optional<std::chrono::milliseconds> duration,
+                            const Progress* progress) {
+    std::string sql = "UPDATE jobs SET ";
+    sql += duration ? "lease_expires_at = " + kNowSeconds + " + ?4" : "lease_expires_at = lease_expires_at";
+    if (progress) sql += ", evaluations = ?5, best_cost = ?6";
+    sql += " " + kHeldBy + " RETURNING cancel_requested";
+    auto update = connection.prepare(sql);
+    bind_lease(update, lease);
+    if (duration) update.bind_real(4, seconds(*duration));
+    if (progress) update.bind_integer(5, progress->evaluations).bind_real_or_null(6, progress->best_cost);
+    if (!update.step()) return LeaseStatus::lost;
+    const bool cancel_requested = update.integer(0) != 0;
+    update.run();  // finish the statement
+    return cancel_requested ? LeaseStatus::cancel_requested : LeaseStatus::held;
+  }
+
+  /// Ends or requeues the jobs listed in temp.lost_jobs (their worker is gone), then empties it.
+  static RecoveryOutcome recover_lost(Connection& connection, int max_attempts,
+                                      const std::function<std::string(int losses)>& lost_error) {
+    RecoveryOutcome outcome;
+    const std::string now = now_rfc3339();
+    const std::string lost = "id IN (SELECT id FROM temp.lost_jobs)";
+    // Cancellation was asked for before the worker went: honour it rather than run the job again.
+    auto cancel = connection.prepare(
+        "UPDATE jobs SET state = 'cancelled', finished_at = ?1, worker = NULL, lease_expires_at = NULL "
+        "WHERE " + lost + " AND cancel_requested = 1");
+    cancel.bind_text(1, now);
+    cancel.run();
+    outcome.cancelled = connection.changes();
+    connection.prepare("DELETE FROM temp.lost_jobs WHERE id IN (SELECT id FROM jobs WHERE state <> 'running')").run();
+    connection.prepare("UPDATE jobs SET worker_losses = worker_losses + 1 WHERE " + lost).run();
+    // The attempt that died leaves nothing behind: its history and estimates go.
+    connection.prepare("DELETE FROM job_history WHERE job_id IN (SELECT id FROM temp.lost_jobs)").run();
+    connection.prepare("DELETE FROM estimates WHERE job_id IN (SELECT id FROM temp.lost_jobs)").run();
+    // A job that took its worker down max_attempts times is failed, never run again.
+    std::vector<std::pair<std::string, int>> poisoned;
+    auto select = connection.prepare("SELECT id, worker_losses FROM jobs WHERE " + lost + " AND worker_losses >= ?1");
+    select.bind_integer(1, max_attempts);
+    while (select.step()) poisoned.emplace_back(select.text(0), static_cast<int>(select.integer(1)));
+    for (const auto& [id, losses] : poisoned) {
+      auto fail = connection.prepare(
+          "UPDATE jobs SET state = 'failed', finished_at = ?2, error = ?3, worker = NULL, lease_expires_at = NULL "
+          "WHERE id = ?1");
+      fail.bind_text(1, id).bind_text(2, now).bind_text(3, lost_error(losses));
+      fail.run();
+      outcome.failed.push_back(id);
+    }
+    auto requeue = connection.prepare(
+        "UPDATE jobs SET state = 'queued', started_at = NULL, evaluations = 0, best_cost = NULL, worker = NULL, "
+        "lease_expires_at = NULL WHERE " + lost + " AND state = 'running'");
+    requeue.run();
+    outcome.requeued = connection.changes();
+    connection.prepare("DELETE FROM temp.lost_jobs").run();
+    return outcome;
+  }
+
   static std::unique_ptr<Connection> open_and_prepare(const std::string& path) {
     auto connection = std::make_unique<Connection>(path);
     sqlite::prepare_database(*connection);

@@ -58,6 +58,7 @@ struct JobInfo {
   std::optional<double> best_cost;
   bool cancel_requested = false;
   int attempts = 0;         ///< times a worker started it (> 1 after a restart)
+  std::string worker;       ///< while running: the process that holds its lease, "HOST:PID"
   std::string result;       ///< JSON text when succeeded
   std::string error;        ///< problem JSON text when failed
 };

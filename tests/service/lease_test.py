@@ -1,0 +1,111 @@
+"""lease_test.py — running jobs are held on leases: two `manipid serve` processes on one
+database file; the one running a job is paused (SIGSTOP) past its lease, the other takes the job
+over and finishes it; the paused one wakes up (SIGCONT) and writes nothing more. A cancel sent to
+the process that is not running the job stops it within one renewal.
+
+Run: MANIPID_BIN=build/debug/server/manipid python3 -m unittest tests/service/lease_test.py
+"""
+import os
+import signal
+import sys
+import time
+import unittest
+
+sys.path.insert(0, os.path.dirname(__file__))
+from harness import Server, temporary_directory  # noqa: E402
+
+LEASE = "1"  # s: renewed every 1/3 s, taken over a second after the last renewal
+
+
+def start(db, name):
+    server = Server(db, "--lease", LEASE, workers=1)
+    server.log_path = f"{db}.{name}.log"
+    return server.start()
+
+
+def worker_name(server):
+    return f"{os.uname().nodename}:{server.process.pid}"
+
+
+def wait_for(predicate, server, job_id, timeout=120):
+    deadline = time.time() + timeout
+    while time.time() < deadline:
+        _, _, job = server.request("GET", f"/v1/jobs/{job_id}")
+        if predicate(job):
+            return job
+        time.sleep(0.05)
+    raise AssertionError(f"job {job_id} never got there: {job}")
+
+
+class Leases(unittest.TestCase):
+    def setUp(self):
+        self.directory = temporary_directory()
+        self.db = os.path.join(self.directory.__enter__(), "jobs.db")
+        self.servers = [start(self.db, "a"), start(self.db, "b")]
+
+    def tearDown(self):
+        for server in self.servers:
+            if server.process.poll() is None:
+                server.process.send_signal(signal.SIGCONT)
+                server.stop()
+        self.directory.__exit__(None, None, None)
+
+    def holder_and_other(self, job):
+        names = [worker_name(server) for server in self.servers]
+        self.assertIn(job["worker"], names, job)
+        holder = self.servers[names.index(job["worker"])]
+        return holder, self.servers[1 - names.index(job["worker"])]
+
+    def test_a_paused_worker_loses_its_job_to_the_other_process_and_writes_nothing_more(self):
+        # Output-error simulates the loop at every evaluation: slow enough to be caught running.
+        body = {"simulation": {"duration": 3.0}, "method": "output-error", "max_evaluations": 40}
+        status, _, job = self.servers[0].request("POST", "/v1/identifications", body)
+        self.assertEqual(status, 202, job)
+        running = wait_for(lambda j: j["state"] == "running" and j["progress"]["evaluations"] > 0,
+                           self.servers[0], job["id"])
+        self.assertEqual(running["attempts"], 1)
+        holder, other = self.holder_and_other(running)
+
+        holder.process.send_signal(signal.SIGSTOP)
+        taken = wait_for(lambda j: j["attempts"] == 2 and j["state"] != "queued", other, job["id"], timeout=60)
+        if taken["state"] == "running":
+            self.assertEqual(taken["worker"], worker_name(other))
+        holder.process.send_signal(signal.SIGCONT)
+
+        done = other.wait_job(job["id"])
+        self.assertEqual(done["state"], "succeeded", done)
+        self.assertEqual(done["attempts"], 2)
+        self.assertIsNone(done["worker"])
+        # One attempt's history only: indices 0..evaluations-1, once each, none of the paused one's.
+        _, _, page = other.request("GET", f"/v1/jobs/{job['id']}/history?page_size=1000")
+        indices = [entry["index"] for entry in page["items"]]
+        self.assertEqual(indices, list(range(done["result"]["evaluations"])))
+        # The paused process learned it had lost the job and stopped it without writing.
+        deadline = time.time() + 30
+        while "stopped, its lease lost" not in holder.read_log() and time.time() < deadline:
+            time.sleep(0.1)
+        self.assertIn("stopped, its lease lost", holder.read_log())
+        self.assertIn("whose worker stopped renewing its lease queued again", other.read_log())
+        _, _, after = holder.request("GET", f"/v1/jobs/{job['id']}")
+        self.assertEqual((after["state"], after["attempts"]), ("succeeded", 2))
+
+    def test_a_cancel_through_the_other_process_stops_the_running_job(self):
+        body = {"simulation": {"duration": 3.0}, "method": "output-error", "max_evaluations": 400}
+        status, _, job = self.servers[0].request("POST", "/v1/identifications", body)
+        self.assertEqual(status, 202, job)
+        running = wait_for(lambda j: j["state"] == "running" and j["progress"]["evaluations"] > 0,
+                           self.servers[0], job["id"])
+        holder, other = self.holder_and_other(running)
+        status, _, answer = other.request("POST", f"/v1/jobs/{job['id']}/cancel")
+        self.assertEqual(status, 200, answer)
+        asked = time.time()
+        done = holder.wait_job(job["id"], timeout=60)
+        self.assertEqual(done["state"], "cancelled", done)
+        self.assertEqual(done["attempts"], 1)
+        # Within a few renewals (1/3 s each), not at the end of its 400 evaluations.
+        self.assertLess(done["progress"]["evaluations"], 400)
+        print(f"cancel through the other process ended the job {time.time() - asked:.2f} s after it was asked")
+
+
+if __name__ == "__main__":
+    unittest.main()
