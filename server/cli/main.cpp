@@ -8,6 +8,7 @@
 #include "cli/serve.h"
 #include "cli/simulate.h"
 #include "cli/torque.h"
+#include "cli/worker.h"
 
 #include "manipid/core/identification.h"
 
@@ -45,6 +46,7 @@ int run(int argc, char** argv) {
   ServeOptions serve;
   ExcitationOptions excitation;
   DoctorOptions doctor;
+  WorkerOptions worker;
   CLI::App* simulate_command = add_simulate_command(app, simulate);
   CLI::App* torque_command = add_torque_command(app, torque);
   CLI::App* filter_command = add_filter_command(app, filter);
@@ -52,8 +54,9 @@ int run(int argc, char** argv) {
   CLI::App* serve_command = add_serve_command(app, serve);
   CLI::App* excitation_command = add_excitation_command(app, excitation);
   CLI::App* doctor_command = add_doctor_command(app, doctor);
-  const CLI::App* commands[] = {simulate_command, torque_command,    filter_command, identify_command,
-                                serve_command,    excitation_command, doctor_command};
+  CLI::App* worker_command = add_worker_command(app, worker);
+  const CLI::App* commands[] = {simulate_command, torque_command,     filter_command, identify_command,
+                                serve_command,    excitation_command, doctor_command, worker_command};
 
   try {
     app.parse(argc, argv);
@@ -76,7 +79,7 @@ int run(int argc, char** argv) {
     // CLI11 calls a mistyped command an unexpected argument; say what the user meant.
     if (!in_command && argc > 1 && argv[1][0] != '-') {
       return report(std::string("unknown command '") + argv[1] +
-                        "'; expected simulate, torque, filter, identify, serve, excitation or doctor (see 'manipid --help')",
+                        "'; expected simulate, torque, filter, identify, serve, worker, excitation or doctor (see 'manipid --help')",
                     exit_usage);
     }
     return report(std::string(error.what()) + " (see '" + help + "')", exit_usage);
@@ -87,9 +90,10 @@ int run(int argc, char** argv) {
   if (filter_command->parsed()) return run_filter(filter);
   if (identify_command->parsed()) return run_identify(identify);
   if (serve_command->parsed()) return run_serve(serve);
+  if (worker_command->parsed()) return run_worker(worker);
   if (excitation_command->parsed()) return run_excitation(excitation);
   if (doctor_command->parsed()) return run_doctor(doctor);
-  return report("no command given; expected simulate, torque, filter, identify, serve, excitation or doctor (see 'manipid --help')", exit_usage);
+  return report("no command given; expected simulate, torque, filter, identify, serve, worker, excitation or doctor (see 'manipid --help')", exit_usage);
 }
 
 }  // namespace

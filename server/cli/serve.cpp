@@ -26,49 +26,6 @@
 #include <thread>
 
 namespace manipid::server::cli {
-namespace {
-
-std::mutex log_mutex;
-
-/// "HOST:PID": who holds this process's leases (a running job's `worker`).
-std::string process_name() {
-  char host[256] = {};
-  if (gethostname(host, sizeof host - 1) != 0 || host[0] == '\0') std::snprintf(host, sizeof host, "localhost");
-  return std::string(host) + ":" + std::to_string(getpid());
-}
-
-void log_line(const std::string& line) {
-  const auto now = std::chrono::system_clock::now();
-  const std::time_t seconds = std::chrono::system_clock::to_time_t(now);
-  const auto millis = std::chrono::duration_cast<std::chrono::milliseconds>(now.time_since_epoch()).count() % 1000;
-  std::tm utc{};
-  gmtime_r(&seconds, &utc);
-  char stamp[40];
-  std::strftime(stamp, sizeof stamp, "%Y-%m-%dT%H:%M:%S", &utc);
-  std::lock_guard lock(log_mutex);
-  std::fprintf(stderr, "%s.%03dZ %s\n", stamp, static_cast<int>(millis), line.c_str());
-}
-
-/// "64MiB", "1M", "500k", "1048576" → bytes; `option` names it in messages.
-std::size_t parse_size(const std::string& text, const std::string& option) {
-  std::size_t digits = 0;
-  while (digits < text.size() && std::isdigit(static_cast<unsigned char>(text[digits]))) ++digits;
-  std::string unit = text.substr(digits);
-  std::transform(unit.begin(), unit.end(), unit.begin(), [](unsigned char c) { return std::tolower(c); });
-  std::size_t scale = 0;
-  if (unit.empty() || unit == "b") scale = 1;
-  else if (unit == "k" || unit == "kib" || unit == "kb") scale = 1u << 10;
-  else if (unit == "m" || unit == "mib" || unit == "mb") scale = 1u << 20;
-  else if (unit == "g" || unit == "gib" || unit == "gb") scale = 1u << 30;
-  if (digits == 0 || digits > 12 || scale == 0) {
-    throw UsageError(option + ": expected a size such as 64MiB, 500k or 1048576, got '" + text + "'");
-  }
-  const std::size_t size = std::stoull(text.substr(0, digits)) * scale;
-  if (size < 1024) throw UsageError(option + ": at least 1k, got '" + text + "'");
-  return size;
-}
-
-}  // namespace
 
 CLI::App* add_serve_command(CLI::App& app, ServeOptions& options) {
   CLI::App* command = app.add_subcommand(
@@ -79,10 +36,7 @@ CLI::App* add_serve_command(CLI::App& app, ServeOptions& options) {
   command->add_option("--port", options.port, "TCP port; 0 picks a free one")
       ->check(integer_between(0, 65535))
       ->capture_default_str();
-  command->add_option("--db", options.database, "Store: a SQLite file, PATH or sqlite:PATH (created with its schema if missing)")
-      ->capture_default_str();
-  command->add_option("--workers", options.workers, "Identification worker threads (default: hardware threads)")
-      ->check(integer_between(1, 256));
+  add_job_options(*command, options.jobs, 0);
   command->add_option("--queue-limit", options.queue_limit, "Queued jobs at most; more get 429 (0: no limit)")
       ->check(integer_between(0, 100'000'000))
       ->capture_default_str();
@@ -91,27 +45,10 @@ CLI::App* add_serve_command(CLI::App& app, ServeOptions& options) {
                       "Memory the request bodies being handled at once may take, 3 bytes per body byte; "
                       "a body beyond it gets 503 and Retry-After (at least 3 x --max-body)")
       ->capture_default_str();
-  command->add_option("--job-memory", options.job_memory,
-                      "Memory the running jobs may hold together, each by its estimate from its samples, joints and kind of "
-                      "work; a job starts when it fits and waits otherwise, one that could never fit is refused (422)")
-      ->capture_default_str();
   command->add_option("--token", options.token, "Bearer token every /v1 request must carry (or MANIPID_TOKEN)")
       ->envname("MANIPID_TOKEN");
-  command->add_option("--job-timeout", options.job_timeout, "Longest a job may run, s (a simulation then fails, an identification stops)")
-      ->check(positive_number())
-      ->capture_default_str();
   command->add_option("--http-threads", options.http_threads, "Connections served at once")
       ->check(integer_between(2, 1024))
-      ->capture_default_str();
-  command->add_option("--max-attempts", options.max_attempts,
-                      "A job whose worker was lost this many times (the process crashed, was killed or stopped "
-                      "renewing the job's lease) is failed instead of run again")
-      ->check(integer_between(1, 1000))
-      ->capture_default_str();
-  command->add_option("--lease", options.lease,
-                      "Seconds a running job's claim holds without renewal (renewed every third of it): a job whose "
-                      "process stopped renewing it runs again elsewhere after this long")
-      ->check(CLI::Range(0.1, 86400.0))
       ->capture_default_str();
   return command;
 }
@@ -124,39 +61,12 @@ int run_serve(const ServeOptions& options) {
                      " x --max-body, so that any body fits alone (" + std::to_string(max_body * api::memory_per_body_byte) +
                      " bytes), got '" + options.memory_budget + "'");
   }
-  const std::size_t job_memory = parse_size(options.job_memory, "--job-memory");
-  const int workers = options.workers > 0 ? options.workers : std::max(1u, std::thread::hardware_concurrency());
+  const jobs::WorkerPoolOptions pool_options = worker_pool_options(options.jobs);
 
-  // Signals go to one thread that waits for them; every thread started from here on
-  // inherits the blocked mask, so no worker is interrupted mid-transaction.
-  sigset_t signals;
-  sigemptyset(&signals);
-  sigaddset(&signals, SIGINT);
-  sigaddset(&signals, SIGTERM);
-  pthread_sigmask(SIG_BLOCK, &signals, nullptr);
+  // Signals go to one thread that waits for them (sigwait below).
+  sigset_t signals = block_stop_signals();
 
-  std::unique_ptr<store::Store> store;
-  try {
-    store = store::open_store(options.database);
-  } catch (const store::StoreError& error) {
-    // Not the value itself: a database URL may carry a password (SQLite's messages name the file).
-    throw UsageError(std::string("--db: ") + error.what());
-  }
-  const store::RecoveryOutcome recovered = store->recover_interrupted_jobs(options.max_attempts, jobs::worker_lost_problem);
-  if (recovered.requeued > 0) log_line("manipid: " + std::to_string(recovered.requeued) + " interrupted job(s) queued again");
-  if (recovered.cancelled > 0) log_line("manipid: " + std::to_string(recovered.cancelled) + " interrupted job(s) cancelled as asked");
-  for (const std::string& id : recovered.failed) {
-    log_line("manipid: job " + id + " failed: its worker died " + std::to_string(options.max_attempts) +
-             " or more times while running it");
-  }
-
-  jobs::WorkerPoolOptions pool_options;
-  pool_options.workers = workers;
-  pool_options.runner.job_time_limit_seconds = options.job_timeout;
-  pool_options.job_memory = job_memory;
-  pool_options.owner = process_name();
-  pool_options.lease = std::chrono::milliseconds(static_cast<long>(std::lround(options.lease * 1000.0)));
-  pool_options.max_attempts = options.max_attempts;
+  const std::unique_ptr<store::Store> store = open_job_store(options.jobs);
   jobs::WorkerPool pool(*store, pool_options, log_line);
   jobs::JobService service(*store, pool, jobs::JobServiceOptions{options.queue_limit, log_line});
 
@@ -191,7 +101,9 @@ int run_serve(const ServeOptions& options) {
   std::printf("listening on http://%s:%d\n", options.host.c_str(), port);
   std::fflush(stdout);
   log_line("manipid " MANIPID_VERSION ": listening on http://" + options.host + ":" + std::to_string(port) + ", " +
-           std::to_string(workers) + " worker(s), database " + options.database +
+           (pool_options.workers == 0 ? std::string("no job threads (API only)")
+                                      : std::to_string(pool_options.workers) + " worker(s)") +
+           ", database " + options.jobs.database +
            (options.token.empty() ? "" : ", bearer token required"));
 
   std::atomic<bool> listen_returned{false};

@@ -187,13 +187,15 @@ class Store {
   virtual std::optional<api::HistoryOverview> history_overview(const std::string& id, long max_points) = 0;
 
   // ---- the process's life ----
-  /// At start-up of the process that owns the file (SQLite): every job left running by a dead
-  /// process counts one more worker loss and goes back to queued (history cleared) — unless its
-  /// cancellation had been asked for (cancelled), or it has now lost its worker `max_attempts`
-  /// times: then it is failed with the error `lost_error(losses)` and never runs again, so a job
-  /// that kills the process cannot kill it on every restart. One transaction.
+  /// At start-up: every running job whose worker is `gone` (a process known dead; an empty
+  /// worker, from before leases, always is) counts one more worker loss and goes back to queued
+  /// (history cleared) — unless its cancellation had been asked for (cancelled), or it has now lost
+  /// its worker `max_attempts` times: then it is failed with the error `lost_error(losses)` and
+  /// never runs again, so a job that kills the process cannot kill it on every restart. Jobs of
+  /// workers not known dead wait for their lease to expire. One transaction.
   virtual RecoveryOutcome recover_interrupted_jobs(int max_attempts,
-                                                   const std::function<std::string(int losses)>& lost_error) = 0;
+                                                   const std::function<std::string(int losses)>& lost_error,
+                                                   const std::function<bool(const std::string& worker)>& gone) = 0;
   /// The same for the running jobs whose lease has expired (their worker died, hung or was
   /// paused past it): what every process does every few seconds.
   virtual RecoveryOutcome recover_expired_leases(int max_attempts,

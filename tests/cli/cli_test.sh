@@ -371,7 +371,7 @@ at_rest() {
 }
 
 ur5_header="t,q1,q2,q3,q4,q5,q6,qd1,qd2,qd3,qd4,qd5,qd6,qdd1,qdd2,qdd3,qdd4,qdd5,qdd6"
-"$manipid" excitation --robot "$robots/ur5_like.urdf" --period 10 --harmonics 5 --dt 0.01 --max-evaluations 100 \
+"$manipid" excitation --robot "$robots/ur5_like.urdf" --period 10 --harmonics 5 --dt 0.01 --max-evaluations 30 \
   --out ur5_excitation.csv --coefficients ur5_excitation.json 2>ur5_excitation.err
 check "excitation (UR5-like): exit 0" test $? -eq 0
 check "excitation (UR5-like): header t,q1..q6,qd1..qd6,qdd1..qdd6" test "$(head -1 ur5_excitation.csv)" = "$ur5_header"
@@ -393,9 +393,9 @@ check "excitation (UR5-like): coefficients name the robot and its joints" \
 check "excitation (UR5-like): coefficients carry period, harmonics, criterion" \
   bash -c "grep -q '\"period\": 10.0' ur5_excitation.json && grep -q '\"harmonics\": 5' ur5_excitation.json &&
            grep -q '\"criterion\": \"condition\"' ur5_excitation.json && grep -q '\"criterion_value\": [0-9]' ur5_excitation.json"
-"$manipid" excitation --robot "$robots/ur5_like.urdf" --dt 0.01 --max-evaluations 100 --out ur5_again.csv 2>/dev/null
+"$manipid" excitation --robot "$robots/ur5_like.urdf" --dt 0.01 --max-evaluations 30 --out ur5_again.csv 2>/dev/null
 check "excitation: same seed, same file" cmp -s ur5_excitation.csv ur5_again.csv
-"$manipid" excitation --robot "$robots/ur5_like.urdf" --dt 0.01 --max-evaluations 100 --seed 2 --out ur5_seed2.csv 2>/dev/null
+"$manipid" excitation --robot "$robots/ur5_like.urdf" --dt 0.01 --max-evaluations 30 --seed 2 --out ur5_seed2.csv 2>/dev/null
 check "excitation: another seed, another trajectory" differ ur5_excitation.csv ur5_seed2.csv
 
 panda_limits_ok=1
@@ -526,6 +526,11 @@ expect_error "doctor: a missing file" 2 "no database file 'missing.db'" "$manipi
 check "doctor: a missing file is not created" test ! -e missing.db
 expect_error "serve: a damaged database is refused at start" 2 "the database file is damaged (PRAGMA quick_check: Page" \
   "$manipid" serve --port 0 --db damaged.db
+expect_error "worker: a damaged database is refused at start" 2 "the database file is damaged (PRAGMA quick_check: Page" \
+  "$manipid" worker --db damaged.db
+expect_error "worker: runs at least one job thread" 2 "--workers" "$manipid" worker --db sound.db --workers 0
+expect_error "worker: a lease below 0.1 s" 2 "--lease" "$manipid" worker --db sound.db --lease 0.01
+expect_error "serve: a PostgreSQL URL is not in this build" 2 "--db" "$manipid" serve --port 0 --db postgresql://u@h/db
 
 echo "$passed passed, $failed failed"
 [[ $failed -eq 0 ]]

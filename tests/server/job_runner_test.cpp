@@ -40,7 +40,8 @@ class FailingStore : public Store {
   DeleteResult delete_job(const std::string&) override { fail(); }
   std::optional<api::Page<api::HistoryEntry>> history(const std::string&, const api::PageRequest&) override { fail(); }
   std::optional<api::HistoryOverview> history_overview(const std::string&, long) override { fail(); }
-  RecoveryOutcome recover_interrupted_jobs(int, const std::function<std::string(int)>&) override { fail(); }
+  RecoveryOutcome recover_interrupted_jobs(int, const std::function<std::string(int)>&,
+                                           const std::function<bool(const std::string&)>&) override { fail(); }
   RecoveryOutcome recover_expired_leases(int, const std::function<std::string(int)>&) override { fail(); }
   std::map<api::JobState, long> count_jobs_by_state() override { fail(); }
   std::optional<std::string> write_trouble() const override { return "string or blob too big"; }

@@ -135,9 +135,10 @@ class StoreContract : public ::testing::TestWithParam<Backend> {
   }
 
   /// Start-up recovery as `manipid serve` does it, with the default of 3 worker deaths.
-  RecoveryOutcome recover(int max_attempts = 3) {
-    return store_->recover_interrupted_jobs(max_attempts,
-                                            [](int losses) { return "{\"lost\": " + std::to_string(losses) + "}"; });
+  RecoveryOutcome recover(int max_attempts = 3, const std::string& alive = "") {
+    return store_->recover_interrupted_jobs(
+        max_attempts, [](int losses) { return "{\"lost\": " + std::to_string(losses) + "}"; },
+        [&](const std::string& worker) { return worker != alive; });
   }
 
   fs::path directory_;
@@ -704,6 +705,21 @@ TEST_P(StoreContract, RecoverInterruptedJobsAfterReopen) {
   EXPECT_EQ(first->id, interrupted);
   EXPECT_EQ(first->attempts, 2);
   EXPECT_EQ(claim()->id, waiting);
+}
+
+TEST_P(StoreContract, StartUpRecoveryLeavesTheJobsOfLiveWorkers) {
+  const auto dead = submit();
+  const auto alive = submit();
+  ASSERT_EQ(claim("host-a:100")->id, dead);
+  ASSERT_EQ(claim("host-a:200")->id, alive);
+  reopen();
+  const RecoveryOutcome recovered = recover(3, "host-a:200");
+  EXPECT_EQ(recovered.requeued, 1);
+  EXPECT_EQ(store_->find_job(dead)->state, JobState::queued);
+  const auto job = store_->find_job(alive);
+  EXPECT_EQ(job->state, JobState::running);
+  EXPECT_EQ(job->worker, "host-a:200");
+  EXPECT_EQ(store_->renew_lease(held(alive), std::chrono::seconds(30)), LeaseStatus::held);
 }
 
 TEST_P(StoreContract, AJobThatKillsItsWorkerThreeTimesIsFailedNotRunAgain) {

@@ -1,18 +1,21 @@
 """lease_test.py — running jobs are held on leases: two `manipid serve` processes on one
 database file; the one running a job is paused (SIGSTOP) past its lease, the other takes the job
 over and finishes it; the paused one wakes up (SIGCONT) and writes nothing more. A cancel sent to
-the process that is not running the job stops it within one renewal.
+the process that is not running the job stops it within one renewal. `manipid serve --workers 0`
+answers the API while `manipid worker` processes run the jobs; a worker that starts later leaves
+the running jobs of the live one alone.
 
 Run: MANIPID_BIN=build/debug/server/manipid python3 -m unittest tests/service/lease_test.py
 """
 import os
 import signal
+import subprocess
 import sys
 import time
 import unittest
 
 sys.path.insert(0, os.path.dirname(__file__))
-from harness import Server, temporary_directory  # noqa: E402
+from harness import Server, binary, temporary_directory  # noqa: E402
 
 LEASE = "1"  # s: renewed every 1/3 s, taken over a second after the last renewal
 
@@ -105,6 +108,68 @@ class Leases(unittest.TestCase):
         # Within a few renewals (1/3 s each), not at the end of its 400 evaluations.
         self.assertLess(done["progress"]["evaluations"], 400)
         print(f"cancel through the other process ended the job {time.time() - asked:.2f} s after it was asked")
+
+
+class Worker:
+    """`manipid worker` on `db`: started, its first stdout line checked, stopped with SIGTERM."""
+
+    def __init__(self, db, name):
+        self.log_path = f"{db}.{name}.log"
+        self.log = open(self.log_path, "ab")
+        self.process = subprocess.Popen([binary(), "worker", "--db", db, "--workers", "1", "--lease", LEASE],
+                                        stdout=subprocess.PIPE, stderr=self.log)
+        line = self.process.stdout.readline().decode()
+        if line != f"working on {db}\n":
+            self.process.kill()
+            raise RuntimeError(f"worker did not start: {line!r}; log: {self.read_log()}")
+
+    def read_log(self):
+        with open(self.log_path, "rb") as stream:
+            return stream.read().decode(errors="replace")
+
+    def stop(self):
+        self.process.send_signal(signal.SIGTERM)
+        status = self.process.wait(60)
+        self.process.stdout.close()
+        self.log.close()
+        return status
+
+
+class ApiAndWorkers(unittest.TestCase):
+    def test_the_api_process_runs_nothing_and_the_workers_run_everything(self):
+        with temporary_directory() as directory:
+            db = os.path.join(directory, "jobs.db")
+            with Server(db, workers=0) as api:
+                deadline = time.time() + 10  # the log line follows the "listening on" line on stdout
+                while "no job threads (API only)" not in api.read_log() and time.time() < deadline:
+                    time.sleep(0.05)
+                self.assertIn("no job threads (API only)", api.read_log())
+                first = Worker(db, "first")
+                try:
+                    body = {"simulation": {"duration": 3.0}, "method": "output-error", "max_evaluations": 40}
+                    status, _, slow = api.request("POST", "/v1/identifications", body)
+                    self.assertEqual(status, 202, slow)
+                    running = wait_for(lambda j: j["state"] == "running", api, slow["id"])
+                    self.assertEqual(running["worker"], worker_name(first))
+                    # A second worker starting now takes back no job from the live first one.
+                    second = Worker(db, "second")
+                    try:
+                        self.assertNotIn("interrupted job(s) queued again", second.read_log())
+                        quick = {"simulation": {"duration": 1.0}, "half_length": 100, "band": 0.2, "free": ["m2"]}
+                        ids = [api.request("POST", "/v1/identifications", quick)[2]["id"] for _ in range(3)]
+                        for job_id in ids + [slow["id"]]:
+                            done = api.wait_job(job_id)
+                            self.assertEqual((done["state"], done["attempts"]), ("succeeded", 1), done)
+                        self.assertEqual(second.stop(), 0)
+                    finally:
+                        if second.process.poll() is None:
+                            second.process.kill()
+                    self.assertEqual(first.stop(), 0)
+                finally:
+                    if first.process.poll() is None:
+                        first.process.kill()
+                self.assertIn("stopped", first.read_log())
+                self.assertNotIn("running (attempt", api.read_log())
 
 
 if __name__ == "__main__":

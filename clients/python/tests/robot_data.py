@@ -12,9 +12,13 @@
 - `clean.csv`: run.csv's motion and truth without noise (an estimate a URDF can hold);
 - `truth.json`: the parameter values by name the torques were made with.
 
-Shared by the Python tests, the MATLAB/Octave tests and the curl batch test:
+Shared by the Python tests and the curl batch test:
 
     python3 clients/python/tests/robot_data.py MANIPID_BIN URDF DIR   # prints the files as JSON
+
+Making them takes ~40 s under the sanitizers, so ctest makes them once (the `robot_data` fixture)
+and names the folder in MANIPID_ROBOT_DATA; robot_runs() copies from there when that folder was
+made by the same binary from the same URDF, and makes them itself otherwise.
 """
 from __future__ import annotations
 
@@ -23,6 +27,7 @@ import json
 import math
 import os
 import random
+import shutil
 import subprocess
 import sys
 from typing import Dict, List, Mapping, Sequence
@@ -154,7 +159,37 @@ def make_robot_runs(binary: str, urdf: str, directory: str, truth: Mapping[str, 
             "jitter_rows": len(measured), "jitter_repeats": repeats}
 
 
+MANIFEST = "manifest.json"
+
+
+def robot_runs(binary: str, urdf: str, directory: str) -> Dict[str, object]:
+    """make_robot_runs with the default truth, or a copy of the files the ctest fixture made
+    (MANIPID_ROBOT_DATA) when the same binary made them from the same URDF. Writes a manifest
+    into `directory` either way, so that it can serve as such a fixture."""
+    made_by = {"binary": os.path.realpath(binary), "urdf": os.path.realpath(urdf)}
+    shared = os.environ.get("MANIPID_ROBOT_DATA")
+    runs = None
+    if shared and os.path.realpath(shared) != os.path.realpath(directory):
+        try:
+            with open(os.path.join(shared, MANIFEST)) as stream:
+                manifest = json.load(stream)
+        except (OSError, ValueError):
+            manifest = {}
+        if manifest.get("made_by") == made_by:
+            os.makedirs(directory, exist_ok=True)
+            runs = dict(manifest["runs"])
+            for key in ("run", "clean", "jitter", "check", "excitation"):
+                copy = os.path.join(directory, os.path.basename(runs[key]))
+                shutil.copyfile(runs[key], copy)
+                runs[key] = copy
+    if runs is None:
+        runs = make_robot_runs(binary, urdf, directory)
+    with open(os.path.join(directory, MANIFEST), "w") as stream:
+        json.dump({"made_by": made_by, "runs": runs}, stream)
+    return runs
+
+
 if __name__ == "__main__":
     if len(sys.argv) != 4:
         sys.exit("usage: robot_data.py MANIPID_BIN URDF DIR")
-    print(json.dumps(make_robot_runs(*sys.argv[1:4])))
+    print(json.dumps(robot_runs(*sys.argv[1:4])))

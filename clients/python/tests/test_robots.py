@@ -27,7 +27,7 @@ sys.path.insert(0, str(Path(__file__).resolve().parent))
 
 from manipid_client import (Client, Dataset, Estimate, Job, JobCancelled, ManipidError, Robot,  # noqa: E402
                             RobotResult, base_value, local_server)
-from robot_data import make_robot_runs  # noqa: E402
+from robot_data import robot_runs  # noqa: E402
 
 if not os.environ.get("MANIPID_BIN"):
     for candidate in ("build/debug/server/manipid", "build/release/server/manipid"):
@@ -57,7 +57,7 @@ class RobotsAgainstServer(unittest.TestCase):
     def setUpClass(cls) -> None:
         cls.stack = contextlib.ExitStack()
         cls.directory = cls.stack.enter_context(tempfile.TemporaryDirectory(prefix="manipid-robot-test-"))
-        cls.runs = make_robot_runs(BINARY, str(PANDA), cls.directory)
+        cls.runs = robot_runs(BINARY, str(PANDA), cls.directory)
         cls.truth = cls.runs["truth"]
         cls.url = cls.stack.enter_context(local_server(workers=2))
         cls.client = Client(cls.url)

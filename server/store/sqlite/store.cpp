@@ -560,12 +560,22 @@ class SqliteStore final : public Store {
 
   // ---- the process's life ----
 
-  RecoveryOutcome recover_interrupted_jobs(int max_attempts,
-                                           const std::function<std::string(int losses)>& lost_error) override {
+  RecoveryOutcome recover_interrupted_jobs(int max_attempts, const std::function<std::string(int losses)>& lost_error,
+                                           const std::function<bool(const std::string& worker)>& gone) override {
     auto connection = pool_.checkout();
     return sqlite::run_transaction(*connection, TransactionKind::write, [&] {
       connection->execute("CREATE TEMP TABLE IF NOT EXISTS lost_jobs (id TEXT PRIMARY KEY) WITHOUT ROWID");
-      connection->prepare("INSERT INTO temp.lost_jobs SELECT id FROM jobs WHERE state = 'running'").run();
+      std::vector<std::string> lost;
+      auto running = connection->prepare("SELECT id, worker FROM jobs WHERE state = 'running'");
+      while (running.step()) {
+        const std::string worker = running.text(1);
+        if (worker.empty() || gone(worker)) lost.push_back(running.text(0));
+      }
+      for (const std::string& id : lost) {
+        auto insert = connection->prepare("INSERT INTO temp.lost_jobs (id) VALUES (?1)");
+        insert.bind_text(1, id);
+        insert.run();
+      }
       return recover_lost(*connection, max_attempts, lost_error);
     });
   }
