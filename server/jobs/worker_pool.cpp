@@ -157,7 +157,8 @@ bool WorkerPool::pause_unless_stopping(std::chrono::milliseconds delay) {
   return !work_available_.wait_for(lock, delay, [&] { return stopping_; });
 }
 
-bool WorkerPool::record_end(const api::JobInfo& job, const store::Lease& lease, JobOutcome& outcome) {
+bool WorkerPool::record_end(const api::JobInfo& job, LiveJob& live, JobOutcome& outcome) {
+  const store::Lease& lease = live.lease;
   // A full disk (StorageFull) keeps the end as computed: once space is freed it is written, and
   // an hour's identification keeps its result. Any other storage failure may be the result
   // itself (over a limit of the store): after two tries the job is recorded failed with a short
@@ -172,6 +173,7 @@ bool WorkerPool::record_end(const api::JobInfo& job, const store::Lease& lease, 
       if (!store_.finish_job(lease, outcome.state, outcome.result, outcome.error, outcome.estimates, outcome.dataset_id)) {
         log_("job " + job.id + ": its end was not recorded: attempt " + std::to_string(lease.attempt) +
              " no longer holds the job's lease (it was recovered, or it had ended)");
+        live.lost = true;
         return true;
       }
       if (attempt > 1) log_("job " + job.id + ": its end was recorded at attempt " + std::to_string(attempt));
@@ -316,7 +318,7 @@ void WorkerPool::run_one(const api::JobInfo& job) {
       // The row stays running; the next start-up puts it back in the queue.
       log_("job " + job.id + ": cannot put it back in the queue: " + error.what());
     }
-  } else if (!record_end(job, live->lease, outcome)) {
+  } else if (!record_end(job, *live, outcome)) {
     outcome.requeue = true;  // stopped while its end could not be written: recovery requeues it
   }
   char duration[32];
@@ -329,7 +331,7 @@ void WorkerPool::run_one(const api::JobInfo& job) {
     std::lock_guard lock(mutex_);
     live_.erase(job.id);
     ++generation_;
-    if (!outcome.requeue) {
+    if (!outcome.requeue && !live->lost.load()) {
       ++statistics_.finished[std::string(api::to_string(job.kind)) + "," + api::to_string(outcome.state)];
       ++statistics_.duration_count;
       statistics_.duration_sum += seconds;

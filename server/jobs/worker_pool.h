@@ -114,7 +114,8 @@ class WorkerPool {
   JobOutcome run_within_memory(const api::JobInfo& job, LiveJob& live);
   /// Writes a job's end until it sticks; false when the pool stopped first (the row stays
   /// running; start-up recovery puts it back in the queue).
-  bool record_end(const api::JobInfo& job, const store::Lease& lease, JobOutcome& outcome);
+  /// Written under `live.lease`; a lease found lost sets `live.lost` (nothing written, nothing to retry).
+  bool record_end(const api::JobInfo& job, LiveJob& live, JobOutcome& outcome);
   /// Waits `delay` unless the pool stops first; false when it stopped.
   bool pause_unless_stopping(std::chrono::milliseconds delay);
   /// Sets `bytes` of --job-memory aside for a job, waiting until they fit beside the jobs running;

@@ -193,7 +193,8 @@ TEST_F(SqliteStoreTest, OutOfMemoryIsBadAllocAndLeavesNothingHalfWritten) {
 TEST_F(SqliteStoreTest, OnlyAWriteThatChangedRowsClearsAFullDisk) {
   // A file capped at its current size (PRAGMA max_page_count) fails as a full disk does
   // (SQLITE_FULL). An idle worker's claim that finds nothing commits an empty write
-  // transaction: that proves nothing about the space and must leave /healthz degraded.
+  // transaction, a lease's heartbeat a few bytes in place: neither proves anything about the
+  // space, and both must leave /healthz degraded.
   sqlite::WriteHealth health;
   sqlite::Connection connection(path_);
   connection.attach(&health);
@@ -215,6 +216,10 @@ TEST_F(SqliteStoreTest, OnlyAWriteThatChangedRowsClearsAFullDisk) {
     connection.execute("UPDATE filler SET bytes = NULL WHERE 0");
   });
   EXPECT_TRUE(health.trouble().has_value()) << "a commit that changed nothing cleared the trouble";
+  // A lease's heartbeat changes a few bytes in place: it fits, and proves nothing about room.
+  sqlite::run_transaction(connection, sqlite::TransactionKind::write_in_place,
+                          [&] { connection.execute("INSERT INTO filler VALUES (x'00')"); });
+  EXPECT_TRUE(health.trouble().has_value()) << "an in-place write cleared the trouble";
   sqlite::run_transaction(connection, sqlite::TransactionKind::read, [&] {});
   EXPECT_TRUE(health.trouble().has_value());
   connection.execute("PRAGMA max_page_count = 1000000");

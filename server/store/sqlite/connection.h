@@ -158,6 +158,11 @@ class ConnectionPool {
 enum class TransactionKind {
   read,   ///< BEGIN (deferred): a consistent snapshot for multi-statement reads
   write,  ///< BEGIN IMMEDIATE: takes the write lock up front, so no read→write upgrade can deadlock
+  /// A write of a few bytes in rows that exist (a lease's heartbeat, taking expired leases back):
+  /// like `write`, and a full disk still marks the store troubled, but its commit never clears
+  /// that — it fits in pages the file (or its WAL) already has, and says nothing about room for
+  /// the result or upload that failed.
+  write_in_place,
 };
 
 /// Retry policy: up to kMaxAttempts tries; each BEGIN IMMEDIATE already waits up to
@@ -177,7 +182,7 @@ auto run_transaction(Connection& connection, TransactionKind kind, Body&& body) 
   using Result = std::invoke_result_t<Body&>;
   for (int attempt = 1;; ++attempt) {
     try {
-      connection.execute(kind == TransactionKind::write ? "BEGIN IMMEDIATE" : "BEGIN");
+      connection.execute(kind == TransactionKind::read ? "BEGIN" : "BEGIN IMMEDIATE");
       // Only a commit that changed rows wrote pages, and so shows there is room again: an idle
       // worker's claim that found nothing commits too, and must not hide a full disk.
       const std::int64_t changes_before = sqlite3_total_changes64(connection.handle());

@@ -383,7 +383,7 @@ class SqliteStore final : public Store {
 
   LeaseStatus renew_lease(const Lease& lease, std::chrono::milliseconds duration) override {
     auto connection = pool_.checkout();
-    return sqlite::run_transaction(*connection, TransactionKind::write,
+    return sqlite::run_transaction(*connection, TransactionKind::write_in_place,
                                    [&] { return extend(*connection, lease, duration, nullptr); });
   }
 
@@ -583,7 +583,7 @@ class SqliteStore final : public Store {
   RecoveryOutcome recover_expired_leases(int max_attempts,
                                          const std::function<std::string(int losses)>& lost_error) override {
     auto connection = pool_.checkout();
-    return sqlite::run_transaction(*connection, TransactionKind::write, [&] {
+    return sqlite::run_transaction(*connection, TransactionKind::write_in_place, [&] {
       connection->execute("CREATE TEMP TABLE IF NOT EXISTS lost_jobs (id TEXT PRIMARY KEY) WITHOUT ROWID");
       connection
           ->prepare("INSERT INTO temp.lost_jobs SELECT id FROM jobs WHERE state = 'running' "
