@@ -27,4 +27,4 @@ if ! wait "$fuzz_build"; then
 fi
 tail -1 build/fuzz-build.log
 [[ "$tests" -eq 0 ]] || exit "$tests"
-bash scripts/fuzz.sh --runs "${1:-60000}"
+bash scripts/fuzz.sh --runs "${1:-30000}"

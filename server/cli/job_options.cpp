@@ -74,7 +74,9 @@ int worker_threads(const JobOptions& options) {
 std::unique_ptr<store::Store> open_job_store(const JobOptions& options) {
   std::unique_ptr<store::Store> store;
   try {
-    store = store::open_store(options.database);
+    store::StoreOptions store_options;
+    store_options.idempotency_ttl = std::chrono::seconds(std::llround(options.idempotency_ttl * 3600.0));
+    store = store::open_store(options.database, store_options);
   } catch (const store::StoreError& error) {
     // Not the value itself: a database URL may carry a password (SQLite's messages name the file).
     throw UsageError(std::string("--db: ") + error.what());

@@ -23,6 +23,7 @@ struct JobOptions {
   double job_timeout = 3600.0;     ///< s, any job
   int max_attempts = 3;            ///< worker losses a job may cause before it is failed for good
   double lease = 30.0;             ///< s a running job's claim holds without renewal
+  double idempotency_ttl = 24.0;   ///< h an Idempotency-Key is remembered (serve's --idempotency-ttl)
 };
 
 /// --db, --workers (at least `fewest_workers`), --job-memory, --job-timeout, --max-attempts, --lease.

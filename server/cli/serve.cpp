@@ -37,6 +37,11 @@ CLI::App* add_serve_command(CLI::App& app, ServeOptions& options) {
       ->check(integer_between(0, 65535))
       ->capture_default_str();
   add_job_options(*command, options.jobs, 0);
+  command->add_option("--idempotency-ttl", options.jobs.idempotency_ttl,
+                      "Hours an Idempotency-Key is remembered: the same key sent again later makes a new job, "
+                      "dataset or robot")
+      ->check(CLI::Range(0.001, 8760.0))
+      ->capture_default_str();
   command->add_option("--queue-limit", options.queue_limit, "Queued jobs at most; more get 429 (0: no limit)")
       ->check(integer_between(0, 100'000'000))
       ->capture_default_str();

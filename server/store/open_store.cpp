@@ -18,6 +18,8 @@ std::string sqlite_path(const std::string& url) {
   return std::string(path);
 }
 
-std::unique_ptr<Store> open_store(const std::string& url) { return sqlite::open_store(sqlite_path(url)); }
+std::unique_ptr<Store> open_store(const std::string& url, const StoreOptions& options) {
+  return sqlite::open_store(sqlite_path(url), options);
+}
 
 }  // namespace manipid::server::store

@@ -39,8 +39,10 @@ std::uint32_t token_check(std::string_view tag, std::string_view position, std::
 
 }  // namespace
 
-std::string now_rfc3339() {
-  const auto now = std::chrono::system_clock::now();
+std::string now_rfc3339() { return rfc3339_ago(std::chrono::seconds(0)); }
+
+std::string rfc3339_ago(std::chrono::seconds age) {
+  const auto now = std::chrono::system_clock::now() - age;
   const auto milliseconds =
       std::chrono::duration_cast<std::chrono::milliseconds>(now.time_since_epoch()).count() % 1000;
   const std::time_t seconds = std::chrono::system_clock::to_time_t(now);

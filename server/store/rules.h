@@ -4,14 +4,18 @@
 
 #include "store/store.h"
 
+#include <chrono>
 #include <cstdint>
 #include <string>
 #include <string_view>
 
 namespace manipid::server::store {
 
-/// e.g. "2026-11-22T06:40:12.345Z" (UTC, milliseconds).
+/// e.g. "2026-11-22T06:40:12.345Z" (UTC, milliseconds). Stamps of this one format compare as
+/// text in time order, so stores can compare them in SQL.
 std::string now_rfc3339();
+/// The stamp `age` before now, in the same format (for "older than" in SQL).
+std::string rfc3339_ago(std::chrono::seconds age);
 
 /// `prefix` + 16 lowercase hex digits from a per-thread generator seeded by std::random_device
 /// ("ds_", "job_", "rb_"): unguessable enough that ids are never reused, not a secret.

@@ -207,10 +207,17 @@ class Store {
   virtual std::optional<std::string> write_trouble() const = 0;
 };
 
+/// How a store is opened; the defaults are `manipid serve`'s.
+struct StoreOptions {
+  /// How long an Idempotency-Key is remembered (--idempotency-ttl): the same key sent again after
+  /// this makes a new job, dataset or robot; older keys are forgotten as new ones are stored.
+  std::chrono::seconds idempotency_ttl = std::chrono::hours(24);
+};
+
 /// The store a `--db` value names: "sqlite:PATH" or a plain PATH is a SQLite file (created if
 /// missing, migrated if older); "postgresql://…" or "postgres://…" a PostgreSQL database, which
 /// this build cannot open yet (StoreError says so). Throws StoreError when it cannot be opened.
-std::unique_ptr<Store> open_store(const std::string& url);
+std::unique_ptr<Store> open_store(const std::string& url, const StoreOptions& options = {});
 /// The SQLite file a `--db` value names (PATH or sqlite:PATH); StoreError for any other backend
 /// or an empty path. open_store and `manipid doctor` both read `--db` through it.
 std::string sqlite_path(const std::string& url);

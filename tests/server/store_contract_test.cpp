@@ -88,13 +88,15 @@ void expect_invalid_field(Call call, const std::string& field) {
 /// A backend under test: its name and how it opens (or reopens) the store kept in `directory`.
 struct Backend {
   std::string name;
-  std::function<std::unique_ptr<Store>(const fs::path& directory)> open;
+  std::function<std::unique_ptr<Store>(const fs::path& directory, const StoreOptions& options)> open;
 };
 
 void PrintTo(const Backend& backend, std::ostream* out) { *out << backend.name; }
 
 std::vector<Backend> backends() {
-  return {{"sqlite", [](const fs::path& directory) { return open_store("sqlite:" + (directory / "manipid.db").string()); }}};
+  return {{"sqlite", [](const fs::path& directory, const StoreOptions& options) {
+             return open_store("sqlite:" + (directory / "manipid.db").string(), options);
+           }}};
 }
 
 class StoreContract : public ::testing::TestWithParam<Backend> {
@@ -103,7 +105,7 @@ class StoreContract : public ::testing::TestWithParam<Backend> {
     std::string pattern = (fs::temp_directory_path() / "manipid-store-XXXXXX").string();
     ASSERT_NE(mkdtemp(pattern.data()), nullptr);
     directory_ = pattern;
-    store_ = GetParam().open(directory_);
+    store_ = GetParam().open(directory_, {});
   }
 
   void TearDown() override {
@@ -111,9 +113,9 @@ class StoreContract : public ::testing::TestWithParam<Backend> {
     fs::remove_all(directory_);
   }
 
-  void reopen() {
+  void reopen(const StoreOptions& options = {}) {
     store_.reset();
-    store_ = GetParam().open(directory_);
+    store_ = GetParam().open(directory_, options);
   }
 
   std::string submit(const NewJob& job = identification_job()) {
@@ -763,6 +765,26 @@ TEST_P(StoreContract, AGracefulRequeueIsNotAWorkerDeath) {
   const RecoveryOutcome recovered = recover();
   EXPECT_EQ(recovered.requeued, 1);  // one death so far, not six
   EXPECT_TRUE(recovered.failed.empty());
+}
+
+TEST_P(StoreContract, IdempotencyKeysExpire) {
+  const api::IdempotencyKey key{"k-expiring", "f1"};
+  const auto first = store_->submit_job(identification_job(), key, 0);
+  const auto robot = store_->insert_robot({"arm", "<robot/>", "", "", 1, "{}"}, key);
+  EXPECT_EQ(store_->submit_job(identification_job(), key, 0).status, SubmitStatus::replayed);
+  reopen({.idempotency_ttl = std::chrono::seconds(0)});
+  std::this_thread::sleep_for(std::chrono::milliseconds(20));  // past the stamps' millisecond
+  // Expired: the same key (even with another body) makes a new job; a robot's key of the same name is its own.
+  const auto again = store_->submit_job(identification_job(), {{"k-expiring", "f2"}}, 0);
+  EXPECT_EQ(again.status, SubmitStatus::created);
+  EXPECT_NE(again.job.id, first.job.id);
+  reopen();
+  EXPECT_EQ(store_->submit_job(identification_job(), {{"k-expiring", "f2"}}, 0).job.id, again.job.id);
+  EXPECT_EQ(store_->submit_job(identification_job(), key, 0).status, SubmitStatus::key_reused);
+  // The robot's key was stored before the expired job key was replaced: forgotten with it.
+  const auto second_robot = store_->insert_robot({"arm", "<robot/>", "", "", 1, "{}"}, key);
+  EXPECT_EQ(second_robot.status, SubmitStatus::created);
+  EXPECT_NE(second_robot.robot.id, robot.robot.id);
 }
 
 // ---- leases ----

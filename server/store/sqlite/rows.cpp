@@ -100,16 +100,20 @@ std::optional<api::JobState> select_state(Connection& connection, const std::str
 
 // ---- idempotency keys ----
 
-std::optional<KeyRecord> select_key(Connection& connection, const char* scope, const std::string& key) {
-  auto statement =
-      connection.prepare("SELECT fingerprint, resource_id FROM idempotency_keys WHERE scope = ?1 AND key = ?2");
-  statement.bind_text(1, scope).bind_text(2, key);
+std::optional<KeyRecord> select_key(Connection& connection, const char* scope, const std::string& key,
+                                    const std::string& not_before) {
+  auto statement = connection.prepare(
+      "SELECT fingerprint, resource_id FROM idempotency_keys WHERE scope = ?1 AND key = ?2 AND created_at >= ?3");
+  statement.bind_text(1, scope).bind_text(2, key).bind_text(3, not_before);
   if (!statement.step()) return std::nullopt;
   return KeyRecord{statement.text(0), statement.text(1)};
 }
 
 void store_key(Connection& connection, const char* scope, const api::IdempotencyKey& key, const std::string& id,
-               const std::string& now) {
+               const std::string& now, const std::string& not_before) {
+  auto expired = connection.prepare("DELETE FROM idempotency_keys WHERE created_at < ?1");
+  expired.bind_text(1, not_before);
+  expired.run();
   auto statement = connection.prepare(
       "INSERT OR REPLACE INTO idempotency_keys (scope, key, fingerprint, resource_id, created_at) "
       "VALUES (?1, ?2, ?3, ?4, ?5)");

@@ -35,10 +35,13 @@ struct KeyRecord {
   std::string resource_id;
 };
 /// scope: "job", "dataset" or "robot".
-std::optional<KeyRecord> select_key(Connection& connection, const char* scope, const std::string& key);
-/// INSERT OR REPLACE: a key whose resource has gone is taken over by the new one.
+/// The key's record if it was stored at `not_before` or later (older keys have expired).
+std::optional<KeyRecord> select_key(Connection& connection, const char* scope, const std::string& key,
+                                    const std::string& not_before);
+/// Stores the key for `id` (INSERT OR REPLACE: a key whose resource has gone, or that expired, is
+/// taken over by the new one), forgetting every key stored before `not_before` (expired).
 void store_key(Connection& connection, const char* scope, const api::IdempotencyKey& key, const std::string& id,
-               const std::string& now);
+               const std::string& now, const std::string& not_before);
 void forget_keys_of(Connection& connection, const char* scope, const std::string& id);
 
 /// A fresh random id ("ds_"/"job_" + 16 hex) not held by a live row; `exists_sql` selects a

@@ -187,7 +187,7 @@ constexpr std::array<const char*, 4> kMigrations = {
     PRAGMA user_version = 3;
     )sql",
 
-    // 3 → 4: leases. A claim names its owner ("HOST:PID") and when the lease ends (Unix seconds,
+    // 3 → 4: leases, and keys that expire. A claim names its owner ("HOST:PID") and when the lease ends (Unix seconds,
     // the database's clock); every write of a running job checks owner and attempt, and any
     // process recovers the running jobs whose lease has ended. Jobs running in the old file have no
     // lease: start-up recovery (the only way they could be running) puts them back in the queue.
@@ -195,6 +195,8 @@ constexpr std::array<const char*, 4> kMigrations = {
     ALTER TABLE jobs ADD COLUMN worker TEXT;
     ALTER TABLE jobs ADD COLUMN lease_expires_at REAL;
     CREATE INDEX jobs_by_lease ON jobs (lease_expires_at) WHERE state = 'running';
+    -- Keys expire (StoreOptions::idempotency_ttl): the old ones are found, and forgotten, by age.
+    CREATE INDEX idempotency_keys_by_age ON idempotency_keys (created_at);
     PRAGMA user_version = 4;
     )sql",
 };

@@ -41,7 +41,8 @@ api::HistoryEntry history_entry(const Statement& rows, const std::string& id) {
 
 class SqliteStore final : public Store {
  public:
-  explicit SqliteStore(const std::string& path) : pool_(path, open_and_prepare(path)) {}
+  SqliteStore(const std::string& path, const StoreOptions& options)
+      : options_(options), pool_(path, open_and_prepare(path)) {}
 
   // ---- datasets ----
 
@@ -63,10 +64,11 @@ class SqliteStore final : public Store {
     const auto qdd = sqlite::encode_doubles(data.qdd.data(), static_cast<std::size_t>(data.qdd.size()));
     const bool uniform = data.is_uniform();
 
+    const std::string keys_not_before = rfc3339_ago(options_.idempotency_ttl);
     auto connection = pool_.checkout();
     return sqlite::run_transaction(*connection, TransactionKind::write, [&]() -> DatasetOutcome {
       if (key) {
-        if (auto earlier = select_key(*connection, "dataset", key->key)) {
+        if (auto earlier = select_key(*connection, "dataset", key->key, keys_not_before)) {
           if (earlier->fingerprint != key->fingerprint) return {SubmitStatus::key_reused, {}};
           if (auto dataset = select_dataset(*connection, earlier->resource_id)) {
             return {SubmitStatus::replayed, *dataset};
@@ -110,7 +112,7 @@ class SqliteStore final : public Store {
           .bind_integer(17, dataset.has_accelerations ? 1 : 0)
           .bind_blob_or_null(18, qdd);
       insert.run();
-      if (key) store_key(*connection, "dataset", *key, dataset.id, dataset.created_at);
+      if (key) store_key(*connection, "dataset", *key, dataset.id, dataset.created_at, keys_not_before);
       return {SubmitStatus::created, dataset};
     });
   }
@@ -191,10 +193,11 @@ class SqliteStore final : public Store {
   // ---- robots ----
 
   RobotOutcome insert_robot(const NewRobot& robot, const std::optional<api::IdempotencyKey>& key) override {
+    const std::string keys_not_before = rfc3339_ago(options_.idempotency_ttl);
     auto connection = pool_.checkout();
     return sqlite::run_transaction(*connection, TransactionKind::write, [&]() -> RobotOutcome {
       if (key) {
-        if (auto earlier = select_key(*connection, "robot", key->key)) {
+        if (auto earlier = select_key(*connection, "robot", key->key, keys_not_before)) {
           if (earlier->fingerprint != key->fingerprint) return {SubmitStatus::key_reused, {}};
           if (auto existing = sqlite::select_robot(*connection, earlier->resource_id)) {
             return {SubmitStatus::replayed, *existing};
@@ -221,7 +224,7 @@ class SqliteStore final : public Store {
           .bind_text(7, created.summary)
           .bind_text(8, robot.urdf);
       insert.run();
-      if (key) store_key(*connection, "robot", *key, created.id, created.created_at);
+      if (key) store_key(*connection, "robot", *key, created.id, created.created_at, keys_not_before);
       return {SubmitStatus::created, created};
     });
   }
@@ -284,10 +287,11 @@ class SqliteStore final : public Store {
 
   SubmitOutcome submit_job(const NewJob& job, const std::optional<api::IdempotencyKey>& key,
                            int queue_limit) override {
+    const std::string keys_not_before = rfc3339_ago(options_.idempotency_ttl);
     auto connection = pool_.checkout();
     return sqlite::run_transaction(*connection, TransactionKind::write, [&]() -> SubmitOutcome {
       if (key) {
-        if (auto earlier = select_key(*connection, "job", key->key)) {
+        if (auto earlier = select_key(*connection, "job", key->key, keys_not_before)) {
           if (earlier->fingerprint != key->fingerprint) return {SubmitStatus::key_reused, {}};
           if (auto existing = select_job(*connection, earlier->resource_id)) return {SubmitStatus::replayed, *existing};
         }
@@ -317,7 +321,7 @@ class SqliteStore final : public Store {
           .bind_text_or_null(6, job.robot_id)
           .bind_text_or_null(7, job.validation_dataset_id);
       insert.run();
-      if (key) store_key(*connection, "job", *key, created.id, created.created_at);
+      if (key) store_key(*connection, "job", *key, created.id, created.created_at, keys_not_before);
       return {SubmitStatus::created, created};
     });
   }
@@ -693,12 +697,15 @@ class SqliteStore final : public Store {
     return connection;
   }
 
+  StoreOptions options_;
   sqlite::ConnectionPool pool_;
 };
 
 }  // namespace
 
-std::unique_ptr<Store> open_store(const std::string& path) { return std::make_unique<SqliteStore>(path); }
+std::unique_ptr<Store> open_store(const std::string& path, const StoreOptions& options) {
+  return std::make_unique<SqliteStore>(path, options);
+}
 
 FileCheck check_file(const std::string& path) {
   std::error_code error;

@@ -12,7 +12,7 @@ namespace manipid::server::store::sqlite {
 
 /// Opens (creating if missing) a SQLite database file with the current schema, migrating an
 /// older one. Throws StoreError when the file cannot be opened or is from a newer manipid.
-std::unique_ptr<Store> open_store(const std::string& path);
+std::unique_ptr<Store> open_store(const std::string& path, const StoreOptions& options = {});
 
 /// `manipid doctor`: a full check of an existing database file, changing nothing (no
 /// migration, no WAL switch). `findings` empty: the file is sound.
