@@ -26,6 +26,8 @@
 
 #include <netinet/in.h>
 #include <poll.h>
+#include <pthread.h>
+#include <signal.h>
 #include <sys/socket.h>
 #include <sys/time.h>
 #include <unistd.h>
@@ -191,7 +193,18 @@ struct Server {
     register_routes(http, service, options);
     port = http.bind("127.0.0.1", 0);
     if (port <= 0) fail("cannot bind 127.0.0.1:0", {});
-    thread = std::thread([this] { http.listen_after_bind(); });
+    // libFuzzer's -timeout is a SIGALRM every few seconds, with a handler and no SA_RESTART:
+    // one that lands on the listening thread ends its accept() with EINTR, and 0.11.4's
+    // listen loop takes any accept error but EMFILE for the end (it closes the socket; every
+    // later input then failed with "cannot connect", in CI after ~6,100 inputs). The listening
+    // thread and the HTTP threads it starts block every signal, so the alarm goes to the
+    // fuzzer's thread, as a signal does in `manipid serve`, which installs no handler.
+    thread = std::thread([this] {
+      sigset_t all;
+      sigfillset(&all);
+      pthread_sigmask(SIG_BLOCK, &all, nullptr);
+      http.listen_after_bind();
+    });
     while (!http.is_running()) std::this_thread::sleep_for(std::chrono::milliseconds(1));
   }
 };
@@ -214,7 +227,17 @@ Answers round_trip(int port, std::string_view request) {
   address.sin_family = AF_INET;
   address.sin_port = htons(static_cast<std::uint16_t>(port));
   address.sin_addr.s_addr = htonl(INADDR_LOOPBACK);
-  if (::connect(fd, reinterpret_cast<sockaddr*>(&address), sizeof address) != 0) fail("cannot connect to the server", {});
+  if (::connect(fd, reinterpret_cast<sockaddr*>(&address), sizeof address) != 0) {
+    int error = errno;
+    if (error == EINTR) {  // the alarm: the connect goes on; its outcome is the socket's error
+      pollfd descriptor{fd, POLLOUT, 0};
+      while (::poll(&descriptor, 1, 30000) < 0 && errno == EINTR) descriptor.revents = 0;
+      socklen_t length = sizeof error;
+      if (descriptor.revents == 0) error = ETIMEDOUT;
+      else ::getsockopt(fd, SOL_SOCKET, SO_ERROR, &error, &length);
+    }
+    if (error != 0) fail(std::string("cannot connect to the server: ") + std::strerror(error), {});
+  }
   for (std::size_t sent = 0; sent < request.size();) {
     const ssize_t n = ::send(fd, request.data() + sent, request.size() - sent, MSG_NOSIGNAL);
     if (n < 0 && errno == EINTR) continue;  // libFuzzer's timer signal: SO_SNDTIMEO calls are not restarted
@@ -229,7 +252,10 @@ Answers round_trip(int port, std::string_view request) {
   Answers answer;
   char buffer[16384];
   constexpr int quiet_ms = 1;
-  for (pollfd descriptor{fd, POLLIN, 0}; ::poll(&descriptor, 1, quiet_ms) != 0; descriptor.revents = 0) {
+  for (pollfd descriptor{fd, POLLIN, 0};; descriptor.revents = 0) {
+    const int ready = ::poll(&descriptor, 1, quiet_ms);
+    if (ready < 0 && errno == EINTR) continue;
+    if (ready == 0) break;
     const ssize_t n = ::recv(fd, buffer, sizeof buffer, 0);
     if (n > 0) {
       answer.bytes.append(buffer, static_cast<std::size_t>(n));
