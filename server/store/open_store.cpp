@@ -1,6 +1,7 @@
 // open_store.cpp — open_store(url) and sqlite_path(url): the one place a `--db` value is read.
 #include "store/store.h"
 
+#include "store/postgres/store.h"
 #include "store/sqlite/store.h"
 
 #include <string_view>
@@ -9,16 +10,21 @@ namespace manipid::server::store {
 
 std::string sqlite_path(const std::string& url) {
   const std::string_view text = url;
-  if (text.starts_with("postgresql://") || text.starts_with("postgres://")) {
+  if (is_postgres_url(url)) {
     // The URL is not repeated: it may carry a password.
-    throw StoreError("PostgreSQL databases are not supported by this build yet; use a SQLite file (--db PATH)");
+    throw StoreError("--db names a PostgreSQL database, not a SQLite file");
   }
   const std::string_view path = text.starts_with("sqlite:") ? text.substr(7) : text;
   if (path.empty()) throw StoreError("--db names no file (give a path, or sqlite:PATH)");
   return std::string(path);
 }
 
+bool is_postgres_url(const std::string& url) {
+  return url.starts_with("postgresql://") || url.starts_with("postgres://");
+}
+
 std::unique_ptr<Store> open_store(const std::string& url, const StoreOptions& options) {
+  if (is_postgres_url(url)) return postgres::open_store(url, options, options.connections);
   return sqlite::open_store(sqlite_path(url), options);
 }
 

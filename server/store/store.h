@@ -20,6 +20,7 @@
 #include "manipid/core/trajectory.h"
 
 #include <chrono>
+#include <cstddef>
 #include <functional>
 #include <map>
 #include <memory>
@@ -42,6 +43,14 @@ class StoreError : public std::runtime_error {
 /// same write may succeed once space is freed. The service answers 507 and retries a job's
 /// final write (worker_pool.cpp); /healthz says "degraded" until a write succeeds again.
 class StorageFull : public StoreError {
+ public:
+  using StoreError::StoreError;
+};
+
+/// The database cannot be reached now (a PostgreSQL server restarting, a network cut): nothing
+/// of the call was done, and the same call may succeed shortly; the connection is opened again
+/// on the next call. The service answers 503 with Retry-After.
+class StoreUnavailable : public StoreError {
  public:
   using StoreError::StoreError;
 };
@@ -212,12 +221,18 @@ struct StoreOptions {
   /// How long an Idempotency-Key is remembered (--idempotency-ttl): the same key sent again after
   /// this makes a new job, dataset or robot; older keys are forgotten as new ones are stored.
   std::chrono::seconds idempotency_ttl = std::chrono::hours(24);
+  /// PostgreSQL: the most connections open at once (the threads that use the store: HTTP threads
+  /// plus workers plus the lease keeper). SQLite opens one per thread as needed.
+  std::size_t connections = 16;
 };
 
 /// The store a `--db` value names: "sqlite:PATH" or a plain PATH is a SQLite file (created if
-/// missing, migrated if older); "postgresql://…" or "postgres://…" a PostgreSQL database, which
-/// this build cannot open yet (StoreError says so). Throws StoreError when it cannot be opened.
+/// missing, migrated if older); "postgresql://…" or "postgres://…" (a libpq connection URI) a
+/// PostgreSQL database shared with other processes (schema created or migrated). Throws
+/// StoreError when it cannot be opened (StoreUnavailable when the server cannot be reached).
 std::unique_ptr<Store> open_store(const std::string& url, const StoreOptions& options = {});
+/// Whether a `--db` value names a PostgreSQL database.
+bool is_postgres_url(const std::string& url);
 /// The SQLite file a `--db` value names (PATH or sqlite:PATH); StoreError for any other backend
 /// or an empty path. open_store and `manipid doctor` both read `--db` through it.
 std::string sqlite_path(const std::string& url);

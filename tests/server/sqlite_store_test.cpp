@@ -195,7 +195,7 @@ TEST_F(SqliteStoreTest, OnlyAWriteThatChangedRowsClearsAFullDisk) {
   // (SQLITE_FULL). An idle worker's claim that finds nothing commits an empty write
   // transaction, a lease's heartbeat a few bytes in place: neither proves anything about the
   // space, and both must leave /healthz degraded.
-  sqlite::WriteHealth health;
+  WriteHealth health;
   sqlite::Connection connection(path_);
   connection.attach(&health);
   connection.execute("CREATE TABLE filler (bytes BLOB)");

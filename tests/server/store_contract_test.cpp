@@ -5,13 +5,17 @@
 #include "store/store.h"
 
 #include <gtest/gtest.h>
+#include <libpq-fe.h>
 
 #include <algorithm>
 #include <atomic>
+#include <cctype>
 #include <chrono>
 #include <cmath>
+#include <cstdlib>
 #include <cstring>
 #include <filesystem>
+#include <fstream>
 #include <functional>
 #include <ostream>
 #include <limits>
@@ -85,23 +89,84 @@ void expect_invalid_field(Call call, const std::string& field) {
   }
 }
 
-/// A backend under test: its name and how it opens (or reopens) the store kept in `directory`.
+/// A backend under test: its name, how it opens (or reopens) the store kept for `directory`,
+/// how it removes that store, and why it cannot run here (empty: it can).
 struct Backend {
   std::string name;
   std::function<std::unique_ptr<Store>(const fs::path& directory, const StoreOptions& options)> open;
+  std::function<void(const fs::path& directory)> remove = [](const fs::path&) {};
+  std::function<std::string()> unavailable = [] { return std::string(); };
 };
 
 void PrintTo(const Backend& backend, std::ostream* out) { *out << backend.name; }
 
+/// The private cluster of the ctest fixture "postgres" (tests/server/postgres_cluster.sh): a
+/// libpq URI template with "%s" for the database name, or empty when there is none.
+std::string postgres_uri_template() {
+  const char* file = std::getenv("MANIPID_TEST_POSTGRES_FILE");
+  if (file == nullptr) return {};
+  std::ifstream in(file);
+  std::string line;
+  std::getline(in, line);
+  return line;
+}
+
+std::string postgres_uri(const std::string& database) {
+  std::string uri = postgres_uri_template();
+  return uri.replace(uri.find("%s"), 2, database);
+}
+
+/// One database per test, named after its temporary directory.
+std::string postgres_database(const fs::path& directory) {
+  std::string name = "t_";
+  for (char c : directory.filename().string()) {
+    if (std::isalnum(static_cast<unsigned char>(c))) name += static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
+  }
+  return name;
+}
+
+/// Runs one statement on the cluster's maintenance database (CREATE and DROP DATABASE).
+void postgres_admin(const std::string& sql) {
+  PGconn* connection = PQconnectdb(postgres_uri("postgres").c_str());
+  const bool connected = PQstatus(connection) == CONNECTION_OK;
+  std::string error = connected ? "" : PQerrorMessage(connection);
+  if (connected) {
+    PGresult* result = PQexec(connection, sql.c_str());
+    if (PQresultStatus(result) != PGRES_COMMAND_OK) error = PQresultErrorMessage(result);
+    PQclear(result);
+  }
+  PQfinish(connection);
+  if (!error.empty()) throw std::runtime_error(sql + ": " + error);
+}
+
 std::vector<Backend> backends() {
-  return {{"sqlite", [](const fs::path& directory, const StoreOptions& options) {
-             return open_store("sqlite:" + (directory / "manipid.db").string(), options);
-           }}};
+  Backend sqlite{"sqlite", [](const fs::path& directory, const StoreOptions& options) {
+                   return open_store("sqlite:" + (directory / "manipid.db").string(), options);
+                 }};
+  Backend postgres{"postgres", [](const fs::path& directory, const StoreOptions& options) {
+                     const std::string database = postgres_database(directory);
+                     if (!fs::exists(directory / "database")) {
+                       postgres_admin("CREATE DATABASE " + database);
+                       std::ofstream(directory / "database") << database << "\n";
+                     }
+                     return open_store(postgres_uri(database), options);
+                   }};
+  postgres.remove = [](const fs::path& directory) {
+    if (fs::exists(directory / "database")) postgres_admin("DROP DATABASE " + postgres_database(directory) + " WITH (FORCE)");
+  };
+  postgres.unavailable = [] {
+    return postgres_uri_template().empty()
+               ? std::string("no PostgreSQL cluster: run through ctest (fixture \"postgres\", "
+                             "tests/server/postgres_cluster.sh; needs the Debian package postgresql)")
+               : std::string();
+  };
+  return {sqlite, postgres};
 }
 
 class StoreContract : public ::testing::TestWithParam<Backend> {
  protected:
   void SetUp() override {
+    if (const std::string why = GetParam().unavailable(); !why.empty()) GTEST_SKIP() << why;
     std::string pattern = (fs::temp_directory_path() / "manipid-store-XXXXXX").string();
     ASSERT_NE(mkdtemp(pattern.data()), nullptr);
     directory_ = pattern;
@@ -110,6 +175,8 @@ class StoreContract : public ::testing::TestWithParam<Backend> {
 
   void TearDown() override {
     store_.reset();  // close every connection before the files go
+    if (directory_.empty()) return;
+    GetParam().remove(directory_);
     fs::remove_all(directory_);
   }
 

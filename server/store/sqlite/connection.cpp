@@ -33,26 +33,6 @@ void throw_sqlite_error(sqlite3* database, int code, std::string_view context) {
 
 // ---- WriteHealth ----
 
-void WriteHealth::failed(const std::string& reason) {
-  std::lock_guard lock(mutex_);
-  reason_ = reason;
-  troubled_.store(true);
-}
-
-void WriteHealth::succeeded() noexcept {
-  if (!troubled_.load()) return;
-  std::lock_guard lock(mutex_);
-  troubled_.store(false);
-  reason_.clear();
-}
-
-std::optional<std::string> WriteHealth::trouble() const {
-  if (!troubled_.load()) return std::nullopt;
-  std::lock_guard lock(mutex_);
-  if (!troubled_.load()) return std::nullopt;
-  return reason_;
-}
-
 // ---- Statement ----
 
 Statement::Statement(Statement&& other) noexcept : database_(other.database_), statement_(other.statement_) {

@@ -4,6 +4,7 @@
 #pragma once
 
 #include "store/store.h"
+#include "store/write_health.h"
 
 #include <sqlite3.h>
 
@@ -68,21 +69,6 @@ class Statement {
 
   sqlite3* database_;
   sqlite3_stmt* statement_;
-};
-
-/// Whether writes fail for want of space now (Store::write_trouble): set when a write
-/// transaction ends in StorageFull, cleared by the next write transaction that commits a change. One per
-/// store, shared by its connections; the clear is one atomic load when nothing failed.
-class WriteHealth {
- public:
-  void failed(const std::string& reason);
-  void succeeded() noexcept;
-  std::optional<std::string> trouble() const;
-
- private:
-  mutable std::mutex mutex_;
-  std::atomic<bool> troubled_{false};
-  std::string reason_;
 };
 
 /// One database connection, used by one thread at a time (it is opened NOMUTEX).

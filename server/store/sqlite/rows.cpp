@@ -1,7 +1,7 @@
 // rows.cpp — shared row reads and writes of the SQLite store (see rows.h).
 #include "store/sqlite/rows.h"
 
-#include "store/sqlite/encoding.h"
+#include "store/encoding.h"
 #include "store/rules.h"
 
 namespace manipid::server::store::sqlite {

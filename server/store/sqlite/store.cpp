@@ -2,7 +2,7 @@
 // jobs and their life cycle, cost histories, estimates and idempotency keys. Every state
 // change is one BEGIN IMMEDIATE transaction run through run_transaction (retried on BUSY).
 #include "store/sqlite/connection.h"
-#include "store/sqlite/encoding.h"
+#include "store/encoding.h"
 #include "store/sqlite/rows.h"
 #include "store/sqlite/schema.h"
 #include "store/sqlite/store.h"
@@ -33,7 +33,7 @@ api::HistoryEntry history_entry(const Statement& rows, const std::string& id) {
   entry.cost = rows.real_or_null(1).value_or(std::numeric_limits<double>::quiet_NaN());
   const auto theta = rows.blob(2);
   entry.theta.resize(theta.size() / sizeof(double));
-  if (!sqlite::decode_doubles(theta, entry.theta.data(), entry.theta.size())) {
+  if (!decode_doubles(theta, entry.theta.data(), entry.theta.size())) {
     throw StoreError("history entry of job " + id + " has a damaged theta in the database");
   }
   return entry;
@@ -56,12 +56,12 @@ class SqliteStore final : public Store {
     check_shape(data.qd, samples, joints, "qd");
     check_shape(data.qdd, samples, joints, "qdd");
     // Encoded before the transaction: the write lock is held only for the insert itself.
-    const auto t = sqlite::encode_doubles(data.t.data(), static_cast<std::size_t>(data.t.size()));
-    const auto q = sqlite::encode_doubles(data.q.data(), static_cast<std::size_t>(data.q.size()));
-    const auto tau = sqlite::encode_doubles(data.tau.data(), static_cast<std::size_t>(data.tau.size()));
-    const auto ref = sqlite::encode_doubles(data.ref.data(), static_cast<std::size_t>(data.ref.size()));
-    const auto qd = sqlite::encode_doubles(data.qd.data(), static_cast<std::size_t>(data.qd.size()));
-    const auto qdd = sqlite::encode_doubles(data.qdd.data(), static_cast<std::size_t>(data.qdd.size()));
+    const auto t = encode_doubles(data.t.data(), static_cast<std::size_t>(data.t.size()));
+    const auto q = encode_doubles(data.q.data(), static_cast<std::size_t>(data.q.size()));
+    const auto tau = encode_doubles(data.tau.data(), static_cast<std::size_t>(data.tau.size()));
+    const auto ref = encode_doubles(data.ref.data(), static_cast<std::size_t>(data.ref.size()));
+    const auto qd = encode_doubles(data.qd.data(), static_cast<std::size_t>(data.qd.size()));
+    const auto qdd = encode_doubles(data.qdd.data(), static_cast<std::size_t>(data.qdd.size()));
     const bool uniform = data.is_uniform();
 
     const std::string keys_not_before = rfc3339_ago(options_.idempotency_ttl);
@@ -139,12 +139,12 @@ class SqliteStore final : public Store {
       data.ref.resize(samples, row.integer(3) != 0 ? joints : 0);
       data.qd.resize(samples, row.integer(8) != 0 ? joints : 0);
       data.qdd.resize(samples, row.integer(10) != 0 ? joints : 0);
-      const bool intact = sqlite::decode_doubles(row.blob(4), data.t.data(), static_cast<std::size_t>(data.t.size())) &&
-                          sqlite::decode_doubles(row.blob(5), data.q.data(), static_cast<std::size_t>(data.q.size())) &&
-                          sqlite::decode_doubles(row.blob(6), data.tau.data(), static_cast<std::size_t>(data.tau.size())) &&
-                          sqlite::decode_doubles(row.blob(7), data.ref.data(), static_cast<std::size_t>(data.ref.size())) &&
-                          sqlite::decode_doubles(row.blob(9), data.qd.data(), static_cast<std::size_t>(data.qd.size())) &&
-                          sqlite::decode_doubles(row.blob(11), data.qdd.data(), static_cast<std::size_t>(data.qdd.size()));
+      const bool intact = decode_doubles(row.blob(4), data.t.data(), static_cast<std::size_t>(data.t.size())) &&
+                          decode_doubles(row.blob(5), data.q.data(), static_cast<std::size_t>(data.q.size())) &&
+                          decode_doubles(row.blob(6), data.tau.data(), static_cast<std::size_t>(data.tau.size())) &&
+                          decode_doubles(row.blob(7), data.ref.data(), static_cast<std::size_t>(data.ref.size())) &&
+                          decode_doubles(row.blob(9), data.qd.data(), static_cast<std::size_t>(data.qd.size())) &&
+                          decode_doubles(row.blob(11), data.qdd.data(), static_cast<std::size_t>(data.qdd.size()));
       if (!intact) throw StoreError("dataset " + id + " has samples of the wrong size in the database");
       return data;
     });
@@ -314,7 +314,7 @@ class SqliteStore final : public Store {
           "INSERT INTO jobs (id, kind, state, request, dataset_id, created_at, robot_id, validation_dataset_id) "
           "VALUES (?1, ?2, 'queued', ?3, ?4, ?5, ?6, ?7)");
       insert.bind_text(1, created.id)
-          .bind_text(2, sqlite::kind_text(job.kind))
+          .bind_text(2, kind_text(job.kind))
           .bind_text(3, job.request)
           .bind_text_or_null(4, job.dataset_id)
           .bind_text(5, created.created_at)
@@ -334,8 +334,8 @@ class SqliteStore final : public Store {
   api::Page<api::JobInfo> list_jobs(const api::JobFilter& filter, const api::PageRequest& page) override {
     const int size = effective_page_size(page.page_size);
     // The token is bound to the filter: a token from another filter would skip or repeat jobs.
-    const std::string context = std::string("state=") + (filter.state ? sqlite::state_text(*filter.state) : "") +
-                                ";kind=" + (filter.kind ? sqlite::kind_text(*filter.kind) : "") +
+    const std::string context = std::string("state=") + (filter.state ? state_text(*filter.state) : "") +
+                                ";kind=" + (filter.kind ? kind_text(*filter.kind) : "") +
                                 ";robot=" + filter.robot_id;
     const std::int64_t before =
         page.page_token.empty() ? INT64_MAX : decode_page_token(page.page_token, "j1", context);
@@ -351,8 +351,8 @@ class SqliteStore final : public Store {
     return sqlite::run_transaction(*connection, TransactionKind::read, [&] {
       auto rows = connection->prepare(sql);
       rows.bind_integer(1, before).bind_integer(4, size + 1);
-      if (filter.state) rows.bind_text(2, sqlite::state_text(*filter.state));
-      if (filter.kind) rows.bind_text(3, sqlite::kind_text(*filter.kind));
+      if (filter.state) rows.bind_text(2, state_text(*filter.state));
+      if (filter.kind) rows.bind_text(3, kind_text(*filter.kind));
       if (!filter.robot_id.empty()) rows.bind_text(5, filter.robot_id);
       api::Page<api::JobInfo> result;
       std::int64_t last_seq = 0;
@@ -395,7 +395,7 @@ class SqliteStore final : public Store {
                               const std::vector<api::HistoryEntry>& batch) override {
     std::vector<std::vector<unsigned char>> thetas;
     thetas.reserve(batch.size());
-    for (const auto& entry : batch) thetas.push_back(sqlite::encode_doubles(entry.theta.data(), entry.theta.size()));
+    for (const auto& entry : batch) thetas.push_back(encode_doubles(entry.theta.data(), entry.theta.size()));
 
     auto connection = pool_.checkout();
     return sqlite::run_transaction(*connection, TransactionKind::write, [&] {
@@ -425,7 +425,7 @@ class SqliteStore final : public Store {
           "dataset_id = coalesce(?8, dataset_id), worker = NULL, lease_expires_at = NULL " +
           kHeldBy);
       bind_lease(update, lease)
-          .bind_text(4, sqlite::state_text(state))
+          .bind_text(4, state_text(state))
           .bind_text(5, now_rfc3339())
           .bind_text_or_null(6, result)
           .bind_text_or_null(7, error)
@@ -607,7 +607,7 @@ class SqliteStore final : public Store {
       }
       auto rows = connection->prepare("SELECT state, count(*) FROM jobs GROUP BY state");
       while (rows.step()) {
-        const auto state = sqlite::state_from_text(rows.text(0));
+        const auto state = state_from_text(rows.text(0));
         if (!state) throw StoreError("a job has an unknown state in the database");
         counts[*state] = static_cast<long>(rows.integer(1));
       }

@@ -1,5 +1,5 @@
-// encoding.h — how the SQLite store writes values: samples as little-endian double blobs, and
-// its own spelling of job states and kinds (the database's format, independent of how the HTTP
+// encoding.h — how every store backend writes values: samples as little-endian double blobs, and
+// its own spelling of job states and kinds (the databases' format, independent of how the HTTP
 // API spells them). Ids, times and page tokens are every backend's (store/rules.h).
 #pragma once
 
@@ -13,7 +13,7 @@
 #include <string_view>
 #include <vector>
 
-namespace manipid::server::store::sqlite {
+namespace manipid::server::store {
 
 /// Raw IEEE-754 little-endian doubles, in the given order.
 std::vector<unsigned char> encode_doubles(const double* values, std::size_t count);
@@ -25,4 +25,4 @@ std::optional<api::JobState> state_from_text(std::string_view text);
 const char* kind_text(api::JobKind kind);
 std::optional<api::JobKind> kind_from_text(std::string_view text);
 
-}  // namespace manipid::server::store::sqlite
+}  // namespace manipid::server::store

@@ -1,11 +1,11 @@
-// encoding.cpp — value encodings of the SQLite store (see encoding.h).
-#include "store/sqlite/encoding.h"
+// encoding.cpp — value encodings every store backend shares (see encoding.h).
+#include "store/encoding.h"
 
 #include <array>
 #include <bit>
 #include <cstring>
 
-namespace manipid::server::store::sqlite {
+namespace manipid::server::store {
 
 namespace {
 
@@ -62,4 +62,4 @@ std::optional<api::JobKind> kind_from_text(std::string_view text) {
   return std::nullopt;
 }
 
-}  // namespace manipid::server::store::sqlite
+}  // namespace manipid::server::store

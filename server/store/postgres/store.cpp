@@ -1,0 +1,889 @@
+// store.cpp — the Store (store/store.h) over a PostgreSQL database that many processes share.
+// How each guarantee of the contract is kept when other processes write at the same time:
+//  - a claim takes the oldest queued job with FOR UPDATE SKIP LOCKED, so concurrent claimers
+//    never wait on each other and never get the same job;
+//  - every write of a running job is one UPDATE guarded by id, state, owner and attempt that
+//    returns cancel_requested: the row lock orders it against recovery and cancel, and a lost
+//    attempt's write (progress, history, end) changes nothing and is rolled back whole;
+//  - an Idempotency-Key is claimed by inserting it (ON CONFLICT DO NOTHING on its primary key):
+//    of two processes sending the same key, the second waits for the first's commit and then
+//    finds its row — never a read-then-write;
+//  - the queue limit's count and insert run under a transaction-scoped advisory lock, so
+//    concurrent submissions cannot overshoot it;
+//  - recovery locks the expired jobs it takes back (SKIP LOCKED: a job another process is
+//    recovering or writing is left to it).
+// Single-statement reads run outside a transaction (each statement is its own snapshot).
+#include "store/postgres/store.h"
+
+#include "store/encoding.h"
+#include "store/postgres/connection.h"
+#include "store/postgres/schema.h"
+#include "store/rules.h"
+
+#include <cmath>
+#include <cstdint>
+#include <cstdio>
+#include <limits>
+#include <stdexcept>
+
+namespace manipid::server::store::postgres {
+
+namespace {
+
+/// Any fixed number: the advisory lock that orders submissions checked against the queue limit.
+constexpr const char* kQueueLock = "1835101802";
+
+const std::string kJobColumns =
+    "id, kind, state, created_at, started_at, finished_at, request, dataset_id, evaluations, best_cost, "
+    "cancel_requested, attempts, result, error, robot_id, validation_dataset_id, worker, seq";
+constexpr int kJobSeqColumn = 17;
+const std::string kDatasetColumns =
+    "id, name, created_at, source_job, joints, samples, dt, has_torque, has_reference, uniform, has_rates, "
+    "has_accelerations, seq";
+constexpr int kDatasetSeqColumn = 12;
+const std::string kRobotColumns = "id, name, created_at, base, tip, joints, summary, seq";
+constexpr int kRobotSeqColumn = 7;
+
+/// The guard of every write of a running job: $1 id, $2 owner, $3 attempt.
+const std::string kHeldBy = "WHERE id = $1 AND state = 'running' AND worker = $2 AND attempts = $3";
+
+Params lease_params(const Lease& lease) {
+  Params params;
+  params.text(lease.job_id).text(lease.owner).integer(lease.attempt);
+  return params;
+}
+
+std::string milliseconds_text(std::chrono::milliseconds duration) { return std::to_string(duration.count()); }
+
+void check_shape(const Eigen::MatrixXd& matrix, int samples, int joints, const char* name) {
+  if (matrix.cols() == 0) return;
+  if (matrix.rows() != samples || matrix.cols() != joints) {
+    throw std::invalid_argument(std::string("Trajectory.") + name + " must be samples x joints or empty");
+  }
+}
+
+std::vector<unsigned char> encode(const double* values, Eigen::Index count) {
+  return encode_doubles(values, static_cast<std::size_t>(count));
+}
+
+api::JobInfo read_job(const Result& rows, int row) {
+  api::JobInfo job;
+  job.id = rows.text(row, 0);
+  const auto kind = kind_from_text(rows.text(row, 1));
+  const auto state = state_from_text(rows.text(row, 2));
+  if (!kind || !state) throw StoreError("job " + job.id + " has an unknown kind or state in the database");
+  job.kind = *kind;
+  job.state = *state;
+  job.created_at = rows.text(row, 3);
+  job.started_at = rows.text(row, 4);
+  job.finished_at = rows.text(row, 5);
+  job.request = rows.text(row, 6);
+  job.dataset_id = rows.text(row, 7);
+  job.evaluations = static_cast<long>(rows.integer(row, 8));
+  job.best_cost = rows.real_or_null(row, 9);
+  job.cancel_requested = rows.boolean(row, 10);
+  job.attempts = static_cast<int>(rows.integer(row, 11));
+  job.result = rows.text(row, 12);
+  job.error = rows.text(row, 13);
+  job.robot_id = rows.text(row, 14);
+  job.validation_dataset_id = rows.text(row, 15);
+  job.worker = rows.text(row, 16);
+  return job;
+}
+
+api::DatasetInfo read_dataset(const Result& rows, int row) {
+  api::DatasetInfo dataset;
+  dataset.id = rows.text(row, 0);
+  dataset.name = rows.text(row, 1);
+  dataset.created_at = rows.text(row, 2);
+  dataset.source_job = rows.text(row, 3);
+  dataset.joints = static_cast<int>(rows.integer(row, 4));
+  dataset.samples = static_cast<int>(rows.integer(row, 5));
+  dataset.dt = rows.real(row, 6);
+  dataset.has_torque = rows.boolean(row, 7);
+  dataset.has_reference = rows.boolean(row, 8);
+  dataset.uniform = rows.boolean(row, 9);
+  dataset.has_rates = rows.boolean(row, 10);
+  dataset.has_accelerations = rows.boolean(row, 11);
+  return dataset;
+}
+
+api::RobotInfo read_robot(const Result& rows, int row) {
+  api::RobotInfo robot;
+  robot.id = rows.text(row, 0);
+  robot.name = rows.text(row, 1);
+  robot.created_at = rows.text(row, 2);
+  robot.base = rows.text(row, 3);
+  robot.tip = rows.text(row, 4);
+  robot.joints = static_cast<int>(rows.integer(row, 5));
+  robot.summary = rows.text(row, 6);
+  return robot;
+}
+
+api::HistoryEntry history_entry(const Result& rows, int row, const std::string& id) {
+  api::HistoryEntry entry;
+  entry.index = static_cast<long>(rows.integer(row, 0));
+  entry.cost = rows.real_or_null(row, 1).value_or(std::numeric_limits<double>::quiet_NaN());
+  const auto theta = rows.bytes(row, 2);
+  entry.theta.resize(theta.size() / sizeof(double));
+  if (!decode_doubles(theta, entry.theta.data(), entry.theta.size())) {
+    throw StoreError("history entry of job " + id + " has a damaged theta in the database");
+  }
+  return entry;
+}
+
+std::optional<api::JobInfo> select_job(Connection& connection, const std::string& id) {
+  auto rows = connection.exec("SELECT " + kJobColumns + " FROM jobs WHERE id = $1", Params().text(id));
+  if (rows.rows() == 0) return std::nullopt;
+  return read_job(rows, 0);
+}
+
+std::optional<api::DatasetInfo> select_dataset(Connection& connection, const std::string& id) {
+  auto rows = connection.exec("SELECT " + kDatasetColumns + " FROM datasets WHERE id = $1", Params().text(id));
+  if (rows.rows() == 0) return std::nullopt;
+  return read_dataset(rows, 0);
+}
+
+std::optional<api::RobotInfo> select_robot(Connection& connection, const std::string& id) {
+  auto rows = connection.exec("SELECT " + kRobotColumns + " FROM robots WHERE id = $1", Params().text(id));
+  if (rows.rows() == 0) return std::nullopt;
+  return read_robot(rows, 0);
+}
+
+/// The job's state, its row locked until the transaction ends (`lock`), or nullopt.
+std::optional<api::JobState> select_state(Connection& connection, const std::string& id, bool lock) {
+  auto rows = connection.exec(std::string("SELECT state FROM jobs WHERE id = $1") + (lock ? " FOR UPDATE" : ""),
+                              Params().text(id));
+  if (rows.rows() == 0) return std::nullopt;
+  const auto state = state_from_text(rows.text(0, 0));
+  if (!state) throw StoreError("job " + id + " has an unknown state in the database");
+  return state;
+}
+
+/// A fresh random id not held by a row of `table` (a 64-bit collision is unlikely, but a
+/// UNIQUE failure would be a 500).
+std::string unused_id(Connection& connection, const char* prefix, const std::string& table) {
+  for (;;) {
+    std::string id = random_id(prefix);
+    if (connection.exec("SELECT 1 FROM " + table + " WHERE id = $1", Params().text(id)).rows() == 0) return id;
+  }
+}
+
+struct KeyRecord {
+  std::string fingerprint;
+  std::string resource_id;
+};
+
+/// Claims Idempotency-Key `key` in `scope` for the new resource `id`: nullopt when the key is
+/// now ours (create the resource), else the live record that holds it. Expired keys are
+/// forgotten first (by the index on their age).
+std::optional<KeyRecord> claim_key(Connection& connection, const char* scope, const api::IdempotencyKey& key,
+                                   const std::string& id, const std::string& now, const std::string& not_before) {
+  connection.exec("DELETE FROM idempotency_keys WHERE created_at < $1", Params().text(not_before));
+  auto inserted = connection.exec(
+      "INSERT INTO idempotency_keys (scope, key, fingerprint, resource_id, created_at) VALUES ($1, $2, $3, $4, $5) "
+      "ON CONFLICT (scope, key) DO NOTHING",
+      Params().text(scope).text(key.key).text(key.fingerprint).text(id).text(now));
+  if (inserted.changed() == 1) return std::nullopt;
+  auto held = connection.exec("SELECT fingerprint, resource_id FROM idempotency_keys WHERE scope = $1 AND key = $2",
+                              Params().text(scope).text(key.key));
+  if (held.rows() == 0) throw ConflictRetry("an Idempotency-Key was removed while it was being claimed");
+  return KeyRecord{held.text(0, 0), held.text(0, 1)};
+}
+
+/// The key now names `id` (its earlier resource is gone).
+void retake_key(Connection& connection, const char* scope, const api::IdempotencyKey& key, const std::string& id,
+                const std::string& now) {
+  connection.exec("UPDATE idempotency_keys SET resource_id = $3, created_at = $4 WHERE scope = $1 AND key = $2",
+                  Params().text(scope).text(key.key).text(id).text(now));
+}
+
+void forget_keys_of(Connection& connection, const char* scope, const std::string& id) {
+  connection.exec("DELETE FROM idempotency_keys WHERE scope = $1 AND resource_id = $2", Params().text(scope).text(id));
+}
+
+/// What a keyed submission should do: create (the key is ours or there is none), replay the
+/// earlier resource, or refuse (the key was used for another body).
+enum class KeyVerdict { create, replay, reused };
+
+struct KeyDecision {
+  KeyVerdict verdict = KeyVerdict::create;
+  std::string earlier_id;
+};
+
+/// Claims the key (when given) for `id`; `exists(earlier)` tells whether its earlier resource
+/// still exists (a key whose resource is gone is taken over).
+template <class Exists>
+KeyDecision decide_key(Connection& connection, const char* scope, const std::optional<api::IdempotencyKey>& key,
+                       const std::string& id, const std::string& now, const std::string& not_before, Exists&& exists) {
+  if (!key) return {};
+  const auto earlier = claim_key(connection, scope, *key, id, now, not_before);
+  if (!earlier) return {};
+  if (earlier->fingerprint != key->fingerprint) return {KeyVerdict::reused, {}};
+  if (exists(earlier->resource_id)) return {KeyVerdict::replay, earlier->resource_id};
+  retake_key(connection, scope, *key, id, now);
+  return {};
+}
+
+/// A PostgreSQL array literal of ids ({"a","b"}); ids are letters, digits and '_', quoted anyway.
+std::string id_array(const std::vector<std::string>& ids) {
+  std::string out = "{";
+  for (std::size_t i = 0; i < ids.size(); ++i) {
+    if (i > 0) out += ',';
+    out += '"';
+    for (char c : ids[i]) {
+      if (c == '"' || c == '\\') out += '\\';
+      out += c;
+    }
+    out += '"';
+  }
+  return out + "}";
+}
+
+/// COPY's text format for one history row: job id, index, cost (\N for NaN, as NULL), θ as
+/// bytea hex (the backslash doubled: COPY reads "\\x…" as "\x…"), \N when θ is empty.
+void append_history_row(std::string& out, const std::string& id, const api::HistoryEntry& entry) {
+  static constexpr char digits[] = "0123456789abcdef";
+  out += id;
+  out += '\t';
+  out += std::to_string(entry.index);
+  out += '\t';
+  if (std::isnan(entry.cost)) {
+    out += "\\N";
+  } else if (std::isinf(entry.cost)) {
+    out += entry.cost > 0 ? "Infinity" : "-Infinity";
+  } else {
+    char buffer[32];
+    std::snprintf(buffer, sizeof buffer, "%.17g", entry.cost);
+    out += buffer;
+  }
+  out += '\t';
+  if (entry.theta.empty()) {
+    out += "\\N";
+  } else {
+    out += "\\\\x";
+    for (unsigned char byte : encode_doubles(entry.theta.data(), entry.theta.size())) {
+      out += digits[byte >> 4];
+      out += digits[byte & 15];
+    }
+  }
+  out += '\n';
+}
+
+class PostgresStore final : public Store {
+ public:
+  PostgresStore(const std::string& uri, const StoreOptions& options, std::size_t connections)
+      : options_(options), pool_(uri, connections) {
+    auto connection = pool_.checkout();
+    prepare_database(*connection);
+  }
+
+  // ---- datasets ----
+
+  DatasetOutcome insert_dataset(const std::string& name, const Trajectory& data, const std::string& source_job,
+                                const std::optional<api::IdempotencyKey>& key) override {
+    const int samples = data.samples();
+    const int joints = data.joint_count();
+    if (data.q.rows() != samples) throw std::invalid_argument("Trajectory.q must have one row per sample");
+    check_shape(data.tau, samples, joints, "tau");
+    check_shape(data.ref, samples, joints, "ref");
+    check_shape(data.qd, samples, joints, "qd");
+    check_shape(data.qdd, samples, joints, "qdd");
+    api::DatasetInfo dataset;
+    dataset.name = name;
+    dataset.source_job = source_job;
+    dataset.joints = joints;
+    dataset.samples = samples;
+    dataset.dt = data.sample_period();  // uniform: t[1] − t[0]; jittery: the median step
+    dataset.uniform = data.is_uniform();
+    dataset.has_torque = data.has_torque();
+    dataset.has_reference = data.has_reference();
+    dataset.has_rates = data.has_rates();
+    dataset.has_accelerations = data.has_accelerations();
+    const std::string keys_not_before = rfc3339_ago(options_.idempotency_ttl);
+
+    auto connection = pool_.checkout();
+    return run_transaction(*connection, TransactionKind::write, [&]() -> DatasetOutcome {
+      dataset.id = unused_id(*connection, "ds_", "datasets");
+      dataset.created_at = now_rfc3339();
+      const KeyDecision decision =
+          decide_key(*connection, "dataset", key, dataset.id, dataset.created_at, keys_not_before,
+                     [&](const std::string& earlier) { return select_dataset(*connection, earlier).has_value(); });
+      if (decision.verdict == KeyVerdict::reused) return {SubmitStatus::key_reused, {}};
+      if (decision.verdict == KeyVerdict::replay) {
+        return {SubmitStatus::replayed, *select_dataset(*connection, decision.earlier_id)};
+      }
+      Params params;
+      params.text(dataset.id)
+          .text(dataset.name)
+          .text(dataset.created_at)
+          .text_or_null(dataset.source_job)
+          .integer(joints)
+          .integer(samples)
+          .real(dataset.dt)
+          .boolean(dataset.uniform)
+          .boolean(dataset.has_torque)
+          .boolean(dataset.has_reference)
+          .boolean(dataset.has_rates)
+          .boolean(dataset.has_accelerations)
+          .bytes_or_null(encode(data.t.data(), data.t.size()))
+          .bytes_or_null(encode(data.q.data(), data.q.size()))
+          .bytes_or_null(encode(data.tau.data(), data.tau.size()))
+          .bytes_or_null(encode(data.ref.data(), data.ref.size()))
+          .bytes_or_null(encode(data.qd.data(), data.qd.size()))
+          .bytes_or_null(encode(data.qdd.data(), data.qdd.size()));
+      connection->exec(
+          "INSERT INTO datasets (id, name, created_at, source_job, joints, samples, dt, uniform, has_torque, "
+          "has_reference, has_rates, has_accelerations, t, q, tau, ref, qd, qdd) "
+          "VALUES ($1, $2, $3, $4, $5, $6, $7, $8, $9, $10, $11, $12, $13, $14, $15, $16, $17, $18)",
+          params);
+      return {SubmitStatus::created, dataset};
+    });
+  }
+
+  std::optional<api::DatasetInfo> find_dataset(const std::string& id) override {
+    auto connection = pool_.checkout();
+    return select_dataset(*connection, id);
+  }
+
+  std::optional<Trajectory> load_dataset(const std::string& id) override {
+    auto connection = pool_.checkout();
+    auto row = connection->exec(
+        "SELECT samples, joints, has_torque, has_reference, has_rates, has_accelerations, t, q, tau, ref, qd, qdd "
+        "FROM datasets WHERE id = $1",
+        Params().text(id));
+    if (row.rows() == 0) return std::nullopt;
+    const auto samples = static_cast<Eigen::Index>(row.integer(0, 0));
+    const auto joints = static_cast<Eigen::Index>(row.integer(0, 1));
+    Trajectory data;
+    data.t.resize(samples);
+    data.q.resize(samples, joints);
+    data.tau.resize(samples, row.boolean(0, 2) ? joints : 0);
+    data.ref.resize(samples, row.boolean(0, 3) ? joints : 0);
+    data.qd.resize(samples, row.boolean(0, 4) ? joints : 0);
+    data.qdd.resize(samples, row.boolean(0, 5) ? joints : 0);
+    const auto fill = [&](int column, double* values, Eigen::Index count) {
+      return decode_doubles(row.bytes(0, column), values, static_cast<std::size_t>(count));
+    };
+    const bool intact = fill(6, data.t.data(), data.t.size()) && fill(7, data.q.data(), data.q.size()) &&
+                        fill(8, data.tau.data(), data.tau.size()) && fill(9, data.ref.data(), data.ref.size()) &&
+                        fill(10, data.qd.data(), data.qd.size()) && fill(11, data.qdd.data(), data.qdd.size());
+    if (!intact) throw StoreError("dataset " + id + " has samples of the wrong size in the database");
+    return data;
+  }
+
+  api::Page<api::DatasetInfo> list_datasets(const api::PageRequest& page) override {
+    const int size = effective_page_size(page.page_size);
+    const std::int64_t before = page.page_token.empty() ? INT64_MAX : decode_page_token(page.page_token, "d1", "");
+    auto connection = pool_.checkout();
+    auto rows = connection->exec("SELECT " + kDatasetColumns + " FROM datasets WHERE seq < $1 ORDER BY seq DESC LIMIT $2",
+                                 Params().integer(before).integer(size + 1));
+    return page_of<api::DatasetInfo>(rows, size, "d1", "", kDatasetSeqColumn, read_dataset);
+  }
+
+  DeleteResult delete_dataset(const std::string& id) override {
+    auto connection = pool_.checkout();
+    return run_transaction(*connection, TransactionKind::write, [&] {
+      auto readers = connection->exec(
+          "SELECT 1 FROM jobs WHERE (dataset_id = $1 OR validation_dataset_id = $1) AND state IN ('queued', 'running') "
+          "LIMIT 1",
+          Params().text(id));
+      if (readers.rows() > 0) return DeleteResult::in_use;
+      if (connection->exec("DELETE FROM datasets WHERE id = $1", Params().text(id)).changed() == 0) {
+        return DeleteResult::not_found;
+      }
+      forget_keys_of(*connection, "dataset", id);
+      return DeleteResult::deleted;
+    });
+  }
+
+  // ---- robots ----
+
+  RobotOutcome insert_robot(const NewRobot& robot, const std::optional<api::IdempotencyKey>& key) override {
+    const std::string keys_not_before = rfc3339_ago(options_.idempotency_ttl);
+    auto connection = pool_.checkout();
+    return run_transaction(*connection, TransactionKind::write, [&]() -> RobotOutcome {
+      api::RobotInfo created;
+      created.id = unused_id(*connection, "rb_", "robots");
+      created.name = robot.name;
+      created.created_at = now_rfc3339();
+      created.base = robot.base;
+      created.tip = robot.tip;
+      created.joints = robot.joints;
+      created.summary = robot.summary;
+      const KeyDecision decision =
+          decide_key(*connection, "robot", key, created.id, created.created_at, keys_not_before,
+                     [&](const std::string& earlier) { return select_robot(*connection, earlier).has_value(); });
+      if (decision.verdict == KeyVerdict::reused) return {SubmitStatus::key_reused, {}};
+      if (decision.verdict == KeyVerdict::replay) return {SubmitStatus::replayed, *select_robot(*connection, decision.earlier_id)};
+      connection->exec(
+          "INSERT INTO robots (id, name, created_at, base, tip, joints, summary, urdf) "
+          "VALUES ($1, $2, $3, $4, $5, $6, $7, $8)",
+          Params()
+              .text(created.id)
+              .text(created.name)
+              .text(created.created_at)
+              .text_or_null(created.base)
+              .text_or_null(created.tip)
+              .integer(created.joints)
+              .text(created.summary)
+              .text(robot.urdf));
+      return {SubmitStatus::created, created};
+    });
+  }
+
+  std::optional<api::RobotInfo> find_robot(const std::string& id) override {
+    auto connection = pool_.checkout();
+    return select_robot(*connection, id);
+  }
+
+  std::optional<std::string> load_robot_urdf(const std::string& id) override {
+    auto connection = pool_.checkout();
+    auto row = connection->exec("SELECT urdf FROM robots WHERE id = $1", Params().text(id));
+    if (row.rows() == 0) return std::nullopt;
+    return row.text(0, 0);
+  }
+
+  api::Page<api::RobotInfo> list_robots(const api::PageRequest& page) override {
+    const int size = effective_page_size(page.page_size);
+    const std::int64_t before = page.page_token.empty() ? INT64_MAX : decode_page_token(page.page_token, "r1", "");
+    auto connection = pool_.checkout();
+    auto rows = connection->exec("SELECT " + kRobotColumns + " FROM robots WHERE seq < $1 ORDER BY seq DESC LIMIT $2",
+                                 Params().integer(before).integer(size + 1));
+    return page_of<api::RobotInfo>(rows, size, "r1", "", kRobotSeqColumn, read_robot);
+  }
+
+  DeleteResult delete_robot(const std::string& id) override {
+    auto connection = pool_.checkout();
+    return run_transaction(*connection, TransactionKind::write, [&] {
+      auto users = connection->exec("SELECT 1 FROM jobs WHERE robot_id = $1 AND state IN ('queued', 'running') LIMIT 1",
+                                    Params().text(id));
+      if (users.rows() > 0) return DeleteResult::in_use;
+      if (connection->exec("DELETE FROM robots WHERE id = $1", Params().text(id)).changed() == 0) {
+        return DeleteResult::not_found;
+      }
+      forget_keys_of(*connection, "robot", id);
+      return DeleteResult::deleted;
+    });
+  }
+
+  // ---- jobs ----
+
+  SubmitOutcome submit_job(const NewJob& job, const std::optional<api::IdempotencyKey>& key, int queue_limit) override {
+    const std::string keys_not_before = rfc3339_ago(options_.idempotency_ttl);
+    auto connection = pool_.checkout();
+    try {
+      return submit(*connection, job, key, queue_limit, keys_not_before);
+    } catch (const QueueFull&) {
+      return {SubmitStatus::queue_full, {}};
+    }
+  }
+
+  std::optional<api::JobInfo> find_job(const std::string& id) override {
+    auto connection = pool_.checkout();
+    return select_job(*connection, id);
+  }
+
+  api::Page<api::JobInfo> list_jobs(const api::JobFilter& filter, const api::PageRequest& page) override {
+    const int size = effective_page_size(page.page_size);
+    // The token is bound to the filter: a token from another filter would skip or repeat jobs.
+    const std::string context = std::string("state=") + (filter.state ? state_text(*filter.state) : "") +
+                                ";kind=" + (filter.kind ? kind_text(*filter.kind) : "") + ";robot=" + filter.robot_id;
+    const std::int64_t before = page.page_token.empty() ? INT64_MAX : decode_page_token(page.page_token, "j1", context);
+    // Fixed SQL fragments per filter combination (values bound, never in the text).
+    Params params;
+    params.integer(before).integer(size + 1);
+    std::string sql = "SELECT " + kJobColumns + " FROM jobs WHERE seq < $1";
+    if (filter.state) {
+      params.text(state_text(*filter.state));
+      sql += " AND state = $" + std::to_string(params.size());
+    }
+    if (filter.kind) {
+      params.text(kind_text(*filter.kind));
+      sql += " AND kind = $" + std::to_string(params.size());
+    }
+    if (!filter.robot_id.empty()) {
+      params.text(filter.robot_id);
+      sql += " AND robot_id = $" + std::to_string(params.size());
+    }
+    sql += " ORDER BY seq DESC LIMIT $2";
+    auto connection = pool_.checkout();
+    auto rows = connection->exec(sql, params);
+    return page_of<api::JobInfo>(rows, size, "j1", context, kJobSeqColumn, read_job);
+  }
+
+  std::optional<api::JobInfo> claim_next_job(const std::string& owner, std::chrono::milliseconds lease) override {
+    auto connection = pool_.checkout();
+    return run_transaction(*connection, TransactionKind::write, [&]() -> std::optional<api::JobInfo> {
+      auto claimed = connection->exec(
+          "WITH next AS (SELECT seq FROM jobs WHERE state = 'queued' ORDER BY seq LIMIT 1 FOR UPDATE SKIP LOCKED) "
+          "UPDATE jobs SET state = 'running', started_at = $1, attempts = attempts + 1, worker = $2, "
+          "lease_expires_at = now() + $3::double precision * interval '1 millisecond' "
+          "FROM next WHERE jobs.seq = next.seq RETURNING " + qualified_job_columns(),
+          Params().text(now_rfc3339()).text(owner).text(milliseconds_text(lease)));
+      if (claimed.rows() == 0) return std::nullopt;
+      return read_job(claimed, 0);
+    });
+  }
+
+  LeaseStatus renew_lease(const Lease& lease, std::chrono::milliseconds duration) override {
+    auto connection = pool_.checkout();
+    return run_transaction(*connection, TransactionKind::write_in_place,
+                           [&] { return extend(*connection, lease, duration, nullptr); });
+  }
+
+  LeaseStatus record_progress(const Lease& lease, long evaluations, std::optional<double> best_cost,
+                              const std::vector<api::HistoryEntry>& batch) override {
+    std::string rows;
+    for (const auto& entry : batch) append_history_row(rows, lease.job_id, entry);
+    auto connection = pool_.checkout();
+    return run_transaction(*connection, TransactionKind::write, [&] {
+      // The guarded update first: a batch of an attempt that lost its lease is dropped whole.
+      const Progress progress{evaluations, best_cost};
+      const LeaseStatus status = extend(*connection, lease, std::nullopt, &progress);
+      if (status == LeaseStatus::lost || batch.empty()) return status;
+      // COPY into a per-session staging table, then one upsert: an index written again
+      // replaces its row, as in the SQLite store.
+      connection->execute(
+          "CREATE TEMP TABLE IF NOT EXISTS history_in (job_id text, idx bigint, cost double precision, theta bytea) "
+          "ON COMMIT DELETE ROWS");
+      connection->copy_in("COPY history_in (job_id, idx, cost, theta) FROM STDIN", rows);
+      connection->exec(
+          "INSERT INTO job_history (job_id, idx, cost, theta) SELECT job_id, idx, cost, theta FROM history_in "
+          "ON CONFLICT (job_id, idx) DO UPDATE SET cost = excluded.cost, theta = excluded.theta");
+      return status;
+    });
+  }
+
+  bool finish_job(const Lease& lease, api::JobState state, const std::string& result, const std::string& error,
+                  const std::vector<EstimateRow>& estimates, const std::string& dataset_id) override {
+    if (!api::is_terminal(state)) throw std::invalid_argument("finish_job needs succeeded, failed or cancelled");
+    auto connection = pool_.checkout();
+    return run_transaction(*connection, TransactionKind::write, [&] {
+      // Only the attempt that holds the lease ends the job, and only once.
+      Params params = lease_params(lease);
+      params.text(state_text(state)).text(now_rfc3339()).text_or_null(result).text_or_null(error).text_or_null(dataset_id);
+      auto ended = connection->exec(
+          "UPDATE jobs SET state = $4, finished_at = $5, result = $6, error = $7, "
+          "dataset_id = coalesce($8, dataset_id), worker = NULL, lease_expires_at = NULL " + kHeldBy,
+          params);
+      if (ended.changed() == 0) return false;
+      connection->exec("DELETE FROM estimates WHERE job_id = $1", Params().text(lease.job_id));
+      for (const auto& estimate : estimates) {
+        connection->exec(
+            "INSERT INTO estimates (job_id, name, value, std_error) VALUES ($1, $2, $3, $4) "
+            "ON CONFLICT (job_id, name) DO UPDATE SET value = excluded.value, std_error = excluded.std_error",
+            Params().text(lease.job_id).text(estimate.name).real(estimate.value).real_or_null(estimate.std_error));
+      }
+      return true;
+    });
+  }
+
+  void requeue_job(const Lease& lease) override {
+    auto connection = pool_.checkout();
+    run_transaction(*connection, TransactionKind::write, [&] {
+      auto running = connection->exec("SELECT cancel_requested FROM jobs " + kHeldBy + " FOR UPDATE", lease_params(lease));
+      if (running.rows() == 0) return;
+      const std::string& id = lease.job_id;
+      if (running.boolean(0, 0)) {
+        // The client asked to cancel it: running it again would ignore that.
+        connection->exec(
+            "UPDATE jobs SET state = 'cancelled', finished_at = $2, worker = NULL, lease_expires_at = NULL WHERE id = $1",
+            Params().text(id).text(now_rfc3339()));
+        return;
+      }
+      clear_progress(*connection, {id});
+      connection->exec(
+          "UPDATE jobs SET state = 'queued', started_at = NULL, cancel_requested = false, evaluations = 0, "
+          "best_cost = NULL, worker = NULL, lease_expires_at = NULL WHERE id = $1",
+          Params().text(id));
+    });
+  }
+
+  CancelOutcome cancel_job(const std::string& id) override {
+    auto connection = pool_.checkout();
+    return run_transaction(*connection, TransactionKind::write, [&] {
+      const auto state = select_state(*connection, id, true);
+      if (!state) return CancelOutcome::not_found;
+      if (*state == api::JobState::queued) {
+        connection->exec("UPDATE jobs SET state = 'cancelled', finished_at = $2 WHERE id = $1",
+                         Params().text(id).text(now_rfc3339()));
+        return CancelOutcome::cancelled_now;
+      }
+      if (*state == api::JobState::running) {
+        connection->exec("UPDATE jobs SET cancel_requested = true WHERE id = $1", Params().text(id));
+        return CancelOutcome::requested;
+      }
+      return CancelOutcome::already_finished;
+    });
+  }
+
+  DeleteResult delete_job(const std::string& id) override {
+    auto connection = pool_.checkout();
+    return run_transaction(*connection, TransactionKind::write, [&] {
+      const auto state = select_state(*connection, id, true);
+      if (!state) return DeleteResult::not_found;
+      if (!api::is_terminal(*state)) return DeleteResult::in_use;
+      clear_progress(*connection, {id});
+      forget_keys_of(*connection, "job", id);
+      connection->exec("DELETE FROM jobs WHERE id = $1", Params().text(id));
+      return DeleteResult::deleted;
+    });
+  }
+
+  std::optional<api::Page<api::HistoryEntry>> history(const std::string& id, const api::PageRequest& page) override {
+    const int size = effective_page_size(page.page_size);
+    const bool first_page = page.page_token.empty();
+    const std::int64_t after = first_page ? -1 : decode_page_token(page.page_token, "h1", id);
+    auto connection = pool_.checkout();
+    return run_transaction(*connection, TransactionKind::read, [&]() -> std::optional<api::Page<api::HistoryEntry>> {
+      if (!select_state(*connection, id, false)) return std::nullopt;
+      auto rows = connection->exec(
+          "SELECT idx, cost, theta FROM job_history WHERE job_id = $1 AND idx > $2 ORDER BY idx LIMIT $3",
+          Params().text(id).integer(after).integer(size + 1));
+      api::Page<api::HistoryEntry> result;
+      for (int row = 0; row < rows.rows(); ++row) {
+        if (static_cast<int>(result.items.size()) == size) {
+          result.next_page_token = encode_page_token("h1", result.items.back().index, id);
+          break;
+        }
+        result.items.push_back(history_entry(rows, row, id));
+      }
+      return result;
+    });
+  }
+
+  std::optional<api::HistoryOverview> history_overview(const std::string& id, long max_points) override {
+    auto connection = pool_.checkout();
+    return run_transaction(*connection, TransactionKind::read, [&]() -> std::optional<api::HistoryOverview> {
+      if (!select_state(*connection, id, false)) return std::nullopt;
+      api::HistoryOverview overview;
+      auto extent = connection->exec("SELECT count(*), min(idx), max(idx) FROM job_history WHERE job_id = $1",
+                                     Params().text(id));
+      overview.total = static_cast<long>(extent.integer(0, 0));
+      if (overview.total == 0) return overview;
+      const std::int64_t first = extent.integer(0, 1), last = extent.integer(0, 2);
+      auto best = connection->exec(
+          "SELECT idx FROM job_history WHERE job_id = $1 AND cost IS NOT NULL ORDER BY cost, idx LIMIT 1",
+          Params().text(id));
+      if (best.rows() > 0) overview.best_index = static_cast<long>(best.integer(0, 0));
+      overview.stride = api::thinning_stride(overview.total, max_points);
+      auto rows = connection->exec(
+          "SELECT idx, cost, theta FROM job_history WHERE job_id = $1 "
+          "AND ((idx - $2) % $3 = 0 OR idx = $4 OR idx = $5) ORDER BY idx",
+          Params().text(id).integer(first).integer(overview.stride).integer(last).integer(overview.best_index.value_or(last)));
+      for (int row = 0; row < rows.rows(); ++row) overview.items.push_back(history_entry(rows, row, id));
+      return overview;
+    });
+  }
+
+  // ---- the process's life ----
+
+  RecoveryOutcome recover_interrupted_jobs(int max_attempts, const std::function<std::string(int losses)>& lost_error,
+                                           const std::function<bool(const std::string& worker)>& gone) override {
+    auto connection = pool_.checkout();
+    return run_transaction(*connection, TransactionKind::write, [&] {
+      auto running = connection->exec("SELECT id, worker FROM jobs WHERE state = 'running' FOR UPDATE SKIP LOCKED");
+      std::vector<std::string> lost;
+      for (int row = 0; row < running.rows(); ++row) {
+        const std::string worker = running.text(row, 1);
+        if (worker.empty() || gone(worker)) lost.push_back(running.text(row, 0));
+      }
+      return recover_lost(*connection, lost, max_attempts, lost_error);
+    });
+  }
+
+  RecoveryOutcome recover_expired_leases(int max_attempts,
+                                         const std::function<std::string(int losses)>& lost_error) override {
+    auto connection = pool_.checkout();
+    return run_transaction(*connection, TransactionKind::write_in_place, [&] {
+      auto expired = connection->exec(
+          "SELECT id FROM jobs WHERE state = 'running' AND (lease_expires_at IS NULL OR lease_expires_at < now()) "
+          "FOR UPDATE SKIP LOCKED");
+      std::vector<std::string> lost;
+      for (int row = 0; row < expired.rows(); ++row) lost.push_back(expired.text(row, 0));
+      return recover_lost(*connection, lost, max_attempts, lost_error);
+    });
+  }
+
+  std::map<api::JobState, long> count_jobs_by_state() override {
+    std::map<api::JobState, long> counts;
+    for (auto state : {api::JobState::queued, api::JobState::running, api::JobState::succeeded, api::JobState::failed,
+                       api::JobState::cancelled}) {
+      counts[state] = 0;
+    }
+    auto connection = pool_.checkout();
+    auto rows = connection->exec("SELECT state, count(*) FROM jobs GROUP BY state");
+    for (int row = 0; row < rows.rows(); ++row) {
+      const auto state = state_from_text(rows.text(row, 0));
+      if (!state) throw StoreError("a job has an unknown state in the database");
+      counts[*state] = static_cast<long>(rows.integer(row, 1));
+    }
+    return counts;
+  }
+
+  std::optional<std::string> write_trouble() const override { return pool_.health().trouble(); }
+
+ private:
+  /// Thrown inside submit_job's transaction to roll it back whole; never leaves the store.
+  struct QueueFull {};
+
+  struct Progress {
+    long evaluations = 0;
+    std::optional<double> best_cost;
+  };
+
+  static std::string qualified_job_columns() {
+    std::string out;
+    std::size_t start = 0;
+    while (start < kJobColumns.size()) {
+      std::size_t end = kJobColumns.find(", ", start);
+      if (end == std::string::npos) end = kJobColumns.size();
+      if (!out.empty()) out += ", ";
+      out += "jobs." + kJobColumns.substr(start, end - start);
+      start = end + 2;
+    }
+    return out;
+  }
+
+  template <class Item, class Read>
+  static api::Page<Item> page_of(const Result& rows, int size, const char* tag, const std::string& context,
+                                 int seq_column, Read read) {
+    api::Page<Item> result;
+    for (int row = 0; row < rows.rows(); ++row) {
+      if (static_cast<int>(result.items.size()) == size) {
+        result.next_page_token = encode_page_token(tag, rows.integer(row - 1, seq_column), context);
+        break;
+      }
+      result.items.push_back(read(rows, row));
+    }
+    return result;
+  }
+
+  /// submit_job's transaction; QueueFull rolls it back whole (the key claimed in it too).
+  static SubmitOutcome submit(Connection& connection, const NewJob& job, const std::optional<api::IdempotencyKey>& key,
+                              int queue_limit, const std::string& keys_not_before) {
+    return run_transaction(connection, TransactionKind::write, [&]() -> SubmitOutcome {
+      api::JobInfo created;
+      created.id = unused_id(connection, "job_", "jobs");
+      created.kind = job.kind;
+      created.state = api::JobState::queued;
+      created.created_at = now_rfc3339();
+      created.request = job.request;
+      created.dataset_id = job.dataset_id;
+      created.robot_id = job.robot_id;
+      created.validation_dataset_id = job.validation_dataset_id;
+      // The key first: a replay or a reused key is answered whatever the queue's length.
+      const KeyDecision decision =
+          decide_key(connection, "job", key, created.id, created.created_at, keys_not_before,
+                     [&](const std::string& earlier) { return select_job(connection, earlier).has_value(); });
+      if (decision.verdict == KeyVerdict::reused) return {SubmitStatus::key_reused, {}};
+      if (decision.verdict == KeyVerdict::replay) return {SubmitStatus::replayed, *select_job(connection, decision.earlier_id)};
+      if (queue_limit > 0) {
+        connection.exec(std::string("SELECT pg_advisory_xact_lock(") + kQueueLock + ")");
+        auto count = connection.exec("SELECT count(*) FROM jobs WHERE state = 'queued'");
+        if (count.integer(0, 0) >= queue_limit) {
+          // Nothing of this submission may stay (the key above is rolled back with it).
+          throw QueueFull();
+        }
+      }
+      connection.exec(
+          "INSERT INTO jobs (id, kind, state, request, dataset_id, created_at, robot_id, validation_dataset_id) "
+          "VALUES ($1, $2, 'queued', $3, $4, $5, $6, $7)",
+          Params()
+              .text(created.id)
+              .text(kind_text(job.kind))
+              .text(job.request)
+              .text_or_null(job.dataset_id)
+              .text(created.created_at)
+              .text_or_null(job.robot_id)
+              .text_or_null(job.validation_dataset_id));
+      return {SubmitStatus::created, created};
+    });
+  }
+
+  /// The guarded update of a held lease: progress and/or a new expiry; what it learned.
+  static LeaseStatus extend(Connection& connection, const Lease& lease, std::optional<std::chrono::milliseconds> duration,
+                            const Progress* progress) {
+    Params params = lease_params(lease);
+    std::string sql = "UPDATE jobs SET lease_expires_at = ";
+    if (duration) {
+      params.text(milliseconds_text(*duration));
+      sql += "now() + $4::double precision * interval '1 millisecond'";
+    } else {
+      sql += "lease_expires_at";
+    }
+    if (progress) {
+      params.integer(progress->evaluations).real_or_null(progress->best_cost);
+      const int at = params.size() - 1;
+      sql += ", evaluations = $" + std::to_string(at) + ", best_cost = $" + std::to_string(at + 1);
+    }
+    sql += " " + kHeldBy + " RETURNING cancel_requested";
+    auto updated = connection.exec(sql, params);
+    if (updated.rows() == 0) return LeaseStatus::lost;
+    return updated.boolean(0, 0) ? LeaseStatus::cancel_requested : LeaseStatus::held;
+  }
+
+  static void clear_progress(Connection& connection, const std::vector<std::string>& ids) {
+    const std::string array = id_array(ids);
+    connection.exec("DELETE FROM job_history WHERE job_id = ANY($1::text[])", Params().text(array));
+    connection.exec("DELETE FROM estimates WHERE job_id = ANY($1::text[])", Params().text(array));
+  }
+
+  /// Ends or requeues the running jobs `lost` (their worker is gone; their rows are locked).
+  static RecoveryOutcome recover_lost(Connection& connection, const std::vector<std::string>& lost, int max_attempts,
+                                      const std::function<std::string(int losses)>& lost_error) {
+    RecoveryOutcome outcome;
+    if (lost.empty()) return outcome;
+    const std::string now = now_rfc3339();
+    // Cancellation was asked for before the worker went: honour it rather than run the job again.
+    auto cancelled = connection.exec(
+        "UPDATE jobs SET state = 'cancelled', finished_at = $1, worker = NULL, lease_expires_at = NULL "
+        "WHERE id = ANY($2::text[]) AND state = 'running' AND cancel_requested RETURNING id",
+        Params().text(now).text(id_array(lost)));
+    outcome.cancelled = cancelled.rows();
+    auto counted = connection.exec(
+        "UPDATE jobs SET worker_losses = worker_losses + 1 WHERE id = ANY($1::text[]) AND state = 'running' "
+        "RETURNING id, worker_losses",
+        Params().text(id_array(lost)));
+    std::vector<std::string> requeue;
+    std::vector<std::pair<std::string, int>> poisoned;
+    for (int row = 0; row < counted.rows(); ++row) {
+      const int losses = static_cast<int>(counted.integer(row, 1));
+      if (losses >= max_attempts) poisoned.emplace_back(counted.text(row, 0), losses);
+      else requeue.push_back(counted.text(row, 0));
+    }
+    // The attempt that died leaves nothing behind: its history and estimates go.
+    std::vector<std::string> ended;
+    for (const auto& [id, losses] : poisoned) ended.push_back(id);
+    ended.insert(ended.end(), requeue.begin(), requeue.end());
+    clear_progress(connection, ended);
+    // A job that took its worker down max_attempts times is failed, never run again.
+    for (const auto& [id, losses] : poisoned) {
+      connection.exec(
+          "UPDATE jobs SET state = 'failed', finished_at = $2, error = $3, worker = NULL, lease_expires_at = NULL "
+          "WHERE id = $1",
+          Params().text(id).text(now).text(lost_error(losses)));
+      outcome.failed.push_back(id);
+    }
+    if (!requeue.empty()) {
+      auto requeued = connection.exec(
+          "UPDATE jobs SET state = 'queued', started_at = NULL, evaluations = 0, best_cost = NULL, worker = NULL, "
+          "lease_expires_at = NULL WHERE id = ANY($1::text[])",
+          Params().text(id_array(requeue)));
+      outcome.requeued = static_cast<int>(requeued.changed());
+    }
+    return outcome;
+  }
+
+  StoreOptions options_;
+  ConnectionPool pool_;
+};
+
+}  // namespace
+
+std::unique_ptr<Store> open_store(const std::string& uri, const StoreOptions& options, std::size_t connections) {
+  return std::make_unique<PostgresStore>(uri, options, connections);
+}
+
+}  // namespace manipid::server::store::postgres
