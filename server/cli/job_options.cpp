@@ -41,7 +41,10 @@ bool worker_gone(const std::string& worker, const std::string& self) {
 }  // namespace
 
 void add_job_options(CLI::App& command, JobOptions& options, int fewest_workers) {
-  command.add_option("--db", options.database, "Store: a SQLite file, PATH or sqlite:PATH (created with its schema if missing)")
+  command.add_option("--db", options.database,
+                     "Store: a SQLite file, PATH or sqlite:PATH (created with its schema if missing), or a PostgreSQL "
+                     "database shared with other processes, postgresql://USER@HOST/DB (the password from PGPASSWORD "
+                     "or ~/.pgpass)")
       ->capture_default_str();
   command.add_option("--workers", options.workers,
                      fewest_workers == 0 ? "Job threads (default: hardware threads; 0: none, the API only, for a "
@@ -71,14 +74,17 @@ int worker_threads(const JobOptions& options) {
   return options.workers >= 0 ? options.workers : static_cast<int>(std::max(1u, std::thread::hardware_concurrency()));
 }
 
-std::unique_ptr<store::Store> open_job_store(const JobOptions& options) {
+std::unique_ptr<store::Store> open_job_store(const JobOptions& options, int other_threads) {
   std::unique_ptr<store::Store> store;
   try {
     store::StoreOptions store_options;
     store_options.idempotency_ttl = std::chrono::seconds(std::llround(options.idempotency_ttl * 3600.0));
+    // Every job thread and HTTP thread may hold a connection at once, plus the lease keeper's.
+    store_options.connections = static_cast<std::size_t>(worker_threads(options) + std::max(other_threads, 0) + 1);
     store = store::open_store(options.database, store_options);
   } catch (const store::StoreError& error) {
     // Not the value itself: a database URL may carry a password (SQLite's messages name the file).
+    if (store::is_postgres_url(options.database)) throw OutputError(std::string("--db: ") + error.what());
     throw UsageError(std::string("--db: ") + error.what());
   }
   const std::string self = process_name();

@@ -35,8 +35,11 @@ int worker_threads(const JobOptions& options);
 /// Opens --db (UsageError naming --db when it cannot) and takes back the jobs that a process of
 /// this machine which no longer runs (or this process's earlier self, same HOST:PID in a restarted
 /// container) left running: queued again, cancelled as asked, or failed after --max-attempts.
-/// Jobs other live processes run keep their leases. Logs what it did.
-std::unique_ptr<store::Store> open_job_store(const JobOptions& options);
+/// Jobs other live processes run keep their leases. Logs what it did. `other_threads`: the
+/// threads besides the job threads that use the store (serve's HTTP threads), for the size of a
+/// PostgreSQL connection pool. A database that cannot be opened is a UsageError (exit 2) for a
+/// SQLite file, an OutputError (exit 1: the program could not run) for PostgreSQL.
+std::unique_ptr<store::Store> open_job_store(const JobOptions& options, int other_threads = 0);
 
 /// The worker pool's settings from these options (its owner is process_name()).
 jobs::WorkerPoolOptions worker_pool_options(const JobOptions& options);

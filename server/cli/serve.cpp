@@ -71,7 +71,7 @@ int run_serve(const ServeOptions& options) {
   // Signals go to one thread that waits for them (sigwait below).
   sigset_t signals = block_stop_signals();
 
-  const std::unique_ptr<store::Store> store = open_job_store(options.jobs);
+  const std::unique_ptr<store::Store> store = open_job_store(options.jobs, options.http_threads);
   jobs::WorkerPool pool(*store, pool_options, log_line);
   jobs::JobService service(*store, pool, jobs::JobServiceOptions{options.queue_limit, log_line});
 
@@ -108,7 +108,7 @@ int run_serve(const ServeOptions& options) {
   log_line("manipid " MANIPID_VERSION ": listening on http://" + options.host + ":" + std::to_string(port) + ", " +
            (pool_options.workers == 0 ? std::string("no job threads (API only)")
                                       : std::to_string(pool_options.workers) + " worker(s)") +
-           ", database " + options.jobs.database +
+           ", database " + store::display_name(options.jobs.database) +
            (options.token.empty() ? "" : ", bearer token required"));
 
   std::atomic<bool> listen_returned{false};

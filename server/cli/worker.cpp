@@ -31,10 +31,10 @@ int run_worker(const WorkerOptions& options) {
   const std::unique_ptr<store::Store> store = open_job_store(options.jobs);
   jobs::WorkerPool pool(*store, pool_options, log_line);
   pool.start();
-  std::printf("working on %s\n", options.jobs.database.c_str());
+  std::printf("working on %s\n", store::display_name(options.jobs.database).c_str());
   std::fflush(stdout);
   log_line("manipid " MANIPID_VERSION ": worker " + pool_options.owner + ", " + std::to_string(pool_options.workers) +
-           " job thread(s), database " + options.jobs.database);
+           " job thread(s), database " + store::display_name(options.jobs.database));
   int signal_number = 0;
   sigwait(&signals, &signal_number);
   log_line(std::string("manipid: ") + (signal_number == SIGINT ? "SIGINT" : "SIGTERM") +

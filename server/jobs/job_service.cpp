@@ -28,11 +28,23 @@ api::DeleteOutcome outcome_of(store::DeleteResult result) {
   }
 }
 
+/// A store call; a database that cannot be reached now (PostgreSQL restarting, a network cut)
+/// is 503 with Retry-After: nothing was done, the same request may succeed shortly.
+template <class Call>
+auto reached(Call&& call) {
+  try {
+    return call();
+  } catch (const store::StoreUnavailable&) {
+    throw api::ApiError(api::ProblemKind::store_unavailable,
+                        "the database cannot be reached now: nothing was done; retry shortly");
+  }
+}
+
 /// A store's write; a full disk is the client's 507 (nothing was stored; retry later), not a 500.
 template <class Write>
 auto stored(Write&& write) {
   try {
-    return write();
+    return reached(write);
   } catch (const store::StorageFull&) {
     throw api::ApiError(api::ProblemKind::insufficient_storage,
                         "the server's disk is full: nothing was stored; retry when space has been freed");
@@ -43,7 +55,7 @@ auto stored(Write&& write) {
 template <class Read>
 auto page_of(Read&& read) {
   try {
-    return read();
+    return reached(read);
   } catch (const store::PageRequestError& error) {
     throw api::ApiError(api::ProblemKind::invalid_field, error.what(), error.field());
   }
@@ -59,8 +71,8 @@ api::DatasetCreated JobService::create_dataset(const api::DatasetUpload& upload,
   return {outcome.dataset, outcome.status == store::SubmitStatus::replayed};
 }
 
-std::optional<api::DatasetInfo> JobService::dataset(const std::string& id) { return store_.find_dataset(id); }
-std::optional<Trajectory> JobService::dataset_data(const std::string& id) { return store_.load_dataset(id); }
+std::optional<api::DatasetInfo> JobService::dataset(const std::string& id) { return reached([&] { return store_.find_dataset(id); }); }
+std::optional<Trajectory> JobService::dataset_data(const std::string& id) { return reached([&] { return store_.load_dataset(id); }); }
 api::Page<api::DatasetInfo> JobService::datasets(const api::PageRequest& page) {
   return page_of([&] { return store_.list_datasets(page); });
 }
@@ -78,8 +90,8 @@ api::RobotCreated JobService::create_robot(const api::RobotUpload& upload, int j
   return {outcome.robot, outcome.status == store::SubmitStatus::replayed};
 }
 
-std::optional<api::RobotInfo> JobService::robot(const std::string& id) { return store_.find_robot(id); }
-std::optional<std::string> JobService::robot_urdf(const std::string& id) { return store_.load_robot_urdf(id); }
+std::optional<api::RobotInfo> JobService::robot(const std::string& id) { return reached([&] { return store_.find_robot(id); }); }
+std::optional<std::string> JobService::robot_urdf(const std::string& id) { return reached([&] { return store_.load_robot_urdf(id); }); }
 api::Page<api::RobotInfo> JobService::robots(const api::PageRequest& page) {
   return page_of([&] { return store_.list_robots(page); });
 }
@@ -121,7 +133,7 @@ api::JobInfo JobService::with_live_progress(api::JobInfo job) const {
 }
 
 std::optional<api::JobInfo> JobService::job(const std::string& id) {
-  auto found = store_.find_job(id);
+  auto found = reached([&] { return store_.find_job(id); });
   if (!found) return std::nullopt;
   return with_live_progress(std::move(*found));
 }
@@ -156,7 +168,7 @@ std::optional<api::Page<api::HistoryEntry>> JobService::history(const std::strin
 }
 
 std::optional<api::HistoryOverview> JobService::history_overview(const std::string& id, long max_points) {
-  return store_.history_overview(id, max_points);
+  return reached([&] { return store_.history_overview(id, max_points); });
 }
 
 std::optional<api::JobInfo> JobService::cancel(const std::string& id) {
@@ -186,7 +198,7 @@ std::optional<std::string> JobService::degraded() const {
 
 std::string JobService::metrics() {
   std::ostringstream out;
-  const auto counts = store_.count_jobs_by_state();
+  const auto counts = reached([&] { return store_.count_jobs_by_state(); });
   out << "# HELP manipid_jobs Jobs in the store by state.\n# TYPE manipid_jobs gauge\n";
   for (const auto& [state, count] : counts) out << "manipid_jobs{state=\"" << api::to_string(state) << "\"} " << count << "\n";
   const auto queued = counts.find(api::JobState::queued);

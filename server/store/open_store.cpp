@@ -23,6 +23,18 @@ bool is_postgres_url(const std::string& url) {
   return url.starts_with("postgresql://") || url.starts_with("postgres://");
 }
 
+std::string display_name(const std::string& url) {
+  if (!is_postgres_url(url)) return url;
+  // postgresql://USER:PASSWORD@HOST/DB → postgresql://USER@HOST/DB
+  const std::size_t authority = url.find("://") + 3;
+  const std::size_t end = url.find_first_of("/?", authority);
+  const std::size_t at = url.rfind('@', end == std::string::npos ? std::string::npos : end);
+  if (at == std::string::npos || at < authority) return url;
+  const std::size_t colon = url.find(':', authority);
+  if (colon == std::string::npos || colon > at) return url;
+  return url.substr(0, colon) + url.substr(at);
+}
+
 std::unique_ptr<Store> open_store(const std::string& url, const StoreOptions& options) {
   if (is_postgres_url(url)) return postgres::open_store(url, options, options.connections);
   return sqlite::open_store(sqlite_path(url), options);

@@ -233,6 +233,8 @@ struct StoreOptions {
 std::unique_ptr<Store> open_store(const std::string& url, const StoreOptions& options = {});
 /// Whether a `--db` value names a PostgreSQL database.
 bool is_postgres_url(const std::string& url);
+/// A `--db` value as logs and stdout may show it: a PostgreSQL URI without its password.
+std::string display_name(const std::string& url);
 /// The SQLite file a `--db` value names (PATH or sqlite:PATH); StoreError for any other backend
 /// or an empty path. open_store and `manipid doctor` both read `--db` through it.
 std::string sqlite_path(const std::string& url);

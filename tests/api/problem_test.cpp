@@ -35,6 +35,7 @@ const std::vector<ExpectedRow>& table() {
       {ProblemKind::shutting_down, 503, "SHUTTING_DOWN"},
       {ProblemKind::insufficient_storage, 507, "INSUFFICIENT_STORAGE"},
       {ProblemKind::memory_busy, 503, "MEMORY_BUSY"},
+      {ProblemKind::store_unavailable, 503, "STORE_UNAVAILABLE"},
       {ProblemKind::internal, 500, "INTERNAL"},
       {ProblemKind::job_failed, 500, "JOB_FAILED"},
       {ProblemKind::not_computable, 422, "NOT_COMPUTABLE"},

@@ -530,7 +530,10 @@ expect_error "worker: a damaged database is refused at start" 2 "the database fi
   "$manipid" worker --db damaged.db
 expect_error "worker: runs at least one job thread" 2 "--workers" "$manipid" worker --db sound.db --workers 0
 expect_error "worker: a lease below 0.1 s" 2 "--lease" "$manipid" worker --db sound.db --lease 0.01
-expect_error "serve: a PostgreSQL URL is not in this build" 2 "--db" "$manipid" serve --port 0 --db postgresql://u@h/db
+expect_error "serve: an unreachable PostgreSQL database exits 1" 1 "--db: cannot connect to PostgreSQL" \
+  "$manipid" serve --port 0 --db "postgresql:///db?host=/nonexistent-manipid-socket-dir"
+expect_error "worker: an unreachable PostgreSQL database exits 1" 1 "--db: cannot connect to PostgreSQL" \
+  "$manipid" worker --db "postgresql:///db?host=/nonexistent-manipid-socket-dir"
 
 echo "$passed passed, $failed failed"
 [[ $failed -eq 0 ]]

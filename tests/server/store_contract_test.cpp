@@ -545,7 +545,7 @@ TEST_P(StoreContract, ClaimOrderIsSubmissionOrder) {
 }
 
 TEST_P(StoreContract, EightThreadsNeverClaimTheSameJob) {
-  constexpr int kJobs = 60;
+  constexpr int kJobs = 200;
   std::set<std::string> submitted;
   for (int i = 0; i < kJobs; ++i) submitted.insert(submit());
 

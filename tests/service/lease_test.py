@@ -3,7 +3,8 @@ database file; the one running a job is paused (SIGSTOP) past its lease, the oth
 over and finishes it; the paused one wakes up (SIGCONT) and writes nothing more. A cancel sent to
 the process that is not running the job stops it within one renewal. `manipid serve --workers 0`
 answers the API while `manipid worker` processes run the jobs; a worker that starts later leaves
-the running jobs of the live one alone.
+the running jobs of the live one alone. Each test runs on a SQLite file and again on a PostgreSQL
+database of the private cluster ctest starts (fixture "postgres"; skipped without it).
 
 Run: MANIPID_BIN=build/debug/server/manipid python3 -m unittest tests/service/lease_test.py
 """
@@ -20,9 +21,29 @@ from harness import Server, binary, temporary_directory  # noqa: E402
 LEASE = "1"  # s: renewed every 1/3 s, taken over a second after the last renewal
 
 
-def start(db, name):
+def postgres_template():
+    """The cluster's libpq URI with %s for the database name, or None without the fixture."""
+    state = os.environ.get("MANIPID_TEST_POSTGRES_FILE")
+    if not state or not os.path.exists(state):
+        return None
+    with open(state) as stream:
+        return stream.readline().strip()
+
+
+def new_database(directory, backend):
+    """A fresh database for one test: a file in `directory`, or a new PostgreSQL database."""
+    if backend == "sqlite":
+        return os.path.join(directory, "jobs.db")
+    template = postgres_template()
+    name = "lease_" + "".join(c for c in os.path.basename(directory).lower() if c.isalnum())
+    subprocess.run(["psql", template.replace("%s", "postgres"), "-qc", f"CREATE DATABASE {name}"], check=True,
+                   stdout=subprocess.DEVNULL)
+    return template.replace("%s", name)
+
+
+def start(db, directory, name):
     server = Server(db, "--lease", LEASE, workers=1)
-    server.log_path = f"{db}.{name}.log"
+    server.log_path = os.path.join(directory, f"{name}.log")
     return server.start()
 
 
@@ -41,10 +62,15 @@ def wait_for(predicate, server, job_id, timeout=120):
 
 
 class Leases(unittest.TestCase):
+    backend = "sqlite"
+
     def setUp(self):
+        if self.backend == "postgres" and postgres_template() is None:
+            self.skipTest("no PostgreSQL cluster (ctest fixture postgres)")
         self.directory = temporary_directory()
-        self.db = os.path.join(self.directory.__enter__(), "jobs.db")
-        self.servers = [start(self.db, "a"), start(self.db, "b")]
+        path = self.directory.__enter__()
+        self.db = new_database(path, self.backend)
+        self.servers = [start(self.db, path, "a"), start(self.db, path, "b")]
 
     def tearDown(self):
         for server in self.servers:
@@ -113,8 +139,8 @@ class Leases(unittest.TestCase):
 class Worker:
     """`manipid worker` on `db`: started, its first stdout line checked, stopped with SIGTERM."""
 
-    def __init__(self, db, name):
-        self.log_path = f"{db}.{name}.log"
+    def __init__(self, db, directory, name):
+        self.log_path = os.path.join(directory, f"{name}.log")
         self.log = open(self.log_path, "ab")
         self.process = subprocess.Popen([binary(), "worker", "--db", db, "--workers", "1", "--lease", LEASE],
                                         stdout=subprocess.PIPE, stderr=self.log)
@@ -136,15 +162,21 @@ class Worker:
 
 
 class ApiAndWorkers(unittest.TestCase):
+    backend = "sqlite"
+
     def test_the_api_process_runs_nothing_and_the_workers_run_everything(self):
+        if self.backend == "postgres" and postgres_template() is None:
+            self.skipTest("no PostgreSQL cluster (ctest fixture postgres)")
         with temporary_directory() as directory:
-            db = os.path.join(directory, "jobs.db")
-            with Server(db, workers=0) as api:
+            db = new_database(directory, self.backend)
+            api_server = Server(db, workers=0)
+            api_server.log_path = os.path.join(directory, "api.log")
+            with api_server as api:
                 deadline = time.time() + 10  # the log line follows the "listening on" line on stdout
                 while "no job threads (API only)" not in api.read_log() and time.time() < deadline:
                     time.sleep(0.05)
                 self.assertIn("no job threads (API only)", api.read_log())
-                first = Worker(db, "first")
+                first = Worker(db, directory, "first")
                 try:
                     body = {"simulation": {"duration": 3.0}, "method": "output-error", "max_evaluations": 40}
                     status, _, slow = api.request("POST", "/v1/identifications", body)
@@ -152,7 +184,7 @@ class ApiAndWorkers(unittest.TestCase):
                     running = wait_for(lambda j: j["state"] == "running", api, slow["id"])
                     self.assertEqual(running["worker"], worker_name(first))
                     # A second worker starting now takes back no job from the live first one.
-                    second = Worker(db, "second")
+                    second = Worker(db, directory, "second")
                     try:
                         self.assertNotIn("interrupted job(s) queued again", second.read_log())
                         quick = {"simulation": {"duration": 1.0}, "half_length": 100, "band": 0.2, "free": ["m2"]}
@@ -170,6 +202,14 @@ class ApiAndWorkers(unittest.TestCase):
                         first.process.kill()
                 self.assertIn("stopped", first.read_log())
                 self.assertNotIn("running (attempt", api.read_log())
+
+
+class LeasesOnPostgres(Leases):
+    backend = "postgres"
+
+
+class ApiAndWorkersOnPostgres(ApiAndWorkers):
+    backend = "postgres"
 
 
 if __name__ == "__main__":

@@ -18,7 +18,8 @@ void send_problem(httplib::Response& response, const Problem& problem, const std
   response.status = status_of(problem.kind);
   response.set_content(problem_to_json(problem, instance).dump(), "application/problem+json");
   if (problem.kind == ProblemKind::queue_full || problem.kind == ProblemKind::shutting_down ||
-      problem.kind == ProblemKind::insufficient_storage || problem.kind == ProblemKind::memory_busy) {
+      problem.kind == ProblemKind::insufficient_storage || problem.kind == ProblemKind::memory_busy ||
+      problem.kind == ProblemKind::store_unavailable) {
     response.set_header("Retry-After", "5");
   }
   if (problem.kind == ProblemKind::unauthorized) response.set_header("WWW-Authenticate", "Bearer");

@@ -31,6 +31,7 @@ enum class ProblemKind {
   shutting_down,         ///< 503 the server is stopping
   insufficient_storage,  ///< 507 the server's disk is full: nothing was stored (with Retry-After)
   memory_busy,           ///< 503 no memory for this request now: over --memory-budget, or it ran out (with Retry-After)
+  store_unavailable,     ///< 503 the database cannot be reached now: nothing was done (with Retry-After)
   internal,              ///< 500 a bug; the detail never carries internals
   // A job's `error` (the request was accepted; the run could not finish):
   job_failed,            ///< 500 the computation could not finish (a diverging simulation, a store failure)

@@ -1,0 +1,124 @@
+"""postgres_test.py — `manipid serve` and `manipid worker` on PostgreSQL, whole processes: a
+database that cannot be reached, that does not exist or that a newer manipid wrote is one line on
+stderr and exit 1 (no stack text, no password); a long-poll (`GET /v1/jobs/{id}?wait=`) on one
+process wakes when a job another process runs ends; two processes given the same
+Idempotency-Key at once make one job.
+
+Needs the private cluster of the ctest fixture "postgres" (MANIPID_TEST_POSTGRES_FILE); skipped
+without it.
+
+Run: MANIPID_BIN=build/debug/server/manipid MANIPID_TEST_POSTGRES_FILE=... python3 tests/service/postgres_test.py -v
+"""
+import os
+import subprocess
+import sys
+import threading
+import time
+import unittest
+
+sys.path.insert(0, os.path.dirname(__file__))
+from harness import Server, binary, temporary_directory  # noqa: E402
+
+
+def cluster_template():
+    state = os.environ.get("MANIPID_TEST_POSTGRES_FILE")
+    if not state or not os.path.exists(state):
+        return None
+    with open(state) as stream:
+        return stream.readline().strip()
+
+
+def psql(template, database, sql):
+    subprocess.run(["psql", template.replace("%s", database), "-qc", sql], check=True, stdout=subprocess.DEVNULL)
+
+
+class OnPostgres(unittest.TestCase):
+    def setUp(self):
+        self.template = cluster_template()
+        if self.template is None:
+            self.skipTest("no PostgreSQL cluster (ctest fixture postgres; Debian package postgresql)")
+        self.directory = temporary_directory()
+        path = self.directory.__enter__()
+        self.name = "svc_" + "".join(c for c in os.path.basename(path).lower() if c.isalnum())
+        psql(self.template, "postgres", f"CREATE DATABASE {self.name}")
+        self.db = self.template.replace("%s", self.name)
+        self.path = path
+
+    def tearDown(self):
+        if self.template is None:
+            return
+        psql(self.template, "postgres", f"DROP DATABASE {self.name} WITH (FORCE)")
+        self.directory.__exit__(None, None, None)
+
+    def server(self, name, *extra, workers=1):
+        server = Server(self.db, *extra, workers=workers)
+        server.log_path = os.path.join(self.path, f"{name}.log")
+        return server
+
+    def refused(self, db):
+        """Runs `serve` on `db`; returns (exit status, stderr) once it gives up."""
+        process = subprocess.run([binary(), "serve", "--port", "0", "--db", db], capture_output=True, timeout=60)
+        return process.returncode, process.stderr.decode()
+
+    def test_bad_configuration_is_one_line_and_exit_1(self):
+        cases = {
+            "unreachable": ("postgresql:///x?host=/nonexistent-manipid-socket-dir&user=postgres",
+                            "--db: cannot connect to PostgreSQL"),
+            "no such database": (self.template.replace("%s", "no_such_database"),
+                                 "--db: PostgreSQL refused the connection"),
+        }
+        # A database a newer manipid wrote: its schema version above this build's.
+        with self.server("first"):
+            pass
+        psql(self.template, self.name, "INSERT INTO manipid_schema (version) VALUES (999)")
+        cases["newer schema"] = (self.db, "written by a newer manipid (schema version 999")
+        for case, (db, expected) in cases.items():
+            with self.subTest(case):
+                status, stderr = self.refused(db)
+                self.assertEqual(status, 1, stderr)
+                self.assertIn(expected, stderr)
+                lines = [line for line in stderr.splitlines() if line.strip()]
+                self.assertEqual(len(lines), 1, stderr)  # one line: no stack, no log noise
+                self.assertNotIn("password=", stderr)
+
+    def test_a_long_poll_on_one_process_wakes_when_another_ends_the_job(self):
+        with self.server("api", workers=0) as api, self.server("runner", workers=1) as runner:
+            body = {"simulation": {"duration": 3.0}, "method": "output-error", "max_evaluations": 20}
+            status, _, job = api.request("POST", "/v1/identifications", body)
+            self.assertEqual(status, 202, job)
+            started = time.time()
+            status, _, waited = api.request("GET", f"/v1/jobs/{job['id']}?wait=60", timeout=120)
+            elapsed = time.time() - started
+            self.assertEqual(status, 200, waited)
+            self.assertEqual(waited["state"], "succeeded", waited)
+            self.assertLess(elapsed, 55, "the long-poll ran to its end instead of waking on the change")
+            self.assertNotIn("running (attempt", api.read_log())
+            self.assertIn("running (attempt 1", runner.read_log())
+
+    def test_two_processes_given_one_key_at_once_make_one_job(self):
+        with self.server("a", workers=0) as a, self.server("b", workers=0) as b:
+            body = {"simulation": {"duration": 1.0}, "half_length": 100, "band": 0.2, "free": ["m2"]}
+            for round_ in range(20):
+                answers = [None, None]
+
+                def send(index, server):
+                    answers[index] = server.request("POST", "/v1/identifications", body,
+                                                    headers={"Idempotency-Key": f"race-{round_}"})
+
+                threads = [threading.Thread(target=send, args=(i, s)) for i, s in enumerate((a, b))]
+                for thread in threads:
+                    thread.start()
+                for thread in threads:
+                    thread.join()
+                statuses = sorted(answer[0] for answer in answers)
+                self.assertEqual(answers[0][2]["id"], answers[1][2]["id"], answers)
+                self.assertIn(202, statuses, answers)
+            status, _, page = a.request("GET", "/v1/jobs?page_size=100")
+            self.assertEqual(len(page["items"]), 20, page)
+
+
+if __name__ == "__main__":
+    if cluster_template() is None:
+        print("no PostgreSQL cluster (ctest fixture postgres; Debian package postgresql): skipped")
+        sys.exit(77)
+    unittest.main()
