@@ -124,9 +124,17 @@ class HistoryWriter {
   void flush() {
     if (live_.lost.load()) return;
     const double best = live_.best_cost.load(std::memory_order_relaxed);
-    heed(store_.record_progress(live_.lease, live_.evaluations.load(std::memory_order_relaxed),
-                                std::isfinite(best) ? std::optional<double>(best) : std::nullopt, batch_),
-         live_);
+    try {
+      heed(store_.record_progress(live_.lease, live_.evaluations.load(std::memory_order_relaxed),
+                                  std::isfinite(best) ? std::optional<double>(best) : std::nullopt, batch_),
+           live_);
+    } catch (const store::StoreUnavailable&) {
+      // The database is away for a moment (a PostgreSQL restart): the batch waits for the next
+      // flush. Should the outage outlast the lease, another process takes the job over and this
+      // attempt's next write learns it lost the lease.
+      last_flush_ = Clock::now();
+      return;
+    }
     batch_.clear();
     last_flush_ = Clock::now();
   }

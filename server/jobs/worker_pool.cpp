@@ -159,8 +159,9 @@ bool WorkerPool::pause_unless_stopping(std::chrono::milliseconds delay) {
 
 bool WorkerPool::record_end(const api::JobInfo& job, LiveJob& live, JobOutcome& outcome) {
   const store::Lease& lease = live.lease;
-  // A full disk (StorageFull) keeps the end as computed: once space is freed it is written, and
-  // an hour's identification keeps its result. Any other storage failure may be the result
+  // A full disk (StorageFull) or an unreachable database (StoreUnavailable) keeps the end as
+  // computed: once space is freed or the database is back it is written, and an hour's
+  // identification keeps its result. Any other storage failure may be the result
   // itself (over a limit of the store): after two tries the job is recorded failed with a short
   // error and no estimates — a far smaller write — tried until it sticks. Either way a job never
   // stays `running` for good: it ends when the store takes a write again (a cancel cannot end it
@@ -179,9 +180,11 @@ bool WorkerPool::record_end(const api::JobInfo& job, LiveJob& live, JobOutcome& 
       if (attempt > 1) log_("job " + job.id + ": its end was recorded at attempt " + std::to_string(attempt));
       return true;
     } catch (const std::exception& error) {
-      const bool full = dynamic_cast<const store::StorageFull*>(&error) != nullptr;
+      // A full disk or a database away for a moment: the end as computed is written once it can be.
+      const bool passing = dynamic_cast<const store::StorageFull*>(&error) != nullptr ||
+                           dynamic_cast<const store::StoreUnavailable*>(&error) != nullptr;
       log_("job " + job.id + ": cannot record its end (attempt " + std::to_string(attempt) + "): " + error.what());
-      if (as_computed && !full && attempt >= kTriesAsComputed) {
+      if (as_computed && !passing && attempt >= kTriesAsComputed) {
         as_computed = false;
         const std::string dataset_id = outcome.dataset_id;  // made or read: it is stored already
         outcome = JobOutcome{};

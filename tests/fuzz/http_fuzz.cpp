@@ -12,6 +12,8 @@
 // A failed check aborts (libFuzzer saves the input as a crash), as do ASan/UBSan findings; a
 // server that never closes the connection shows as a libFuzzer timeout. With HTTP_FUZZ_SHOW set
 // in the environment, every answer is printed (`HTTP_FUZZ_SHOW=1 build/fuzz/http_fuzz FILE`).
+// The main build replays the seed corpus and the regressions through this file without libFuzzer
+// (tests/fuzz/replay_main.cpp, ctest http_fuzz_replay).
 //
 // The fake service is made afresh for every input, with the same fixtures (a dataset with
 // data, a queued job, a finished job with a cost history), so an input's answers never depend
@@ -251,7 +253,9 @@ Answers round_trip(int port, std::string_view request) {
   // half-close; its status is still checked in the server's log line (check_log_line).
   Answers answer;
   char buffer[16384];
-  constexpr int quiet_ms = 1;
+  // HTTP_FUZZ_QUIET_MS sets another wait: the replay of saved inputs (ctest http_fuzz_replay, a
+  // slower -Og build) waits 200 ms, so that every answer is read and checked.
+  static const int quiet_ms = std::getenv("HTTP_FUZZ_QUIET_MS") ? std::max(1, std::atoi(std::getenv("HTTP_FUZZ_QUIET_MS"))) : 1;
   for (pollfd descriptor{fd, POLLIN, 0};; descriptor.revents = 0) {
     const int ready = ::poll(&descriptor, 1, quiet_ms);
     if (ready < 0 && errno == EINTR) continue;

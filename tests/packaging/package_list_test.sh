@@ -145,9 +145,21 @@ assert service["build"]["dockerfile"] == "docker/Dockerfile", service["build"]
 assert any(str(v).endswith(":/data") and str(v).split(":")[0] in doc["volumes"] for v in service["volumes"]), "named volume on /data"
 assert any(str(p).endswith(":8080") for p in service["ports"]), "port 8080"
 assert "MANIPID_TOKEN" in service["environment"], "token from the environment"
+# Profile "postgres": an API process without job threads and scalable workers on one database.
+api, worker, postgres = (doc["services"][name] for name in ("api", "worker", "postgres"))
+assert all(s["profiles"] == ["postgres"] for s in (api, worker, postgres)), "profile postgres"
+assert api["entrypoint"][:2] == ["manipid", "serve"] and "--workers" in api["entrypoint"], api["entrypoint"]
+assert api["entrypoint"][api["entrypoint"].index("--workers") + 1] == "0", "the API runs no job"
+assert worker["entrypoint"][:2] == ["manipid", "worker"], worker["entrypoint"]
+db = api["entrypoint"][api["entrypoint"].index("--db") + 1]
+assert db.startswith("postgresql://") and db == worker["entrypoint"][worker["entrypoint"].index("--db") + 1], db
+assert ":" not in db.split("//")[1].split("@")[0], "no password in the URI"
+assert "PGPASSWORD" in api["environment"] and "PGPASSWORD" in worker["environment"], "password from the environment"
+assert worker["healthcheck"]["disable"] is True, "a worker serves no /healthz"
+assert "ports" not in worker, "workers publish no port (they scale)"
 EOF
-  then pass "compose.yaml: init, named volume on /data, port 8080, MANIPID_TOKEN"
-  else fail "compose.yaml: init, named volume on /data, port 8080, MANIPID_TOKEN"
+  then pass "compose.yaml: init, named volume on /data, port 8080, MANIPID_TOKEN; profile postgres: API + workers"
+  else fail "compose.yaml: init, named volume on /data, port 8080, MANIPID_TOKEN; profile postgres: API + workers"
   fi
 else
   echo "skip  compose.yaml (no python3-yaml)"

@@ -105,6 +105,30 @@ class Server:
         raise AssertionError(f"job {job_id} did not finish in {timeout} s")
 
 
+def postgres_template():
+    """The libpq URI of the private PostgreSQL cluster the ctest fixture "postgres" runs
+    (tests/server/postgres_cluster.sh), with %s where a database name goes; None without one."""
+    state = os.environ.get("MANIPID_TEST_POSTGRES_FILE")
+    if not state or not os.path.exists(state):
+        return None
+    with open(state) as stream:
+        return stream.readline().strip()
+
+
+def postgres_sql(database, sql):
+    """Runs one statement with psql on `database` of that cluster."""
+    subprocess.run(["psql", postgres_template().replace("%s", database), "-qc", sql], check=True,
+                   stdout=subprocess.DEVNULL)
+
+
+def postgres_database(directory, prefix):
+    """A new database on the cluster, named after `directory` (a test's temporary directory):
+    its name and its URI."""
+    name = prefix + "_" + "".join(c for c in os.path.basename(directory).lower() if c.isalnum())
+    postgres_sql("postgres", f"CREATE DATABASE {name}")
+    return name, postgres_template().replace("%s", name)
+
+
 def temporary_directory():
     return tempfile.TemporaryDirectory(prefix="manipid-service-test-")
 

@@ -16,29 +16,16 @@ import time
 import unittest
 
 sys.path.insert(0, os.path.dirname(__file__))
-from harness import Server, binary, temporary_directory  # noqa: E402
+from harness import Server, binary, postgres_database, postgres_template, temporary_directory  # noqa: E402
 
 LEASE = "1"  # s: renewed every 1/3 s, taken over a second after the last renewal
-
-
-def postgres_template():
-    """The cluster's libpq URI with %s for the database name, or None without the fixture."""
-    state = os.environ.get("MANIPID_TEST_POSTGRES_FILE")
-    if not state or not os.path.exists(state):
-        return None
-    with open(state) as stream:
-        return stream.readline().strip()
 
 
 def new_database(directory, backend):
     """A fresh database for one test: a file in `directory`, or a new PostgreSQL database."""
     if backend == "sqlite":
         return os.path.join(directory, "jobs.db")
-    template = postgres_template()
-    name = "lease_" + "".join(c for c in os.path.basename(directory).lower() if c.isalnum())
-    subprocess.run(["psql", template.replace("%s", "postgres"), "-qc", f"CREATE DATABASE {name}"], check=True,
-                   stdout=subprocess.DEVNULL)
-    return template.replace("%s", name)
+    return postgres_database(directory, "lease")[1]
 
 
 def start(db, directory, name):

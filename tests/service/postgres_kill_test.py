@@ -17,30 +17,15 @@ import argparse
 import os
 import random
 import signal
-import subprocess
 import sys
 import time
 
 sys.path.insert(0, os.path.dirname(__file__))
-from harness import Server, temporary_directory  # noqa: E402
+from harness import Server, postgres_database, postgres_sql, postgres_template, temporary_directory  # noqa: E402
 
 LEASE = "2"
 JOB = {"simulation": {"duration": 1.0}, "half_length": 100, "band": 0.2, "free": ["m2"]}
 SLOW_JOB = {"simulation": {"duration": 3.0}, "method": "output-error", "max_evaluations": 40}
-
-
-def cluster_template():
-    state = os.environ.get("MANIPID_TEST_POSTGRES_FILE")
-    if not state or not os.path.exists(state):
-        return None
-    with open(state) as stream:
-        return stream.readline().strip()
-
-
-def create_database(template, name):
-    subprocess.run(["psql", template.replace("%s", "postgres"), "-qc", f"CREATE DATABASE {name}"], check=True,
-                   stdout=subprocess.DEVNULL)
-    return template.replace("%s", name)
 
 
 def runs(server, job):
@@ -71,11 +56,9 @@ def kill_while_running(servers, key):
     raise AssertionError(f"the slow job never ran: {seen}")
 
 
-def run_once(template, directory, repetition, jobs, seed):
+def run_once(directory, repetition, jobs, seed):
     rng = random.Random(seed)
-    unique = "".join(c for c in os.path.basename(directory).lower() if c.isalnum())
-    name = f"kill_{unique}_{repetition}"
-    db = create_database(template, name)
+    name, db = postgres_database(directory, f"kill{repetition}")
     servers = []
     for letter in "abc":
         server = Server(db, "--lease", LEASE, workers=1)
@@ -135,8 +118,7 @@ def run_once(template, directory, repetition, jobs, seed):
             if server.process is not None and server.process.poll() is None:
                 server.process.send_signal(signal.SIGCONT)
                 server.stop()
-        subprocess.run(["psql", template.replace("%s", "postgres"), "-qc", f"DROP DATABASE {name} WITH (FORCE)"],
-                       stdout=subprocess.DEVNULL)
+        postgres_sql("postgres", f"DROP DATABASE {name} WITH (FORCE)")
 
 
 def main():
@@ -145,13 +127,12 @@ def main():
     parser.add_argument("--repeat", type=int, default=3)
     parser.add_argument("--seed", type=int, default=1)
     arguments = parser.parse_args()
-    template = cluster_template()
-    if template is None:
+    if postgres_template() is None:
         print("no PostgreSQL cluster (ctest fixture postgres; Debian package postgresql): skipped")
         return 77
     with temporary_directory() as directory:
         for repetition in range(arguments.repeat):
-            run_once(template, directory, repetition, arguments.jobs, arguments.seed + repetition)
+            run_once(directory, repetition, arguments.jobs, arguments.seed + repetition)
     return 0
 
 

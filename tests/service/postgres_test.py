@@ -2,7 +2,9 @@
 database that cannot be reached, that does not exist or that a newer manipid wrote is one line on
 stderr and exit 1 (no stack text, no password); a long-poll (`GET /v1/jobs/{id}?wait=`) on one
 process wakes when a job another process runs ends; two processes given the same
-Idempotency-Key at once make one job.
+Idempotency-Key at once make one job; connections the database drops (a restart, an
+administrator) are 503 STORE_UNAVAILABLE with Retry-After for the requests that meet them, never
+a 500, and are opened again.
 
 Needs the private cluster of the ctest fixture "postgres" (MANIPID_TEST_POSTGRES_FILE); skipped
 without it.
@@ -17,37 +19,23 @@ import time
 import unittest
 
 sys.path.insert(0, os.path.dirname(__file__))
-from harness import Server, binary, temporary_directory  # noqa: E402
-
-
-def cluster_template():
-    state = os.environ.get("MANIPID_TEST_POSTGRES_FILE")
-    if not state or not os.path.exists(state):
-        return None
-    with open(state) as stream:
-        return stream.readline().strip()
-
-
-def psql(template, database, sql):
-    subprocess.run(["psql", template.replace("%s", database), "-qc", sql], check=True, stdout=subprocess.DEVNULL)
+from harness import Server, binary, postgres_database, postgres_sql, postgres_template, temporary_directory  # noqa: E402
 
 
 class OnPostgres(unittest.TestCase):
     def setUp(self):
-        self.template = cluster_template()
+        self.template = postgres_template()
         if self.template is None:
             self.skipTest("no PostgreSQL cluster (ctest fixture postgres; Debian package postgresql)")
         self.directory = temporary_directory()
         path = self.directory.__enter__()
-        self.name = "svc_" + "".join(c for c in os.path.basename(path).lower() if c.isalnum())
-        psql(self.template, "postgres", f"CREATE DATABASE {self.name}")
-        self.db = self.template.replace("%s", self.name)
+        self.name, self.db = postgres_database(path, "svc")
         self.path = path
 
     def tearDown(self):
         if self.template is None:
             return
-        psql(self.template, "postgres", f"DROP DATABASE {self.name} WITH (FORCE)")
+        postgres_sql("postgres", f"DROP DATABASE {self.name} WITH (FORCE)")
         self.directory.__exit__(None, None, None)
 
     def server(self, name, *extra, workers=1):
@@ -70,7 +58,7 @@ class OnPostgres(unittest.TestCase):
         # A database a newer manipid wrote: its schema version above this build's.
         with self.server("first"):
             pass
-        psql(self.template, self.name, "INSERT INTO manipid_schema (version) VALUES (999)")
+        postgres_sql(self.name, "INSERT INTO manipid_schema (version) VALUES (999)")
         cases["newer schema"] = (self.db, "written by a newer manipid (schema version 999")
         for case, (db, expected) in cases.items():
             with self.subTest(case):
@@ -95,6 +83,27 @@ class OnPostgres(unittest.TestCase):
             self.assertNotIn("running (attempt", api.read_log())
             self.assertIn("running (attempt 1", runner.read_log())
 
+    def test_dropped_connections_are_503_and_opened_again(self):
+        with self.server("api", workers=0) as api:
+            for round_ in range(3):
+                status, _, before = api.request("GET", "/v1/jobs")
+                self.assertEqual(status, 200, before)
+                postgres_sql("postgres", "SELECT pg_terminate_backend(pid) FROM pg_stat_activity "
+                                         f"WHERE datname = '{self.name}' AND pid <> pg_backend_pid()")
+                answers = []
+                for _ in range(40):
+                    status, headers, body = api.request("GET", "/v1/jobs")
+                    answers.append(status)
+                    if status == 200:
+                        break
+                    self.assertEqual(status, 503, body)
+                    self.assertEqual(body["code"], "STORE_UNAVAILABLE", body)
+                    self.assertIn("retry-after", headers)
+                self.assertEqual(answers[-1], 200, answers)
+                print(f"after the drop: {answers}", flush=True)
+            status, _, job = api.request("POST", "/v1/identifications", {"simulation": {"duration": 1.0}})
+            self.assertEqual(status, 202, job)
+
     def test_two_processes_given_one_key_at_once_make_one_job(self):
         with self.server("a", workers=0) as a, self.server("b", workers=0) as b:
             body = {"simulation": {"duration": 1.0}, "half_length": 100, "band": 0.2, "free": ["m2"]}
@@ -118,7 +127,7 @@ class OnPostgres(unittest.TestCase):
 
 
 if __name__ == "__main__":
-    if cluster_template() is None:
+    if postgres_template() is None:
         print("no PostgreSQL cluster (ctest fixture postgres; Debian package postgresql): skipped")
         sys.exit(77)
     unittest.main()
