@@ -27,11 +27,43 @@ WorkerPool::WorkerPool(store::Store& store, WorkerPoolOptions options, Log log)
 WorkerPool::~WorkerPool() { stop(); }
 
 void WorkerPool::start() {
+  // What other processes on the database do, told at once where the store can (PostgreSQL):
+  // a job to claim wakes an idle worker, a cancel reaches the job running here, an end wakes
+  // this process's long-polls. Without it (SQLite) the workers and long-polls look every second.
+  watching_ = store_.watch_jobs([this](const store::JobEvent& event) { heed_event(event); });
   for (int i = 0; i < options_.workers; ++i) threads_.emplace_back([this] { work(); });
   keeper_ = std::thread([this] { keep_leases(); });
 }
 
+void WorkerPool::heed_event(const store::JobEvent& event) {
+  switch (event.kind) {
+    case store::JobEvent::Kind::queued:
+      notify_submitted();
+      break;
+    case store::JobEvent::Kind::cancel_requested: {
+      bool here = false;
+      {
+        std::lock_guard lock(mutex_);
+        if (auto found = live_.find(event.job_id); found != live_.end()) {
+          found->second->cancel = true;
+          here = true;
+        }
+      }
+      if (here) memory_freed_.notify_all();  // a job waiting for memory ends at once
+      break;
+    }
+    case store::JobEvent::Kind::changed:
+      notify_changed();
+      break;
+  }
+}
+
 void WorkerPool::stop() {
+  // No more events: replacing the watcher waits for one being heeded to return.
+  if (watching_) {
+    store_.watch_jobs({});
+    watching_ = false;
+  }
   {
     std::lock_guard lock(mutex_);
     if (stopping_ && threads_.empty()) return;

@@ -107,6 +107,8 @@ class WorkerPool {
   void work();
   /// The keeper thread: renews this process's leases and recovers expired ones, every lease / 3.
   void keep_leases();
+  /// What another process did (store::Store::watch_jobs), from the store's thread.
+  void heed_event(const store::JobEvent& event);
   void renew_leases();
   void run_one(const api::JobInfo& job);
   /// run_job once the job's memory estimate is set aside (waiting for room); the estimate is given
@@ -128,6 +130,7 @@ class WorkerPool {
   Log log_;
   std::vector<std::thread> threads_;
   std::thread keeper_;
+  bool watching_ = false;  ///< the store reports other processes' job changes to heed_event
 
   mutable std::mutex mutex_;
   std::condition_variable work_available_;

@@ -139,9 +139,31 @@ struct RecoveryOutcome {
   std::vector<std::string> failed;   ///< ids of jobs whose worker died too often: failed for good
 };
 
+/// A change to a job that a process committed, as a backend that can tell every process at once
+/// reports it (PostgreSQL: LISTEN/NOTIFY).
+struct JobEvent {
+  enum class Kind {
+    queued,            ///< a job can be claimed (submitted, or put back)
+    cancel_requested,  ///< a client asked to cancel a running job
+    changed,           ///< a job's state changed otherwise (its end, a queued job cancelled)
+  };
+  Kind kind = Kind::changed;
+  std::string job_id;
+};
+
 class Store {
  public:
   virtual ~Store() = default;
+
+  /// Calls `on_event`, from a thread of the store's own, for every job change any process on
+  /// the database commits (this one's too), until replaced by another call (an empty function:
+  /// none). Returns false when this backend cannot tell (SQLite: callers look at the store
+  /// again from time to time instead); events may also be missed while the database is away, so
+  /// callers poll as well, only less often. Replacing waits for a call in progress to return.
+  virtual bool watch_jobs(std::function<void(const JobEvent&)> on_event) {
+    (void)on_event;
+    return false;
+  }
 
   // ---- datasets ----
   /// Stores the samples (as binary blobs, not text). `key`, when given, makes it idempotent.

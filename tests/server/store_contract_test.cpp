@@ -10,6 +10,7 @@
 #include <algorithm>
 #include <atomic>
 #include <cctype>
+#include <condition_variable>
 #include <chrono>
 #include <cmath>
 #include <cstdlib>
@@ -19,6 +20,7 @@
 #include <functional>
 #include <ostream>
 #include <limits>
+#include <mutex>
 #include <random>
 #include <set>
 #include <string>
@@ -1074,6 +1076,39 @@ TEST_P(StoreContract, ConcurrentSubmissionsWithSharedKeys) {
   EXPECT_EQ(store_->count_jobs_by_state()[JobState::queued], kThreads * kPerThread - 40 + 5);
   // Every thread got the same job for the same shared key.
   for (int t = 1; t < kThreads; ++t) EXPECT_EQ(shared_ids[t], shared_ids[0]);
+}
+
+// ---- what other processes did ----
+
+TEST_P(StoreContract, AWatcherHearsWhatAnotherProcessDid) {
+  std::mutex mutex;
+  std::condition_variable arrived;
+  std::vector<std::pair<JobEvent::Kind, std::string>> events;
+  const bool watching = store_->watch_jobs([&](const JobEvent& event) {
+    std::lock_guard lock(mutex);
+    events.emplace_back(event.kind, event.job_id);
+    arrived.notify_all();
+  });
+  if (!watching) {
+    EXPECT_EQ(GetParam().name, "sqlite") << "only SQLite leaves its watchers to poll";
+    return;
+  }
+  // Another process's store on the same database: a job queued, claimed, its cancel asked, ended.
+  auto other = GetParam().open(directory_, {});
+  const std::string id = other->submit_job(identification_job(), std::nullopt, 0).job.id;
+  const auto job = other->claim_next_job("host-b:200", std::chrono::seconds(30));
+  ASSERT_TRUE(job);
+  EXPECT_EQ(other->cancel_job(id), CancelOutcome::requested);
+  ASSERT_TRUE(other->finish_job({id, job->worker, job->attempts}, JobState::cancelled, "", "", {}, ""));
+  const std::vector<std::pair<JobEvent::Kind, std::string>> expected = {
+      {JobEvent::Kind::queued, id}, {JobEvent::Kind::cancel_requested, id}, {JobEvent::Kind::changed, id}};
+  {
+    std::unique_lock lock(mutex);
+    arrived.wait_for(lock, std::chrono::seconds(20), [&] { return events.size() >= expected.size(); });
+    EXPECT_EQ(events, expected);
+  }
+  store_->watch_jobs({});
+  other.reset();
 }
 
 }  // namespace

@@ -1,6 +1,9 @@
 // connection.cpp — libpq connections, results, parameters and the pool (see connection.h).
 #include "store/postgres/connection.h"
 
+#include <poll.h>
+
+#include <cerrno>
 #include <charconv>
 #include <cmath>
 #include <cstdio>
@@ -216,6 +219,23 @@ void Connection::copy_in(const std::string& sql, const std::string& data) {
     if (PQresultStatus(raw) != PGRES_COMMAND_OK) fail(raw, "COPY failed");
     changes_ += end.changed();
   }
+}
+
+std::vector<std::string> Connection::notifications(std::chrono::milliseconds timeout) {
+  pollfd descriptor{PQsocket(connection_), POLLIN, 0};
+  if (descriptor.fd < 0) throw StoreUnavailable("the PostgreSQL connection was lost");
+  if (::poll(&descriptor, 1, static_cast<int>(timeout.count())) < 0 && errno != EINTR) {
+    throw StoreUnavailable("the PostgreSQL connection was lost");
+  }
+  if (PQconsumeInput(connection_) == 0) {
+    throw StoreUnavailable("the PostgreSQL connection was lost: " + first_line(PQerrorMessage(connection_)));
+  }
+  std::vector<std::string> payloads;
+  while (PGnotify* notification = PQnotifies(connection_)) {
+    payloads.emplace_back(notification->extra);
+    PQfreemem(notification);
+  }
+  return payloads;
 }
 
 void Connection::rollback_quietly() noexcept {

@@ -14,6 +14,7 @@
 
 #include <libpq-fe.h>
 
+#include <chrono>
 #include <condition_variable>
 #include <cstdint>
 #include <memory>
@@ -101,6 +102,9 @@ class Connection {
   void copy_in(const std::string& sql, const std::string& data);
   /// False once the server connection is gone (the pool then opens a new one).
   bool usable() const { return PQstatus(connection_) == CONNECTION_OK; }
+  /// LISTEN: waits up to `timeout` for the server to send something; then the payloads of the
+  /// notifications that arrived. Throws StoreUnavailable when the connection is lost.
+  std::vector<std::string> notifications(std::chrono::milliseconds timeout);
   void rollback_quietly() noexcept;
   void attach(WriteHealth* health) noexcept { health_ = health; }
   WriteHealth* health() const noexcept { return health_; }

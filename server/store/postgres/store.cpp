@@ -20,11 +20,15 @@
 #include "store/postgres/schema.h"
 #include "store/rules.h"
 
+#include <algorithm>
 #include <cmath>
+#include <condition_variable>
 #include <cstdint>
 #include <cstdio>
 #include <limits>
+#include <mutex>
 #include <stdexcept>
+#include <thread>
 
 namespace manipid::server::store::postgres {
 
@@ -225,6 +229,28 @@ KeyDecision decide_key(Connection& connection, const char* scope, const std::opt
   return {};
 }
 
+/// The channel every process LISTENs on; a payload is "<kind> <job id>" (JobEvent).
+constexpr const char* kChannel = "manipid_jobs";
+
+/// Tells every listening process, when the transaction commits (NOTIFY is transactional: a
+/// rolled-back change is never announced).
+void announce(Connection& connection, const char* kind, const std::string& id) {
+  connection.exec(std::string("SELECT pg_notify('") + kChannel + "', $1)", Params().text(std::string(kind) + " " + id));
+}
+
+std::optional<JobEvent> parse_event(const std::string& payload) {
+  const std::size_t space = payload.find(' ');
+  if (space == std::string::npos) return std::nullopt;
+  const std::string kind = payload.substr(0, space);
+  JobEvent event;
+  event.job_id = payload.substr(space + 1);
+  if (kind == "queued") event.kind = JobEvent::Kind::queued;
+  else if (kind == "cancel") event.kind = JobEvent::Kind::cancel_requested;
+  else if (kind == "changed") event.kind = JobEvent::Kind::changed;
+  else return std::nullopt;
+  return event;
+}
+
 /// A PostgreSQL array literal of ids ({"a","b"}); ids are letters, digits and '_', quoted anyway.
 std::string id_array(const std::vector<std::string>& ids) {
   std::string out = "{";
@@ -276,6 +302,29 @@ class PostgresStore final : public Store {
       : options_(options), pool_(uri, connections) {
     auto connection = pool_.checkout();
     prepare_database(*connection);
+  }
+
+  ~PostgresStore() override {
+    {
+      std::lock_guard lock(listen_mutex_);
+      stop_listening_ = true;
+    }
+    listen_wake_.notify_all();
+    if (listener_.joinable()) listener_.join();
+  }
+
+  PostgresStore(const PostgresStore&) = delete;
+  PostgresStore& operator=(const PostgresStore&) = delete;
+
+  bool watch_jobs(std::function<void(const JobEvent&)> on_event) override {
+    const bool watch = static_cast<bool>(on_event);
+    {
+      std::lock_guard lock(watcher_mutex_);  // waits for an event being handed over
+      on_event_ = std::move(on_event);
+    }
+    std::lock_guard lock(listen_mutex_);
+    if (watch && !listener_.joinable()) listener_ = std::thread([this] { listen(); });
+    return true;
   }
 
   // ---- datasets ----
@@ -568,6 +617,7 @@ class PostgresStore final : public Store {
           "dataset_id = coalesce($8, dataset_id), worker = NULL, lease_expires_at = NULL " + kHeldBy,
           params);
       if (ended.changed() == 0) return false;
+      announce(*connection, "changed", lease.job_id);
       connection->exec("DELETE FROM estimates WHERE job_id = $1", Params().text(lease.job_id));
       for (const auto& estimate : estimates) {
         connection->exec(
@@ -590,6 +640,7 @@ class PostgresStore final : public Store {
         connection->exec(
             "UPDATE jobs SET state = 'cancelled', finished_at = $2, worker = NULL, lease_expires_at = NULL WHERE id = $1",
             Params().text(id).text(now_rfc3339()));
+        announce(*connection, "changed", id);
         return;
       }
       clear_progress(*connection, {id});
@@ -597,6 +648,7 @@ class PostgresStore final : public Store {
           "UPDATE jobs SET state = 'queued', started_at = NULL, cancel_requested = false, evaluations = 0, "
           "best_cost = NULL, worker = NULL, lease_expires_at = NULL WHERE id = $1",
           Params().text(id));
+      announce(*connection, "queued", id);
     });
   }
 
@@ -608,10 +660,12 @@ class PostgresStore final : public Store {
       if (*state == api::JobState::queued) {
         connection->exec("UPDATE jobs SET state = 'cancelled', finished_at = $2 WHERE id = $1",
                          Params().text(id).text(now_rfc3339()));
+        announce(*connection, "changed", id);
         return CancelOutcome::cancelled_now;
       }
       if (*state == api::JobState::running) {
         connection->exec("UPDATE jobs SET cancel_requested = true WHERE id = $1", Params().text(id));
+        announce(*connection, "cancel", id);
         return CancelOutcome::requested;
       }
       return CancelOutcome::already_finished;
@@ -798,6 +852,7 @@ class PostgresStore final : public Store {
               .text(created.created_at)
               .text_or_null(job.robot_id)
               .text_or_null(job.validation_dataset_id));
+      announce(connection, "queued", created.id);
       return {SubmitStatus::created, created};
     });
   }
@@ -842,6 +897,7 @@ class PostgresStore final : public Store {
         "WHERE id = ANY($2::text[]) AND state = 'running' AND cancel_requested RETURNING id",
         Params().text(now).text(id_array(lost)));
     outcome.cancelled = cancelled.rows();
+    for (int row = 0; row < cancelled.rows(); ++row) announce(connection, "changed", cancelled.text(row, 0));
     auto counted = connection.exec(
         "UPDATE jobs SET worker_losses = worker_losses + 1 WHERE id = ANY($1::text[]) AND state = 'running' "
         "RETURNING id, worker_losses",
@@ -865,6 +921,7 @@ class PostgresStore final : public Store {
           "WHERE id = $1",
           Params().text(id).text(now).text(lost_error(losses)));
       outcome.failed.push_back(id);
+      announce(connection, "changed", id);
     }
     if (!requeue.empty()) {
       auto requeued = connection.exec(
@@ -872,12 +929,50 @@ class PostgresStore final : public Store {
           "lease_expires_at = NULL WHERE id = ANY($1::text[])",
           Params().text(id_array(requeue)));
       outcome.requeued = static_cast<int>(requeued.changed());
+      for (const std::string& id : requeue) announce(connection, "queued", id);
     }
     return outcome;
   }
 
+  /// The listener thread: one connection of its own LISTENing on the channel, handing each
+  /// notification to the watcher; a lost connection is opened again (events meanwhile are
+  /// missed: watchers poll as well).
+  void listen() {
+    std::chrono::milliseconds pause{100};
+    const auto stopping = [this] {
+      std::lock_guard lock(listen_mutex_);
+      return stop_listening_;
+    };
+    while (!stopping()) {
+      try {
+        Connection connection(pool_.conninfo());
+        connection.execute(std::string("LISTEN ") + kChannel);
+        pause = std::chrono::milliseconds(100);
+        while (!stopping()) {
+          for (const std::string& payload : connection.notifications(std::chrono::milliseconds(200))) {
+            const auto event = parse_event(payload);
+            if (!event) continue;
+            std::lock_guard lock(watcher_mutex_);
+            if (on_event_) on_event_(*event);
+          }
+        }
+      } catch (const StoreError&) {
+        // The database is away: try again after a pause that grows to 5 s.
+      }
+      std::unique_lock lock(listen_mutex_);
+      listen_wake_.wait_for(lock, pause, [this] { return stop_listening_; });
+      pause = std::min(pause * 2, std::chrono::milliseconds(5000));
+    }
+  }
+
   StoreOptions options_;
   ConnectionPool pool_;
+  std::mutex watcher_mutex_;  ///< guards on_event_, held while it runs
+  std::function<void(const JobEvent&)> on_event_;
+  std::mutex listen_mutex_;
+  std::condition_variable listen_wake_;
+  bool stop_listening_ = false;
+  std::thread listener_;  ///< last: joined (in the destructor) before the members it uses go
 };
 
 }  // namespace
