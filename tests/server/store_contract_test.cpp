@@ -263,6 +263,16 @@ TEST_P(StoreContract, DatasetRoundTripIsBitExact) {
   EXPECT_TRUE(same_bits(loaded->tau, data.tau));
   EXPECT_TRUE(same_bits(loaded->ref, data.ref));
   EXPECT_TRUE(std::signbit(loaded->q(0, 0)));
+  // Read again (a backend may keep recent samples in memory): the same bits; deleted — by this
+  // store or by another process's — gone.
+  const auto again = store_->load_dataset(outcome.dataset.id);
+  ASSERT_TRUE(again);
+  EXPECT_TRUE(same_bits(again->q, data.q));
+  auto other = GetParam().open(directory_, {});
+  EXPECT_EQ(other->delete_dataset(outcome.dataset.id), DeleteResult::deleted);
+  other.reset();
+  EXPECT_FALSE(store_->load_dataset(outcome.dataset.id));
+  EXPECT_FALSE(store_->find_dataset(outcome.dataset.id));
 }
 
 TEST_P(StoreContract, DatasetRoundTripWithoutTorqueOrReference) {

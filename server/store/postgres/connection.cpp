@@ -91,6 +91,22 @@ std::vector<unsigned char> Result::bytes(int row, int column) const {
   return out;
 }
 
+std::int64_t Result::binary_integer(int row, int column) const {
+  if (null(row, column)) return 0;
+  const auto* bytes = reinterpret_cast<const unsigned char*>(PQgetvalue(result_, row, column));
+  const int length = PQgetlength(result_, row, column);
+  std::uint64_t value = 0;
+  for (int i = 0; i < length; ++i) value = (value << 8) | bytes[i];  // network byte order
+  if (length == 4) return static_cast<std::int32_t>(static_cast<std::uint32_t>(value));
+  return static_cast<std::int64_t>(value);
+}
+
+std::span<const unsigned char> Result::binary_bytes(int row, int column) const {
+  if (null(row, column)) return {};
+  return {reinterpret_cast<const unsigned char*>(PQgetvalue(result_, row, column)),
+          static_cast<std::size_t>(PQgetlength(result_, row, column))};
+}
+
 // ---- Params ----
 
 Params& Params::text(std::string value) {
@@ -184,12 +200,19 @@ void Connection::fail(const PGresult* result, const std::string& what) {
   }
 }
 
-Result Connection::exec(const std::string& sql, const Params& params) {
+Result Connection::exec(const std::string& sql, const Params& params, bool binary_results) {
+  auto found = prepared_.find(sql);
+  if (found == prepared_.end()) {
+    std::string name = "s" + std::to_string(prepared_.size());
+    Result prepared(PQprepare(connection_, name.c_str(), sql.c_str(), params.size(), nullptr));
+    if (PQresultStatus(prepared.get()) != PGRES_COMMAND_OK) fail(prepared.get(), "a statement could not be prepared");
+    found = prepared_.emplace(sql, std::move(name)).first;
+  }
   const auto values = params.pointers();
   const auto lengths = params.lengths();
   const auto formats = params.formats();
-  Result result(PQexecParams(connection_, sql.c_str(), params.size(), nullptr, values.data(), lengths.data(),
-                             formats.data(), 0));
+  Result result(PQexecPrepared(connection_, found->second.c_str(), params.size(), values.data(), lengths.data(),
+                               formats.data(), binary_results ? 1 : 0));
   const PGresult* raw = result.get();
   const auto status = PQresultStatus(raw);
   if (status != PGRES_COMMAND_OK && status != PGRES_TUPLES_OK) fail(raw, "a statement failed");

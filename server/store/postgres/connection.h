@@ -21,7 +21,9 @@
 #include <mutex>
 #include <optional>
 #include <string>
+#include <span>
 #include <type_traits>
+#include <unordered_map>
 #include <vector>
 
 namespace manipid::server::store::postgres {
@@ -47,6 +49,11 @@ class Result {
   std::optional<double> real_or_null(int row, int column) const;
   bool boolean(int row, int column) const { return text(row, column) == "t"; }
   std::vector<unsigned char> bytes(int row, int column) const;  ///< bytea; empty for NULL
+  // Binary-format results (exec(…, true)):
+  std::int64_t binary_integer(int row, int column) const;  ///< int4 or int8
+  bool binary_boolean(int row, int column) const { return !null(row, column) && *PQgetvalue(result_, row, column) != 0; }
+  /// A bytea's raw bytes (empty for NULL), valid while this Result lives.
+  std::span<const unsigned char> binary_bytes(int row, int column) const;
 
  private:
   PGresult* result_;
@@ -95,7 +102,9 @@ class Connection {
   /// Runs one statement. Throws StorageFull (a full disk), StoreUnavailable (the connection is
   /// gone or the server is shutting down), ConflictRetry (serialization failure, deadlock) or
   /// StoreError.
-  Result exec(const std::string& sql, const Params& params = {});
+  /// Each SQL text is prepared once per connection (its plan kept, as the SQLite store keeps its
+  /// statements); `binary_results`: the result in PostgreSQL's binary format (bytea as raw bytes).
+  Result exec(const std::string& sql, const Params& params = {}, bool binary_results = false);
   /// Runs SQL without parameters (transaction control, schema scripts; several statements allowed).
   void execute(const std::string& sql);
   /// COPY … FROM STDIN with `data` in COPY's text format.
@@ -119,6 +128,11 @@ class Connection {
   PGconn* connection_ = nullptr;
   WriteHealth* health_ = nullptr;
   long changes_ = 0;
+  std::unordered_map<std::string, std::string> prepared_;  ///< SQL text → statement name
+
+ public:
+  /// Set once the session's temporary tables exist (they live as long as the connection).
+  bool staging_ready = false;
 };
 
 /// A transaction PostgreSQL aborted for a conflict with another (SQLSTATE 40001, 40P01): running

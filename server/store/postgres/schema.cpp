@@ -39,6 +39,11 @@ constexpr std::array<const char*, 1> kMigrations = {
       qd  bytea,
       qdd bytea
     );
+    -- Samples are doubles, which do not compress: stored out of line as they are (EXTERNAL),
+    -- without pglz's attempt on every insert and read.
+    ALTER TABLE datasets ALTER COLUMN t SET STORAGE EXTERNAL, ALTER COLUMN q SET STORAGE EXTERNAL,
+      ALTER COLUMN tau SET STORAGE EXTERNAL, ALTER COLUMN ref SET STORAGE EXTERNAL,
+      ALTER COLUMN qd SET STORAGE EXTERNAL, ALTER COLUMN qdd SET STORAGE EXTERNAL;
 
     CREATE TABLE robots (
       seq        bigserial PRIMARY KEY,

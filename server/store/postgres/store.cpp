@@ -11,7 +11,10 @@
 //  - the queue limit's count and insert run under a transaction-scoped advisory lock, so
 //    concurrent submissions cannot overshoot it;
 //  - recovery locks the expired jobs it takes back (SKIP LOCKED: a job another process is
-//    recovering or writing is left to it).
+//    recovering or writing is left to it);
+//  - every job change is announced on the channel manipid_jobs within its transaction (NOTIFY
+//    is sent at commit, never for a rollback); a listener thread per store hands them to the
+//    watcher (watch_jobs).
 // Single-statement reads run outside a transaction (each statement is its own snapshot).
 #include "store/postgres/store.h"
 
@@ -26,6 +29,7 @@
 #include <cstdint>
 #include <cstdio>
 #include <limits>
+#include <list>
 #include <mutex>
 #include <stdexcept>
 #include <thread>
@@ -251,13 +255,13 @@ std::optional<JobEvent> parse_event(const std::string& payload) {
   return event;
 }
 
-/// A PostgreSQL array literal of ids ({"a","b"}); ids are letters, digits and '_', quoted anyway.
-std::string id_array(const std::vector<std::string>& ids) {
+/// A PostgreSQL array literal of texts, every element quoted.
+std::string array_literal(const std::vector<std::string>& texts) {
   std::string out = "{";
-  for (std::size_t i = 0; i < ids.size(); ++i) {
+  for (std::size_t i = 0; i < texts.size(); ++i) {
     if (i > 0) out += ',';
     out += '"';
-    for (char c : ids[i]) {
+    for (char c : texts[i]) {
       if (c == '"' || c == '\\') out += '\\';
       out += c;
     }
@@ -265,6 +269,29 @@ std::string id_array(const std::vector<std::string>& ids) {
   }
   return out + "}";
 }
+
+/// A PostgreSQL array literal of doubles (17 significant digits: exact), NULL for none.
+std::string array_literal(const std::vector<std::optional<double>>& numbers) {
+  std::string out = "{";
+  for (std::size_t i = 0; i < numbers.size(); ++i) {
+    if (i > 0) out += ',';
+    if (!numbers[i]) {
+      out += "NULL";
+    } else if (std::isnan(*numbers[i])) {
+      out += "NaN";
+    } else if (std::isinf(*numbers[i])) {
+      out += *numbers[i] > 0 ? "Infinity" : "-Infinity";
+    } else {
+      char buffer[32];
+      std::snprintf(buffer, sizeof buffer, "%.17g", *numbers[i]);
+      out += buffer;
+    }
+  }
+  return out + "}";
+}
+
+/// A PostgreSQL array literal of ids ({"a","b"}); ids are letters, digits and '_', quoted anyway.
+std::string id_array(const std::vector<std::string>& ids) { return array_literal(ids); }
 
 /// COPY's text format for one history row: job id, index, cost (\N for NaN, as NULL), θ as
 /// bytea hex (the backslash doubled: COPY reads "\\x…" as "\x…"), \N when θ is empty.
@@ -295,6 +322,58 @@ void append_history_row(std::string& out, const std::string& id, const api::Hist
   }
   out += '\n';
 }
+
+/// The samples of the datasets read last, up to a byte budget, oldest dropped first.
+class RecentDatasets {
+ public:
+  explicit RecentDatasets(std::size_t budget) : budget_(budget) {}
+
+  std::optional<Trajectory> find(const std::string& id) {
+    std::lock_guard lock(mutex_);
+    for (auto entry = entries_.begin(); entry != entries_.end(); ++entry) {
+      if (entry->id != id) continue;
+      entries_.splice(entries_.begin(), entries_, entry);  // now the most recent
+      return entry->data;
+    }
+    return std::nullopt;
+  }
+
+  void insert(const std::string& id, const Trajectory& data) {
+    const std::size_t bytes = sizeof(double) * static_cast<std::size_t>(data.t.size() + data.q.size() + data.tau.size() +
+                                                                        data.ref.size() + data.qd.size() + data.qdd.size());
+    if (bytes > budget_ / 4) return;  // a huge dataset is read when needed, not kept
+    std::lock_guard lock(mutex_);
+    for (const auto& entry : entries_) {
+      if (entry.id == id) return;
+    }
+    entries_.push_front({id, data, bytes});
+    held_ += bytes;
+    while (held_ > budget_) {
+      held_ -= entries_.back().bytes;
+      entries_.pop_back();
+    }
+  }
+
+  void erase(const std::string& id) {
+    std::lock_guard lock(mutex_);
+    entries_.remove_if([&](const Entry& entry) {
+      if (entry.id != id) return false;
+      held_ -= entry.bytes;
+      return true;
+    });
+  }
+
+ private:
+  struct Entry {
+    std::string id;
+    Trajectory data;
+    std::size_t bytes = 0;
+  };
+  std::size_t budget_;
+  std::size_t held_ = 0;
+  std::list<Entry> entries_;
+  std::mutex mutex_;
+};
 
 class PostgresStore final : public Store {
  public:
@@ -397,27 +476,38 @@ class PostgresStore final : public Store {
 
   std::optional<Trajectory> load_dataset(const std::string& id) override {
     auto connection = pool_.checkout();
+    // Datasets never change once stored (ids are never reused): the samples of a recent one are
+    // kept in memory, and only its existence is asked again (it may have been deleted since).
+    if (auto cached = recent_datasets_.find(id)) {
+      if (connection->exec("SELECT 1 FROM datasets WHERE id = $1", Params().text(id)).rows() == 0) {
+        recent_datasets_.erase(id);
+        return std::nullopt;
+      }
+      return *cached;
+    }
+    // Binary results: the samples arrive as the bytes stored, not as hex text.
     auto row = connection->exec(
         "SELECT samples, joints, has_torque, has_reference, has_rates, has_accelerations, t, q, tau, ref, qd, qdd "
         "FROM datasets WHERE id = $1",
-        Params().text(id));
+        Params().text(id), true);
     if (row.rows() == 0) return std::nullopt;
-    const auto samples = static_cast<Eigen::Index>(row.integer(0, 0));
-    const auto joints = static_cast<Eigen::Index>(row.integer(0, 1));
+    const auto samples = static_cast<Eigen::Index>(row.binary_integer(0, 0));
+    const auto joints = static_cast<Eigen::Index>(row.binary_integer(0, 1));
     Trajectory data;
     data.t.resize(samples);
     data.q.resize(samples, joints);
-    data.tau.resize(samples, row.boolean(0, 2) ? joints : 0);
-    data.ref.resize(samples, row.boolean(0, 3) ? joints : 0);
-    data.qd.resize(samples, row.boolean(0, 4) ? joints : 0);
-    data.qdd.resize(samples, row.boolean(0, 5) ? joints : 0);
+    data.tau.resize(samples, row.binary_boolean(0, 2) ? joints : 0);
+    data.ref.resize(samples, row.binary_boolean(0, 3) ? joints : 0);
+    data.qd.resize(samples, row.binary_boolean(0, 4) ? joints : 0);
+    data.qdd.resize(samples, row.binary_boolean(0, 5) ? joints : 0);
     const auto fill = [&](int column, double* values, Eigen::Index count) {
-      return decode_doubles(row.bytes(0, column), values, static_cast<std::size_t>(count));
+      return decode_doubles(row.binary_bytes(0, column), values, static_cast<std::size_t>(count));
     };
     const bool intact = fill(6, data.t.data(), data.t.size()) && fill(7, data.q.data(), data.q.size()) &&
                         fill(8, data.tau.data(), data.tau.size()) && fill(9, data.ref.data(), data.ref.size()) &&
                         fill(10, data.qd.data(), data.qd.size()) && fill(11, data.qdd.data(), data.qdd.size());
     if (!intact) throw StoreError("dataset " + id + " has samples of the wrong size in the database");
+    recent_datasets_.insert(id, data);
     return data;
   }
 
@@ -441,6 +531,7 @@ class PostgresStore final : public Store {
       if (connection->exec("DELETE FROM datasets WHERE id = $1", Params().text(id)).changed() == 0) {
         return DeleteResult::not_found;
       }
+      recent_datasets_.erase(id);
       forget_keys_of(*connection, "dataset", id);
       return DeleteResult::deleted;
     });
@@ -586,6 +677,13 @@ class PostgresStore final : public Store {
     std::string rows;
     for (const auto& entry : batch) append_history_row(rows, lease.job_id, entry);
     auto connection = pool_.checkout();
+    if (!batch.empty() && !connection->staging_ready) {
+      // Once per connection, outside the transaction (a rollback would take the table along).
+      connection->execute(
+          "CREATE TEMP TABLE IF NOT EXISTS history_in (job_id text, idx bigint, cost double precision, theta bytea) "
+          "ON COMMIT DELETE ROWS");
+      connection->staging_ready = true;
+    }
     return run_transaction(*connection, TransactionKind::write, [&] {
       // The guarded update first: a batch of an attempt that lost its lease is dropped whole.
       const Progress progress{evaluations, best_cost};
@@ -593,9 +691,6 @@ class PostgresStore final : public Store {
       if (status == LeaseStatus::lost || batch.empty()) return status;
       // COPY into a per-session staging table, then one upsert: an index written again
       // replaces its row, as in the SQLite store.
-      connection->execute(
-          "CREATE TEMP TABLE IF NOT EXISTS history_in (job_id text, idx bigint, cost double precision, theta bytea) "
-          "ON COMMIT DELETE ROWS");
       connection->copy_in("COPY history_in (job_id, idx, cost, theta) FROM STDIN", rows);
       connection->exec(
           "INSERT INTO job_history (job_id, idx, cost, theta) SELECT job_id, idx, cost, theta FROM history_in "
@@ -619,11 +714,20 @@ class PostgresStore final : public Store {
       if (ended.changed() == 0) return false;
       announce(*connection, "changed", lease.job_id);
       connection->exec("DELETE FROM estimates WHERE job_id = $1", Params().text(lease.job_id));
-      for (const auto& estimate : estimates) {
+      if (!estimates.empty()) {
+        // One statement for all rows (arrays unnested side by side); a name given twice keeps its last row.
+        std::vector<std::string> names;
+        std::vector<std::optional<double>> values, errors;
+        for (const auto& estimate : estimates) {
+          names.push_back(estimate.name);
+          values.emplace_back(estimate.value);
+          errors.push_back(estimate.std_error);
+        }
         connection->exec(
-            "INSERT INTO estimates (job_id, name, value, std_error) VALUES ($1, $2, $3, $4) "
-            "ON CONFLICT (job_id, name) DO UPDATE SET value = excluded.value, std_error = excluded.std_error",
-            Params().text(lease.job_id).text(estimate.name).real(estimate.value).real_or_null(estimate.std_error));
+            "INSERT INTO estimates (job_id, name, value, std_error) "
+            "SELECT DISTINCT ON (name) $1, name, value, std_error FROM unnest($2::text[], $3::float8[], $4::float8[]) "
+            "WITH ORDINALITY AS row (name, value, std_error, position) ORDER BY name, position DESC",
+            Params().text(lease.job_id).text(array_literal(names)).text(array_literal(values)).text(array_literal(errors)));
       }
       return true;
     });
@@ -967,6 +1071,7 @@ class PostgresStore final : public Store {
 
   StoreOptions options_;
   ConnectionPool pool_;
+  RecentDatasets recent_datasets_{64u << 20};  ///< 64 MiB of samples
   std::mutex watcher_mutex_;  ///< guards on_event_, held while it runs
   std::function<void(const JobEvent&)> on_event_;
   std::mutex listen_mutex_;
