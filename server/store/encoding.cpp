@@ -1,6 +1,9 @@
 // encoding.cpp — value encodings every store backend shares (see encoding.h).
 #include "store/encoding.h"
 
+#include <stdexcept>
+#include <string>
+
 #include <array>
 #include <bit>
 #include <cstring>
@@ -42,6 +45,27 @@ bool decode_doubles(std::span<const unsigned char> bytes, double* values, std::s
     values[i] = std::bit_cast<double>(bits);
   }
   return true;
+}
+
+namespace {
+
+void check_block(const Eigen::MatrixXd& matrix, Eigen::Index samples, Eigen::Index joints, const char* name) {
+  if (matrix.cols() == 0) return;
+  if (matrix.rows() != samples || matrix.cols() != joints) {
+    throw std::invalid_argument(std::string("Trajectory.") + name + " must be samples x joints or empty");
+  }
+}
+
+}  // namespace
+
+void check_dataset_shape(const Trajectory& data) {
+  const Eigen::Index samples = data.samples();
+  const Eigen::Index joints = data.joint_count();
+  if (data.q.rows() != samples) throw std::invalid_argument("Trajectory.q must have one row per sample");
+  check_block(data.tau, samples, joints, "tau");
+  check_block(data.ref, samples, joints, "ref");
+  check_block(data.qd, samples, joints, "qd");
+  check_block(data.qdd, samples, joints, "qdd");
 }
 
 const char* state_text(api::JobState state) { return kStateTexts.at(static_cast<std::size_t>(state)); }

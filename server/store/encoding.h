@@ -4,6 +4,7 @@
 #pragma once
 
 #include "manipid/api/records.h"
+#include "manipid/core/trajectory.h"
 
 #include <cstddef>
 #include <cstdint>
@@ -19,6 +20,10 @@ namespace manipid::server::store {
 std::vector<unsigned char> encode_doubles(const double* values, std::size_t count);
 /// Fills `count` doubles; false when the blob does not hold exactly that many.
 bool decode_doubles(std::span<const unsigned char> bytes, double* values, std::size_t count);
+
+/// The shapes a stored dataset must have: q one row per sample; tau, ref, qd and qdd samples x
+/// joints or empty. std::invalid_argument naming the block otherwise (a caller's bug, not input).
+void check_dataset_shape(const Trajectory& data);
 
 const char* state_text(api::JobState state);
 std::optional<api::JobState> state_from_text(std::string_view text);

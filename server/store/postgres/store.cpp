@@ -63,13 +63,6 @@ Params lease_params(const Lease& lease) {
 
 std::string milliseconds_text(std::chrono::milliseconds duration) { return std::to_string(duration.count()); }
 
-void check_shape(const Eigen::MatrixXd& matrix, int samples, int joints, const char* name) {
-  if (matrix.cols() == 0) return;
-  if (matrix.rows() != samples || matrix.cols() != joints) {
-    throw std::invalid_argument(std::string("Trajectory.") + name + " must be samples x joints or empty");
-  }
-}
-
 std::vector<unsigned char> encode(const double* values, Eigen::Index count) {
   return encode_doubles(values, static_cast<std::size_t>(count));
 }
@@ -412,11 +405,7 @@ class PostgresStore final : public Store {
                                 const std::optional<api::IdempotencyKey>& key) override {
     const int samples = data.samples();
     const int joints = data.joint_count();
-    if (data.q.rows() != samples) throw std::invalid_argument("Trajectory.q must have one row per sample");
-    check_shape(data.tau, samples, joints, "tau");
-    check_shape(data.ref, samples, joints, "ref");
-    check_shape(data.qd, samples, joints, "qd");
-    check_shape(data.qdd, samples, joints, "qdd");
+    check_dataset_shape(data);
     api::DatasetInfo dataset;
     dataset.name = name;
     dataset.source_job = source_job;

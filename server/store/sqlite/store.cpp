@@ -19,13 +19,6 @@ namespace manipid::server::store::sqlite {
 namespace {
 
 
-void check_shape(const Eigen::MatrixXd& matrix, int samples, int joints, const char* name) {
-  if (matrix.cols() == 0) return;
-  if (matrix.rows() != samples || matrix.cols() != joints) {
-    throw std::invalid_argument(std::string("Trajectory.") + name + " must be samples x joints or empty");
-  }
-}
-
 /// One job_history row (idx, cost, theta) of the statement's current step.
 api::HistoryEntry history_entry(const Statement& rows, const std::string& id) {
   api::HistoryEntry entry;
@@ -50,11 +43,7 @@ class SqliteStore final : public Store {
                                 const std::optional<api::IdempotencyKey>& key) override {
     const int samples = data.samples();
     const int joints = data.joint_count();
-    if (data.q.rows() != samples) throw std::invalid_argument("Trajectory.q must have one row per sample");
-    check_shape(data.tau, samples, joints, "tau");
-    check_shape(data.ref, samples, joints, "ref");
-    check_shape(data.qd, samples, joints, "qd");
-    check_shape(data.qdd, samples, joints, "qdd");
+    check_dataset_shape(data);
     // Encoded before the transaction: the write lock is held only for the insert itself.
     const auto t = encode_doubles(data.t.data(), static_cast<std::size_t>(data.t.size()));
     const auto q = encode_doubles(data.q.data(), static_cast<std::size_t>(data.q.size()));
