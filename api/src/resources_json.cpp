@@ -40,24 +40,27 @@ nlohmann::ordered_json dataset_to_json(const DatasetInfo& dataset) {
           {"links", {{"self", self}, {"data", self + "?format=csv"}}}};
 }
 
-nlohmann::ordered_json job_to_json(const JobInfo& job) {
+namespace {
+
+/// Every member of a job up to "progress": what the store keeps in columns, not as JSON text.
+Json job_head(const JobInfo& job) {
+  return {{"id", job.id},
+          {"kind", to_string(job.kind)},
+          {"state", to_string(job.state)},
+          {"created_at", job.created_at},
+          {"started_at", text_or_null(job.started_at)},
+          {"finished_at", text_or_null(job.finished_at)},
+          {"attempts", job.attempts},
+          {"worker", job.state == JobState::running ? text_or_null(job.worker) : Json(nullptr)},
+          {"dataset_id", text_or_null(job.dataset_id)},
+          {"robot_id", text_or_null(job.robot_id)},
+          {"validation_dataset_id", text_or_null(job.validation_dataset_id)},
+          {"cancel_requested", job.cancel_requested},
+          {"progress", {{"evaluations", job.evaluations}, {"best_cost", job.best_cost ? number(*job.best_cost) : Json(nullptr)}}}};
+}
+
+Json job_links(const JobInfo& job) {
   const std::string self = "/v1/jobs/" + job.id;
-  Json json = {{"id", job.id},
-               {"kind", to_string(job.kind)},
-               {"state", to_string(job.state)},
-               {"created_at", job.created_at},
-               {"started_at", text_or_null(job.started_at)},
-               {"finished_at", text_or_null(job.finished_at)},
-               {"attempts", job.attempts},
-               {"worker", job.state == JobState::running ? text_or_null(job.worker) : Json(nullptr)},
-               {"dataset_id", text_or_null(job.dataset_id)},
-               {"robot_id", text_or_null(job.robot_id)},
-               {"validation_dataset_id", text_or_null(job.validation_dataset_id)},
-               {"cancel_requested", job.cancel_requested},
-               {"progress", {{"evaluations", job.evaluations}, {"best_cost", job.best_cost ? number(*job.best_cost) : Json(nullptr)}}},
-               {"request", embedded(job.request)}};
-  if (!job.result.empty()) json["result"] = embedded(job.result);
-  if (!job.error.empty()) json["error"] = embedded(job.error);
   Json links = {{"self", self}, {"cancel", self + "/cancel"}};
   // Only the paper model's identifications evaluate a cost step by step; the other jobs' history is empty.
   const bool robot_job = !job.robot_id.empty();
@@ -70,8 +73,34 @@ nlohmann::ordered_json job_to_json(const JobInfo& job) {
   }
   if (job.kind == JobKind::identification) links["fit"] = self + "/fit";
   if (job.kind == JobKind::identification && robot_job) links["urdf"] = self + "/urdf";
-  json["links"] = links;
-  return json;
+  return links;
+}
+
+/// `,"name":` and the stored JSON text as it is (manipid wrote it with dump(): the bytes a parse
+/// and dump would give back); text that is not JSON goes out as a string, as embedded() does.
+void append_embedded(std::string& out, const char* name, const std::string& text) {
+  out += ",\"";
+  out += name;
+  out += "\":";
+  if (Json::accept(text)) {
+    out += text;
+  } else {
+    out += Json(text).dump();
+  }
+}
+
+}  // namespace
+
+std::string job_to_text(const JobInfo& job, JobText form) {
+  std::string out = job_head(job).dump();
+  out.pop_back();  // the head's closing brace: the members below follow
+  if (form == JobText::whole) append_embedded(out, "request", job.request);
+  if (!job.result.empty()) append_embedded(out, "result", job.result);
+  if (!job.error.empty()) append_embedded(out, "error", job.error);
+  out += ",\"links\":";
+  out += job_links(job).dump();
+  out += '}';
+  return out;
 }
 
 nlohmann::ordered_json robot_to_json(const RobotInfo& robot) {

@@ -25,14 +25,29 @@ bool is_postgres_url(const std::string& url) {
 
 std::string display_name(const std::string& url) {
   if (!is_postgres_url(url)) return url;
-  // postgresql://USER:PASSWORD@HOST/DB → postgresql://USER@HOST/DB
-  const std::size_t authority = url.find("://") + 3;
-  const std::size_t end = url.find_first_of("/?", authority);
-  const std::size_t at = url.rfind('@', end == std::string::npos ? std::string::npos : end);
-  if (at == std::string::npos || at < authority) return url;
-  const std::size_t colon = url.find(':', authority);
-  if (colon == std::string::npos || colon > at) return url;
-  return url.substr(0, colon) + url.substr(at);
+  // libpq takes a password in two places: postgresql://USER:PASSWORD@HOST/DB and ?password=…
+  // Both go; everything else stays as given.
+  std::string shown = url;
+  const std::size_t authority = shown.find("://") + 3;
+  const std::size_t end = shown.find_first_of("/?", authority);
+  const std::size_t at = shown.rfind('@', end == std::string::npos ? std::string::npos : end);
+  if (at != std::string::npos && at >= authority) {
+    const std::size_t colon = shown.find(':', authority);
+    if (colon != std::string::npos && colon < at) shown.erase(colon, at - colon);
+  }
+  const std::size_t query = shown.find('?');
+  if (query == std::string::npos) return shown;
+  std::string kept;
+  std::string_view rest = std::string_view(shown).substr(query + 1);
+  while (!rest.empty()) {
+    const std::size_t amp = rest.find('&');
+    const std::string_view parameter = rest.substr(0, amp);
+    rest = amp == std::string_view::npos ? std::string_view() : rest.substr(amp + 1);
+    if (parameter.starts_with("password=") || parameter == "password") continue;
+    kept += kept.empty() ? "" : "&";
+    kept += parameter;
+  }
+  return shown.substr(0, query) + (kept.empty() ? "" : "?" + kept);
 }
 
 std::unique_ptr<Store> open_store(const std::string& url, const StoreOptions& options) {

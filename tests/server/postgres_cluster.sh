@@ -3,7 +3,9 @@
 #   postgres_cluster.sh start STATE_FILE   initdb into a new temporary directory, Unix socket only
 #                                          (listen_addresses='', the socket in that directory),
 #                                          start it, and write a libpq URI template to STATE_FILE
-#                                          ("%s" where the database name goes) and the directory
+#                                          ("%s" where the database name goes) and the directory;
+#                                          the role manipid_password signs in with the password
+#                                          manipid-test-secret, every other role is trusted
 #   postgres_cluster.sh stop STATE_FILE    stop it and remove the directory and STATE_FILE
 # initdb refuses to run as root (CI runs as root): then the server binaries run as the `postgres`
 # user the Debian package creates, and the directory is given to it. Without PostgreSQL's
@@ -53,11 +55,17 @@ as_owner "$bindir/initdb" -D "$dir/data" -U postgres -A trust -E UTF8 --no-local
   cat "$dir/initdb.log" >&2
   exit 1
 }
+# One role signs in with a password (scram-sha-256), so a wrong one can be tested; every other
+# role is trusted on the socket. pg_hba.conf is read top down: this line first.
+hba="$dir/data/pg_hba.conf"
+as_owner bash -c "{ echo 'local all manipid_password scram-sha-256'; cat '$hba'; } >'$hba.new' && mv '$hba.new' '$hba'"
 options="-c listen_addresses='' -c unix_socket_directories='$dir' -c fsync=off -c synchronous_commit=off"
 options+=" -c full_page_writes=off -c max_connections=300"
 as_owner "$bindir/pg_ctl" -D "$dir/data" -o "$options" -l "$dir/server.log" -w -t 60 start >/dev/null || {
   cat "$dir/server.log" >&2
   exit 1
 }
+as_owner "$bindir/psql" -h "$dir" -U postgres -d postgres -qc \
+  "CREATE ROLE manipid_password LOGIN CREATEDB PASSWORD 'manipid-test-secret'" >/dev/null
 printf 'postgresql:///%%s?host=%s&user=postgres\n%s\n' "$dir" "$dir" >"$state"
 echo "postgres_cluster: PostgreSQL $("$bindir/postgres" --version | awk '{print $3}') on the socket in $dir"

@@ -170,6 +170,20 @@ TEST_F(SqliteStoreTest, OpenStoreReadsTheDbValue) {
   EXPECT_THROW(open_store(""), StoreError);
 }
 
+TEST(StoreUrl, DisplayNameShowsNoPassword) {
+  EXPECT_EQ(display_name("/var/lib/manipid/jobs.db"), "/var/lib/manipid/jobs.db");
+  EXPECT_EQ(display_name("sqlite:jobs.db"), "sqlite:jobs.db");
+  EXPECT_EQ(display_name("postgresql://lab@db.example/manipid"), "postgresql://lab@db.example/manipid");
+  EXPECT_EQ(display_name("postgresql://lab:s3cret@db.example:5433/manipid"), "postgresql://lab@db.example:5433/manipid");
+  EXPECT_EQ(display_name("postgres://lab:s3cret@db.example"), "postgres://lab@db.example");
+  EXPECT_EQ(display_name("postgresql:///manipid?host=/tmp/pg&user=lab&password=s3cret"),
+            "postgresql:///manipid?host=/tmp/pg&user=lab");
+  EXPECT_EQ(display_name("postgresql:///manipid?password=s3cret&host=/tmp/pg"), "postgresql:///manipid?host=/tmp/pg");
+  EXPECT_EQ(display_name("postgresql://lab:a@db/manipid?password=b"), "postgresql://lab@db/manipid");
+  // A ':' after the '@' is a port, not a password.
+  EXPECT_EQ(display_name("postgresql://db.example:5432/manipid"), "postgresql://db.example:5432/manipid");
+}
+
 /// SQLite out of memory (its hard heap limit reached) is std::bad_alloc, which the routes answer 503
 /// MEMORY_BUSY and the job runner "out of memory" — not a storage fault answered 500 — and nothing of the
 /// write is left behind: the store takes the same write once memory is back.

@@ -1,6 +1,8 @@
 """postgres_test.py — `manipid serve` and `manipid worker` on PostgreSQL, whole processes: a
-database that cannot be reached, that does not exist or that a newer manipid wrote is one line on
-stderr and exit 1 (no stack text, no password); a long-poll (`GET /v1/jobs/{id}?wait=`) on one
+database that cannot be reached, that does not exist, that a newer manipid wrote or that refuses
+the password is one line on stderr and exit 1 (no stack text, no password); the right password
+(in the URI or PGPASSWORD) serves; a cancel sent to one process stops the job a third runs; a
+long-poll (`GET /v1/jobs/{id}?wait=`) on one
 process wakes when a job another process runs ends; two processes given the same
 Idempotency-Key at once make one job; connections the database drops (a restart, an
 administrator) are 503 STORE_UNAVAILABLE with Retry-After for the requests that meet them, never
@@ -43,10 +45,16 @@ class OnPostgres(unittest.TestCase):
         server.log_path = os.path.join(self.path, f"{name}.log")
         return server
 
-    def refused(self, db):
+    def refused(self, db, environment=None):
         """Runs `serve` on `db`; returns (exit status, stderr) once it gives up."""
-        process = subprocess.run([binary(), "serve", "--port", "0", "--db", db], capture_output=True, timeout=60)
+        process = subprocess.run([binary(), "serve", "--port", "0", "--db", db], capture_output=True, timeout=60,
+                                 env={**os.environ, **(environment or {})})
         return process.returncode, process.stderr.decode()
+
+    def password_uri(self, database, password=None):
+        """The cluster's role that signs in with a password (tests/server/postgres_cluster.sh)."""
+        uri = self.template.replace("%s", database).replace("user=postgres", "user=manipid_password")
+        return uri + (f"&password={password}" if password else "")
 
     def test_bad_configuration_is_one_line_and_exit_1(self):
         cases = {
@@ -68,6 +76,54 @@ class OnPostgres(unittest.TestCase):
                 lines = [line for line in stderr.splitlines() if line.strip()]
                 self.assertEqual(len(lines), 1, stderr)  # one line: no stack, no log noise
                 self.assertNotIn("password=", stderr)
+
+    def test_a_wrong_password_is_one_line_and_exit_1_and_the_right_one_serves(self):
+        database = self.name + "_pw"
+        postgres_sql("postgres", f"CREATE DATABASE {database} OWNER manipid_password")
+        try:
+            for case, db, environment in (
+                    ("in the URI", self.password_uri(database, "not-the-secret-1"), None),
+                    ("in PGPASSWORD", self.password_uri(database), {"PGPASSWORD": "not-the-secret-2"})):
+                with self.subTest(case):
+                    status, stderr = self.refused(db, environment)
+                    self.assertEqual(status, 1, stderr)
+                    self.assertIn("--db: PostgreSQL refused the connection", stderr)
+                    self.assertIn("password", stderr)  # libpq's reason, in words
+                    self.assertEqual(len([line for line in stderr.splitlines() if line.strip()]), 1, stderr)
+                    self.assertNotIn("not-the-secret", stderr)
+            # The right password: the service starts, answers, and never prints the password.
+            server = Server(self.password_uri(database, "manipid-test-secret"), workers=0)
+            server.log_path = os.path.join(self.path, "password.log")
+            with server:
+                status, _, health = server.request("GET", "/healthz")
+                self.assertEqual(status, 200, health)
+                status, _, job = server.request("POST", "/v1/simulations", {"duration": 1.0})
+                self.assertEqual(status, 202, job)
+            self.assertIn("listening on", server.read_log())
+            self.assertNotIn("manipid-test-secret", server.read_log())
+        finally:
+            postgres_sql("postgres", f"DROP DATABASE {database} WITH (FORCE)")
+
+    def test_cancel_sent_to_one_process_stops_the_job_another_runs(self):
+        # Submit on A, cancel on B, the runner on C stops: three processes, one database.
+        with self.server("a", workers=0) as a, self.server("b", workers=0) as b, \
+                self.server("c", workers=1) as c:
+            # Far longer to simulate than this test waits (tests/hostile/long_simulation_test.py).
+            status, _, job = a.request("POST", "/v1/simulations", {"duration": 600, "kd": [1e5, 1e5, 1e5, 1e5]})
+            self.assertEqual(status, 202, job)
+            for _ in range(600):
+                status, _, seen = b.request("GET", f"/v1/jobs/{job['id']}")
+                if seen["state"] != "queued":
+                    break
+                time.sleep(0.05)
+            self.assertEqual(seen["state"], "running", seen)
+            self.assertTrue(seen["worker"].split(":")[1] == str(c.process.pid), seen)
+            status, _, cancelled = b.request("POST", f"/v1/jobs/{job['id']}/cancel")
+            self.assertIn(status, (200, 202), cancelled)
+            status, _, ended = a.request("GET", f"/v1/jobs/{job['id']}?wait=60", timeout=120)
+            self.assertEqual(status, 200, ended)
+            self.assertEqual(ended["state"], "cancelled", ended)
+            self.assertIn("cancelled", c.read_log())
 
     def test_a_long_poll_on_one_process_wakes_when_another_ends_the_job(self):
         with self.server("api", workers=0) as api, self.server("runner", workers=1) as runner:

@@ -20,7 +20,8 @@
 namespace manipid::api::http {
 
 void send_job(httplib::Response& response, int status, const JobInfo& job) {
-  send_json(response, status, job_to_json(job));
+  response.status = status;
+  response.set_content(job_to_text(job), "application/json");
   if (!is_terminal(job.state)) response.set_header("Retry-After", "1");
 }
 
@@ -54,7 +55,7 @@ void get_job(RouteState& state, const httplib::Request& request, httplib::Respon
     job = state.service.job(id);
   }
   if (!job) throw ApiError(ProblemKind::not_found, "no job " + id, "id");
-  const std::string body = job_to_json(*job).dump();
+  const std::string body = job_to_text(*job);
   const std::string etag = etag_of(body);
   response.set_header("ETag", etag);
   if (!is_terminal(job->state)) response.set_header("Retry-After", "1");
@@ -92,15 +93,16 @@ void list_jobs(RouteState& state, const httplib::Request& request, httplib::Resp
     }
   }
   const Page<JobInfo> page = state.service.jobs(filter, page_request(request, 50));
-  nlohmann::ordered_json items = nlohmann::ordered_json::array();
+  std::string body = "{\"items\":[";
   for (const JobInfo& job : page.items) {
-    nlohmann::ordered_json json = job_to_json(job);
-    json.erase("request");  // lists stay light; GET the job for the whole of it
-    items.push_back(std::move(json));
+    if (&job != &page.items.front()) body += ',';
+    body += job_to_text(job, JobText::without_request);  // lists stay light; GET the job for the whole of it
   }
-  nlohmann::ordered_json body = {{"items", items}};
-  if (!page.next_page_token.empty()) body["next_page_token"] = page.next_page_token;
-  send_json(response, 200, body);
+  body += ']';
+  if (!page.next_page_token.empty()) body += ",\"next_page_token\":" + nlohmann::ordered_json(page.next_page_token).dump();
+  body += '}';
+  response.status = 200;
+  response.set_content(body, "application/json");
 }
 
 void job_history(RouteState& state, const httplib::Request& request, httplib::Response& response) {

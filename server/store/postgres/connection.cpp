@@ -310,12 +310,14 @@ namespace detail {
 
 void begin(Connection& connection, TransactionKind kind) {
   connection.reset_changes();
+  if (kind == TransactionKind::statement) return;
   connection.execute(kind == TransactionKind::read ? "BEGIN ISOLATION LEVEL REPEATABLE READ READ ONLY" : "BEGIN");
 }
 
 void commit(Connection& connection, TransactionKind kind) {
-  connection.execute("COMMIT");
-  if (kind == TransactionKind::write && connection.health() != nullptr && connection.changes() > 0) {
+  if (kind != TransactionKind::statement) connection.execute("COMMIT");
+  const bool proves_space = kind == TransactionKind::write || kind == TransactionKind::statement;
+  if (proves_space && connection.health() != nullptr && connection.changes() > 0) {
     connection.health()->succeeded();
   }
 }

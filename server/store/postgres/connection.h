@@ -187,6 +187,8 @@ enum class TransactionKind {
   read,            ///< a consistent snapshot of several statements (REPEATABLE READ, READ ONLY)
   write,           ///< READ COMMITTED with the row locks each statement takes; a commit clears a full disk
   write_in_place,  ///< the same, but its commit proves nothing about space (lease heartbeats, recovery)
+  statement,       ///< one write statement that is its own transaction (autocommit): no BEGIN and
+                   ///< COMMIT round trips; a change it makes clears a full disk as a write's commit does
 };
 
 namespace detail {

@@ -235,6 +235,12 @@ void announce(Connection& connection, const char* kind, const std::string& id) {
   connection.exec(std::string("SELECT pg_notify('") + kChannel + "', $1)", Params().text(std::string(kind) + " " + id));
 }
 
+/// The tail of a statement whose CTE `rows` returns the ids of changed jobs: announces each
+/// (as announce does) in the same round trip; the statement returns one row per id.
+std::string announcement(const char* kind, const char* rows) {
+  return std::string("SELECT pg_notify('") + kChannel + "', '" + kind + " ' || id) FROM " + rows;
+}
+
 std::optional<JobEvent> parse_event(const std::string& payload) {
   const std::size_t space = payload.find(' ');
   if (space == std::string::npos) return std::nullopt;
@@ -643,7 +649,9 @@ class PostgresStore final : public Store {
 
   std::optional<api::JobInfo> claim_next_job(const std::string& owner, std::chrono::milliseconds lease) override {
     auto connection = pool_.checkout();
-    return run_transaction(*connection, TransactionKind::write, [&]() -> std::optional<api::JobInfo> {
+    // One statement, atomic on its own: no BEGIN/COMMIT (two round trips of every claim, and
+    // idle workers claim every second).
+    return run_transaction(*connection, TransactionKind::statement, [&]() -> std::optional<api::JobInfo> {
       auto claimed = connection->exec(
           "WITH next AS (SELECT seq FROM jobs WHERE state = 'queued' ORDER BY seq LIMIT 1 FOR UPDATE SKIP LOCKED) "
           "UPDATE jobs SET state = 'running', started_at = $1, attempts = attempts + 1, worker = $2, "
@@ -696,13 +704,15 @@ class PostgresStore final : public Store {
       // Only the attempt that holds the lease ends the job, and only once.
       Params params = lease_params(lease);
       params.text(state_text(state)).text(now_rfc3339()).text_or_null(result).text_or_null(error).text_or_null(dataset_id);
+      // One round trip: the guarded end, an earlier attempt's estimates gone, the announcement.
       auto ended = connection->exec(
-          "UPDATE jobs SET state = $4, finished_at = $5, result = $6, error = $7, "
-          "dataset_id = coalesce($8, dataset_id), worker = NULL, lease_expires_at = NULL " + kHeldBy,
+          "WITH ended AS (UPDATE jobs SET state = $4, finished_at = $5, result = $6, error = $7, "
+          "dataset_id = coalesce($8, dataset_id), worker = NULL, lease_expires_at = NULL " + kHeldBy +
+              " RETURNING id), "
+          "gone AS (DELETE FROM estimates WHERE job_id IN (SELECT id FROM ended)) " +
+              announcement("changed", "ended"),
           params);
-      if (ended.changed() == 0) return false;
-      announce(*connection, "changed", lease.job_id);
-      connection->exec("DELETE FROM estimates WHERE job_id = $1", Params().text(lease.job_id));
+      if (ended.rows() == 0) return false;
       if (!estimates.empty()) {
         // One statement for all rows (arrays unnested side by side); a name given twice keeps its last row.
         std::vector<std::string> names;
@@ -912,7 +922,7 @@ class PostgresStore final : public Store {
                               int queue_limit, const std::string& keys_not_before) {
     return run_transaction(connection, TransactionKind::write, [&]() -> SubmitOutcome {
       api::JobInfo created;
-      created.id = unused_id(connection, "job_", "jobs");
+      created.id = random_id("job_");
       created.kind = job.kind;
       created.state = api::JobState::queued;
       created.created_at = now_rfc3339();
@@ -934,9 +944,12 @@ class PostgresStore final : public Store {
           throw QueueFull();
         }
       }
-      connection.exec(
-          "INSERT INTO jobs (id, kind, state, request, dataset_id, created_at, robot_id, validation_dataset_id) "
-          "VALUES ($1, $2, 'queued', $3, $4, $5, $6, $7)",
+      // One round trip: the row and its announcement. An id drawn twice (2^-64) is a conflict:
+      // the transaction runs again with a new one.
+      auto added = connection.exec(
+          "WITH added AS (INSERT INTO jobs (id, kind, state, request, dataset_id, created_at, robot_id, "
+          "validation_dataset_id) VALUES ($1, $2, 'queued', $3, $4, $5, $6, $7) ON CONFLICT (id) DO NOTHING "
+          "RETURNING id) " + announcement("queued", "added"),
           Params()
               .text(created.id)
               .text(kind_text(job.kind))
@@ -945,7 +958,7 @@ class PostgresStore final : public Store {
               .text(created.created_at)
               .text_or_null(job.robot_id)
               .text_or_null(job.validation_dataset_id));
-      announce(connection, "queued", created.id);
+      if (added.rows() == 0) throw ConflictRetry("job id " + created.id + " drawn twice");
       return {SubmitStatus::created, created};
     });
   }

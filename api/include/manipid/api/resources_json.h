@@ -16,13 +16,21 @@ namespace manipid::api {
 ///  "links": {"self", "data"}}
 nlohmann::ordered_json dataset_to_json(const DatasetInfo& dataset);
 
+/// What job_to_text writes: the whole job, or a list's item (all but "request").
+enum class JobText { whole, without_request };
+
+/// The job as JSON text:
 /// {"id", "kind", "state", "created_at", "started_at", "finished_at" (null until then),
-///  "attempts", "dataset_id" (null when none yet), "robot_id", "validation_dataset_id" (null when none),
-///  "cancel_requested",
-///  "progress": {"evaluations", "best_cost"}, "request": {...},
+///  "attempts", "worker" (HOST:PID while running, else null), "dataset_id" (null when none yet),
+///  "robot_id", "validation_dataset_id" (null when none), "cancel_requested",
+///  "progress": {"evaluations", "best_cost"}, "request": {...} (not in without_request),
 ///  "result": {...} (succeeded; also cancelled identifications: the best point reached),
-///  "error": {problem} (failed), "links": {"self", "history", "cancel", "dataset"?}}
-nlohmann::ordered_json job_to_json(const JobInfo& job);
+///  "error": {problem} (failed), "links": {"self", "cancel", "history"?, "dataset"?, ...}}
+/// Text, not a tree: a status read is the most frequent request, and the stored request and
+/// result (kilobytes of JSON text written by manipid) are spliced in as they are rather than
+/// parsed and written out again (most of a read's time before). Stored text that is not JSON
+/// goes out as a string.
+std::string job_to_text(const JobInfo& job, JobText form = JobText::whole);
 
 /// {"id", "name", "created_at", the stored description (robot_json.h: robot_description's members),
 ///  "links": {"self", "urdf"}}
