@@ -59,7 +59,7 @@ int main(int argc, char** argv) {
       std::vector<std::string> mine;
       while (auto next = store->claim_next_job(owner, std::chrono::seconds(30))) {
         const store::Lease lease{next->id, next->worker, next->attempts};
-        if (!store->finish_job(lease, manipid::api::JobState::succeeded, "{}", "", {}, "")) ++lost;
+        if (!store->finish_job(lease, {.state = manipid::api::JobState::succeeded, .result = "{}"})) ++lost;
         mine.push_back(next->id);
       }
       std::lock_guard lock(mutex);

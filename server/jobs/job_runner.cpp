@@ -121,6 +121,16 @@ class HistoryWriter {
     }
   }
 
+  /// The entries not yet written go with the job's end (one transaction with the result), with
+  /// the progress counters.
+  void hand_over(store::JobEnd& end) {
+    const double best = live_.best_cost.load(std::memory_order_relaxed);
+    end.history = std::move(batch_);
+    batch_.clear();
+    end.evaluations = live_.evaluations.load(std::memory_order_relaxed);
+    end.best_cost = std::isfinite(best) ? std::optional<double>(best) : std::nullopt;
+  }
+
   void flush() {
     if (live_.lost.load()) return;
     const double best = live_.best_cost.load(std::memory_order_relaxed);
@@ -201,7 +211,6 @@ JobOutcome run_identification_job(const api::JobInfo& job, store::Store& store, 
     history.add(index, cost, theta);
   };
   const IdentificationResult result = identify(spec.preset.model, *data, identification);
-  history.flush();
 
   JobOutcome outcome;
   outcome.dataset_id = dataset_id;
@@ -209,6 +218,7 @@ JobOutcome run_identification_job(const api::JobInfo& job, store::Store& store, 
     outcome.requeue = true;
     return outcome;
   }
+  history.hand_over(outcome);
   outcome.state = result.cancelled ? api::JobState::cancelled : api::JobState::succeeded;
   nlohmann::ordered_json json = api::result_to_json(result, truth_of(store, spec, dataset_id));
   json["dataset_id"] = dataset_id;

@@ -34,14 +34,11 @@ struct RunnerOptions {
   double history_flush_seconds = 0.5;       ///< or sooner than a full batch, while running
 };
 
-struct JobOutcome {
-  api::JobState state = api::JobState::failed;  ///< succeeded, failed or cancelled
-  bool requeue = false;                          ///< interrupted by shutdown: run again later
-  std::string result;                            ///< JSON text
-  std::string error;                             ///< problem JSON text
-  std::vector<store::EstimateRow> estimates;
-  std::string dataset_id;                        ///< the dataset used or made
-  std::string log;                               ///< what only the server log may say (SQLite's text)
+/// The end to write (store::JobEnd: state, result or problem, estimates, dataset, the history's
+/// last batch), and what the worker pool does besides.
+struct JobOutcome : store::JobEnd {
+  bool requeue = false;  ///< interrupted by shutdown: run again later
+  std::string log;       ///< what only the server log may say (SQLite's text)
 };
 
 /// Runs `job` (state running, claimed by this thread under `live.lease`). Never throws: every

@@ -203,7 +203,7 @@ bool WorkerPool::record_end(const api::JobInfo& job, LiveJob& live, JobOutcome& 
   std::chrono::milliseconds delay{250};
   for (int attempt = 1;; ++attempt) {
     try {
-      if (!store_.finish_job(lease, outcome.state, outcome.result, outcome.error, outcome.estimates, outcome.dataset_id)) {
+      if (!store_.finish_job(lease, outcome)) {
         log_("job " + job.id + ": its end was not recorded: attempt " + std::to_string(lease.attempt) +
              " no longer holds the job's lease (it was recovered, or it had ended)");
         live.lost = true;

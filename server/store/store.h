@@ -116,6 +116,20 @@ struct EstimateRow {
   std::optional<double> std_error;
 };
 
+/// A running job's end, as finish_job writes it in one transaction.
+struct JobEnd {
+  api::JobState state = api::JobState::failed;  ///< succeeded, failed or cancelled
+  std::string result;                            ///< result JSON text (may be empty)
+  std::string error;                             ///< problem JSON text (failed)
+  std::vector<EstimateRow> estimates;
+  std::string dataset_id;                        ///< the dataset it made or used (empty: unchanged)
+  /// The evaluations not yet written — the history's last batch — with the progress counters
+  /// they bring (evaluations set: the counters are written; unset: they stay as they are).
+  std::vector<api::HistoryEntry> history;
+  std::optional<long> evaluations;
+  std::optional<double> best_cost;
+};
+
 enum class CancelOutcome { not_found, cancelled_now, requested, already_finished };
 
 /// Who runs a claimed job: its owner ("HOST:PID:THREAD") and the attempt the claim counted.
@@ -199,11 +213,10 @@ class Store {
   /// Progress of a running job plus a batch of new history entries, in one transaction.
   virtual LeaseStatus record_progress(const Lease& lease, long evaluations, std::optional<double> best_cost,
                                       const std::vector<api::HistoryEntry>& batch) = 0;
-  /// A running job's end: state (succeeded, failed or cancelled), result JSON or problem
-  /// JSON, estimates (may be empty), the dataset it made or used — one transaction, written only
+  /// A running job's end (JobEnd: state, result or problem, estimates, the dataset it made or
+  /// used, the history's last batch and the progress with it) — one transaction, written only
   /// while the lease holds (false: lost, nothing written).
-  virtual bool finish_job(const Lease& lease, api::JobState state, const std::string& result, const std::string& error,
-                          const std::vector<EstimateRow>& estimates, const std::string& dataset_id) = 0;
+  virtual bool finish_job(const Lease& lease, const JobEnd& end) = 0;
   /// A running job back to queued with its history cleared (shutdown before it finished), if
   /// the lease still holds; cancelled instead when its cancellation was asked for.
   virtual void requeue_job(const Lease& lease) = 0;

@@ -33,8 +33,7 @@ class FailingStore : public Store {
   std::optional<api::JobInfo> claim_next_job(const std::string&, std::chrono::milliseconds) override { fail(); }
   LeaseStatus renew_lease(const Lease&, std::chrono::milliseconds) override { fail(); }
   LeaseStatus record_progress(const Lease&, long, std::optional<double>, const std::vector<api::HistoryEntry>&) override { fail(); }
-  bool finish_job(const Lease&, api::JobState, const std::string&, const std::string&, const std::vector<EstimateRow>&,
-                  const std::string&) override { fail(); }
+  bool finish_job(const Lease&, const JobEnd&) override { fail(); }
   void requeue_job(const Lease&) override { fail(); }
   CancelOutcome cancel_job(const std::string&) override { fail(); }
   DeleteResult delete_job(const std::string&) override { fail(); }

@@ -81,6 +81,18 @@ std::vector<api::HistoryEntry> history_batch(long first, long count) {
   return batch;
 }
 
+/// A job's end without history or progress (JobEnd's other members as finish_job's callers give them).
+JobEnd end_as(api::JobState state, std::string result, std::string error, std::vector<EstimateRow> estimates,
+              std::string dataset_id) {
+  JobEnd end;
+  end.state = state;
+  end.result = std::move(result);
+  end.error = std::move(error);
+  end.estimates = std::move(estimates);
+  end.dataset_id = std::move(dataset_id);
+  return end;
+}
+
 template <class Call>
 void expect_invalid_field(Call call, const std::string& field) {
   try {
@@ -314,7 +326,7 @@ TEST_P(StoreContract, DatasetOfAQueuedOrRunningJobIsNotDeleted) {
   EXPECT_EQ(store_->delete_dataset(dataset), DeleteResult::in_use);
   ASSERT_TRUE(claim());
   EXPECT_EQ(store_->delete_dataset(dataset), DeleteResult::in_use);
-  store_->finish_job(held(id), api::JobState::succeeded, "{}", "", {}, dataset);
+  store_->finish_job(held(id), end_as(api::JobState::succeeded, "{}", "", {}, dataset));
   EXPECT_EQ(store_->delete_dataset(dataset), DeleteResult::deleted);
   EXPECT_FALSE(store_->find_dataset(dataset));
   EXPECT_EQ(store_->delete_dataset(dataset), DeleteResult::not_found);
@@ -418,7 +430,7 @@ TEST_P(StoreContract, RobotsAreIdempotentPagedAndNotDeletedWhileInUse) {
   EXPECT_EQ(store_->delete_robot(first.robot.id), DeleteResult::in_use);
   ASSERT_TRUE(claim());
   EXPECT_EQ(store_->delete_robot(first.robot.id), DeleteResult::in_use);
-  store_->finish_job(held(id), api::JobState::succeeded, "{}", "", {}, "");
+  store_->finish_job(held(id), end_as(api::JobState::succeeded, "{}", "", {}, ""));
   EXPECT_EQ(store_->delete_robot(first.robot.id), DeleteResult::deleted);
   EXPECT_EQ(store_->delete_robot(first.robot.id), DeleteResult::not_found);
   // Its key went with it: the same key now makes a new robot.
@@ -660,8 +672,8 @@ TEST_P(StoreContract, FinishJobKeepsOutcome) {
   const auto id = submit();
   ASSERT_TRUE(claim());
   store_->record_progress(held(id), 10, 0.1, history_batch(0, 10));
-  store_->finish_job(held(id), JobState::succeeded, R"({"theta":[1,2]})", "",
-                     {{"m1", 1.5, 0.01}, {"l1", 0.3, std::nullopt}}, "ds_aaaaaaaaaaaaaaaa");
+  store_->finish_job(held(id), end_as(JobState::succeeded, R"({"theta":[1,2]})", "",
+                     {{"m1", 1.5, 0.01}, {"l1", 0.3, std::nullopt}}, "ds_aaaaaaaaaaaaaaaa"));
   auto job = store_->find_job(id);
   ASSERT_TRUE(job);
   EXPECT_EQ(job->state, JobState::succeeded);
@@ -672,20 +684,64 @@ TEST_P(StoreContract, FinishJobKeepsOutcome) {
   EXPECT_EQ(store_->history(id, {})->items.size(), 10u);  // the history stays with the result
 
   // A second end does not overwrite the first; an empty dataset id keeps the input's.
-  store_->finish_job(held(id), JobState::failed, "", R"({"code":"INTERNAL"})", {}, "");
+  store_->finish_job(held(id), end_as(JobState::failed, "", R"({"code":"INTERNAL"})", {}, ""));
   job = store_->find_job(id);
   EXPECT_EQ(job->state, JobState::succeeded);
   EXPECT_EQ(job->error, "");
 
   const auto failed = submit();
   ASSERT_TRUE(claim());
-  store_->finish_job(held(failed), JobState::failed, "", R"({"code":"INTERNAL"})", {}, "");
+  store_->finish_job(held(failed), end_as(JobState::failed, "", R"({"code":"INTERNAL"})", {}, ""));
   job = store_->find_job(failed);
   EXPECT_EQ(job->state, JobState::failed);
   EXPECT_EQ(job->error, R"({"code":"INTERNAL"})");
   EXPECT_EQ(job->dataset_id, "ds_0123456789abcdef");
 
-  EXPECT_THROW(store_->finish_job(held(failed), JobState::running, "", "", {}, ""), std::invalid_argument);
+  EXPECT_THROW(store_->finish_job(held(failed), end_as(JobState::running, "", "", {}, "")), std::invalid_argument);
+}
+
+TEST_P(StoreContract, TheEndBringsTheLastHistoryBatchAndItsProgressInOneWrite) {
+  const auto id = submit();
+  ASSERT_TRUE(claim());
+  store_->record_progress(held(id), 10, 0.5, history_batch(0, 10));
+  JobEnd end = end_as(JobState::succeeded, "{}", "", {{"m1", 1.5, 0.01}}, "");
+  end.history = history_batch(10, 5);
+  end.evaluations = 15;
+  end.best_cost = 0.125;
+  ASSERT_TRUE(store_->finish_job(held(id), end));
+  auto job = store_->find_job(id);
+  EXPECT_EQ(job->state, JobState::succeeded);
+  EXPECT_EQ(job->evaluations, 15);
+  EXPECT_EQ(job->best_cost, 0.125);
+  const auto items = store_->history(id, {})->items;
+  ASSERT_EQ(items.size(), 15u);
+  const auto expected = history_batch(0, 15);
+  for (std::size_t i = 0; i < items.size(); ++i) {
+    EXPECT_EQ(items[i].index, expected[i].index);
+    EXPECT_EQ(items[i].cost, expected[i].cost);  // bit for bit
+    EXPECT_EQ(items[i].theta, expected[i].theta);
+  }
+
+  // An end without progress leaves the counters as the last progress write left them.
+  const auto quiet = submit();
+  ASSERT_TRUE(claim());
+  store_->record_progress(held(quiet), 7, 0.25, history_batch(0, 7));
+  ASSERT_TRUE(store_->finish_job(held(quiet), end_as(JobState::cancelled, "", "", {}, "")));
+  job = store_->find_job(quiet);
+  EXPECT_EQ(job->evaluations, 7);
+  EXPECT_EQ(job->best_cost, 0.25);
+
+  // An attempt that lost its lease writes none of it: neither the end nor the batch.
+  const auto lost = submit();
+  ASSERT_TRUE(claim());
+  JobEnd stale = end;
+  stale.history = history_batch(0, 3);
+  stale.evaluations = 3;
+  EXPECT_FALSE(store_->finish_job(Lease{lost, "someone-else:1", 1}, stale));
+  job = store_->find_job(lost);
+  EXPECT_EQ(job->state, JobState::running);
+  EXPECT_EQ(job->evaluations, 0);
+  EXPECT_TRUE(store_->history(lost, {})->items.empty());
 }
 
 TEST_P(StoreContract, CancelRules) {
@@ -703,7 +759,7 @@ TEST_P(StoreContract, CancelRules) {
   job = store_->find_job(running);
   EXPECT_EQ(job->state, JobState::running);
   EXPECT_TRUE(job->cancel_requested);
-  store_->finish_job(held(running), JobState::cancelled, "", "", {}, "");
+  store_->finish_job(held(running), end_as(JobState::cancelled, "", "", {}, ""));
   EXPECT_EQ(store_->cancel_job(running), CancelOutcome::already_finished);
   EXPECT_EQ(store_->cancel_job("job_0000000000000000"), CancelOutcome::not_found);
 }
@@ -717,7 +773,7 @@ TEST_P(StoreContract, DeleteRules) {
   EXPECT_EQ(store_->delete_job(queued), DeleteResult::in_use);
 
   store_->record_progress(held(queued), 3, 1.0, history_batch(0, 3));
-  store_->finish_job(held(queued), JobState::succeeded, "{}", "", {{"m1", 1.0, std::nullopt}}, "");
+  store_->finish_job(held(queued), end_as(JobState::succeeded, "{}", "", {{"m1", 1.0, std::nullopt}}, ""));
   EXPECT_EQ(store_->delete_job(queued), DeleteResult::deleted);
   EXPECT_FALSE(store_->find_job(queued));
   EXPECT_FALSE(store_->history(queued, {}));
@@ -883,7 +939,7 @@ TEST_P(StoreContract, AClaimNamesItsOwnerAndOnlyThatAttemptWrites) {
   for (const Lease& stranger : {Lease{id, "host-b:200", 1}, Lease{id, "host-a:100", 0}}) {
     EXPECT_EQ(store_->renew_lease(stranger, std::chrono::seconds(30)), LeaseStatus::lost);
     EXPECT_EQ(store_->record_progress(stranger, 9, 0.1, history_batch(4, 5)), LeaseStatus::lost);
-    EXPECT_FALSE(store_->finish_job(stranger, JobState::succeeded, "{}", "", {{"m1", 1.0, std::nullopt}}, ""));
+    EXPECT_FALSE(store_->finish_job(stranger, end_as(JobState::succeeded, "{}", "", {{"m1", 1.0, std::nullopt}}, "")));
     store_->requeue_job(stranger);
   }
   auto job = store_->find_job(id);
@@ -895,7 +951,7 @@ TEST_P(StoreContract, AClaimNamesItsOwnerAndOnlyThatAttemptWrites) {
   EXPECT_EQ(store_->cancel_job(id), CancelOutcome::requested);
   EXPECT_EQ(store_->renew_lease(lease, std::chrono::seconds(30)), LeaseStatus::cancel_requested);
   EXPECT_EQ(store_->record_progress(lease, 5, 0.3, history_batch(4, 1)), LeaseStatus::cancel_requested);
-  EXPECT_TRUE(store_->finish_job(lease, JobState::cancelled, "", "", {}, ""));
+  EXPECT_TRUE(store_->finish_job(lease, end_as(JobState::cancelled, "", "", {}, "")));
   job = store_->find_job(id);
   EXPECT_EQ(job->state, JobState::cancelled);
   EXPECT_EQ(job->worker, "");  // only a running job has a worker
@@ -936,8 +992,8 @@ TEST_P(StoreContract, ExpiredLeasesAreRecoveredAndTheOldAttemptIsShutOut) {
   EXPECT_EQ(again->id, expiring);
   EXPECT_EQ(again->attempts, 2);
   EXPECT_EQ(store_->record_progress(old_attempt, 6, 0.2, history_batch(3, 3)), LeaseStatus::lost);
-  EXPECT_FALSE(store_->finish_job(old_attempt, JobState::succeeded, "{\"old\": true}", "", {}, ""));
-  EXPECT_TRUE(store_->finish_job(held(expiring), JobState::succeeded, "{\"new\": true}", "", {}, ""));
+  EXPECT_FALSE(store_->finish_job(old_attempt, end_as(JobState::succeeded, "{\"old\": true}", "", {}, "")));
+  EXPECT_TRUE(store_->finish_job(held(expiring), end_as(JobState::succeeded, "{\"new\": true}", "", {}, "")));
   job = store_->find_job(expiring);
   EXPECT_EQ(job->result, "{\"new\": true}");
   EXPECT_TRUE(store_->history(expiring, {})->items.empty());
@@ -1109,7 +1165,7 @@ TEST_P(StoreContract, AWatcherHearsWhatAnotherProcessDid) {
   const auto job = other->claim_next_job("host-b:200", std::chrono::seconds(30));
   ASSERT_TRUE(job);
   EXPECT_EQ(other->cancel_job(id), CancelOutcome::requested);
-  ASSERT_TRUE(other->finish_job({id, job->worker, job->attempts}, JobState::cancelled, "", "", {}, ""));
+  ASSERT_TRUE(other->finish_job({id, job->worker, job->attempts}, end_as(JobState::cancelled, "", "", {}, "")));
   const std::vector<std::pair<JobEvent::Kind, std::string>> expected = {
       {JobEvent::Kind::queued, id}, {JobEvent::Kind::cancel_requested, id}, {JobEvent::Kind::changed, id}};
   {

@@ -671,53 +671,50 @@ class PostgresStore final : public Store {
 
   LeaseStatus record_progress(const Lease& lease, long evaluations, std::optional<double> best_cost,
                               const std::vector<api::HistoryEntry>& batch) override {
-    std::string rows;
-    for (const auto& entry : batch) append_history_row(rows, lease.job_id, entry);
+    const std::string rows = history_rows(lease.job_id, batch);
     auto connection = pool_.checkout();
-    if (!batch.empty() && !connection->staging_ready) {
-      // Once per connection, outside the transaction (a rollback would take the table along).
-      connection->execute(
-          "CREATE TEMP TABLE IF NOT EXISTS history_in (job_id text, idx bigint, cost double precision, theta bytea) "
-          "ON COMMIT DELETE ROWS");
-      connection->staging_ready = true;
-    }
+    if (!rows.empty()) prepare_staging(*connection);
     return run_transaction(*connection, TransactionKind::write, [&] {
       // The guarded update first: a batch of an attempt that lost its lease is dropped whole.
       const Progress progress{evaluations, best_cost};
       const LeaseStatus status = extend(*connection, lease, std::nullopt, &progress);
-      if (status == LeaseStatus::lost || batch.empty()) return status;
-      // COPY into a per-session staging table, then one upsert: an index written again
-      // replaces its row, as in the SQLite store.
-      connection->copy_in("COPY history_in (job_id, idx, cost, theta) FROM STDIN", rows);
-      connection->exec(
-          "INSERT INTO job_history (job_id, idx, cost, theta) SELECT job_id, idx, cost, theta FROM history_in "
-          "ON CONFLICT (job_id, idx) DO UPDATE SET cost = excluded.cost, theta = excluded.theta");
+      if (status != LeaseStatus::lost) write_history(*connection, rows);
       return status;
     });
   }
 
-  bool finish_job(const Lease& lease, api::JobState state, const std::string& result, const std::string& error,
-                  const std::vector<EstimateRow>& estimates, const std::string& dataset_id) override {
-    if (!api::is_terminal(state)) throw std::invalid_argument("finish_job needs succeeded, failed or cancelled");
+  bool finish_job(const Lease& lease, const JobEnd& end) override {
+    if (!api::is_terminal(end.state)) throw std::invalid_argument("finish_job needs succeeded, failed or cancelled");
+    const std::string rows = history_rows(lease.job_id, end.history);
     auto connection = pool_.checkout();
+    if (!rows.empty()) prepare_staging(*connection);
     return run_transaction(*connection, TransactionKind::write, [&] {
-      // Only the attempt that holds the lease ends the job, and only once.
+      // Only the attempt that holds the lease ends the job, and only once. One round trip: the
+      // guarded end with its progress, an earlier attempt's estimates gone, the announcement.
       Params params = lease_params(lease);
-      params.text(state_text(state)).text(now_rfc3339()).text_or_null(result).text_or_null(error).text_or_null(dataset_id);
-      // One round trip: the guarded end, an earlier attempt's estimates gone, the announcement.
+      params.text(state_text(end.state)).text(now_rfc3339()).text_or_null(end.result).text_or_null(end.error);
+      params.text_or_null(end.dataset_id);
+      if (end.evaluations) {
+        params.integer(*end.evaluations).real_or_null(end.best_cost);
+      } else {
+        params.null().null();
+      }
       auto ended = connection->exec(
           "WITH ended AS (UPDATE jobs SET state = $4, finished_at = $5, result = $6, error = $7, "
-          "dataset_id = coalesce($8, dataset_id), worker = NULL, lease_expires_at = NULL " + kHeldBy +
-              " RETURNING id), "
+          "dataset_id = coalesce($8, dataset_id), worker = NULL, lease_expires_at = NULL, "
+          "evaluations = coalesce($9::bigint, evaluations), "
+          "best_cost = CASE WHEN $9::bigint IS NULL THEN best_cost ELSE $10::double precision END " +
+              kHeldBy + " RETURNING id), "
           "gone AS (DELETE FROM estimates WHERE job_id IN (SELECT id FROM ended)) " +
               announcement("changed", "ended"),
           params);
       if (ended.rows() == 0) return false;
-      if (!estimates.empty()) {
+      write_history(*connection, rows);
+      if (!end.estimates.empty()) {
         // One statement for all rows (arrays unnested side by side); a name given twice keeps its last row.
         std::vector<std::string> names;
         std::vector<std::optional<double>> values, errors;
-        for (const auto& estimate : estimates) {
+        for (const auto& estimate : end.estimates) {
           names.push_back(estimate.name);
           values.emplace_back(estimate.value);
           errors.push_back(estimate.std_error);
@@ -961,6 +958,33 @@ class PostgresStore final : public Store {
       if (added.rows() == 0) throw ConflictRetry("job id " + created.id + " drawn twice");
       return {SubmitStatus::created, created};
     });
+  }
+
+  /// History entries of job `id` as COPY text rows (made before the transaction).
+  static std::string history_rows(const std::string& id, const std::vector<api::HistoryEntry>& batch) {
+    std::string rows;
+    for (const auto& entry : batch) append_history_row(rows, id, entry);
+    return rows;
+  }
+
+  /// The per-session staging table write_history copies into: made once per connection, outside
+  /// any transaction (a rollback would take it along).
+  static void prepare_staging(Connection& connection) {
+    if (connection.staging_ready) return;
+    connection.execute(
+        "CREATE TEMP TABLE IF NOT EXISTS history_in (job_id text, idx bigint, cost double precision, theta bytea) "
+        "ON COMMIT DELETE ROWS");
+    connection.staging_ready = true;
+  }
+
+  /// COPY into the per-session staging table (prepare_staging), then one upsert: an index written again replaces
+  /// its row, as in the SQLite store. Nothing when `rows` is empty.
+  static void write_history(Connection& connection, const std::string& rows) {
+    if (rows.empty()) return;
+    connection.copy_in("COPY history_in (job_id, idx, cost, theta) FROM STDIN", rows);
+    connection.exec(
+        "INSERT INTO job_history (job_id, idx, cost, theta) SELECT job_id, idx, cost, theta FROM history_in "
+        "ON CONFLICT (job_id, idx) DO UPDATE SET cost = excluded.cost, theta = excluded.theta");
   }
 
   /// The guarded update of a held lease: progress and/or a new expiry; what it learned.

@@ -382,49 +382,44 @@ class SqliteStore final : public Store {
 
   LeaseStatus record_progress(const Lease& lease, long evaluations, std::optional<double> best_cost,
                               const std::vector<api::HistoryEntry>& batch) override {
-    std::vector<std::vector<unsigned char>> thetas;
-    thetas.reserve(batch.size());
-    for (const auto& entry : batch) thetas.push_back(encode_doubles(entry.theta.data(), entry.theta.size()));
-
+    const auto thetas = encode_thetas(batch);
     auto connection = pool_.checkout();
     return sqlite::run_transaction(*connection, TransactionKind::write, [&] {
       // The guarded update first: a batch of an attempt that lost its lease is dropped whole.
       const Progress progress{evaluations, best_cost};
       const LeaseStatus status = extend(*connection, lease, std::nullopt, &progress);
       if (status == LeaseStatus::lost) return status;
-      for (std::size_t i = 0; i < batch.size(); ++i) {
-        auto insert = connection->prepare(
-            "INSERT OR REPLACE INTO job_history (job_id, idx, cost, theta) VALUES (?1, ?2, ?3, ?4)");
-        insert.bind_text(1, lease.job_id).bind_integer(2, batch[i].index).bind_real(3, batch[i].cost);
-        insert.bind_blob_or_null(4, thetas[i]);  // an empty θ is NULL and reads back empty
-        insert.run();
-      }
+      write_history(*connection, lease.job_id, batch, thetas);
       return status;
     });
   }
 
-  bool finish_job(const Lease& lease, api::JobState state, const std::string& result, const std::string& error,
-                  const std::vector<EstimateRow>& estimates, const std::string& dataset_id) override {
-    if (!api::is_terminal(state)) throw std::invalid_argument("finish_job needs succeeded, failed or cancelled");
+  bool finish_job(const Lease& lease, const JobEnd& end) override {
+    if (!api::is_terminal(end.state)) throw std::invalid_argument("finish_job needs succeeded, failed or cancelled");
+    const auto thetas = encode_thetas(end.history);
     auto connection = pool_.checkout();
     return sqlite::run_transaction(*connection, TransactionKind::write, [&] {
       // Only the attempt that holds the lease ends the job, and only once.
       auto update = connection->prepare(
           "UPDATE jobs SET state = ?4, finished_at = ?5, result = ?6, error = ?7, "
-          "dataset_id = coalesce(?8, dataset_id), worker = NULL, lease_expires_at = NULL " +
+          "dataset_id = coalesce(?8, dataset_id), worker = NULL, lease_expires_at = NULL, "
+          "evaluations = coalesce(?9, evaluations), best_cost = CASE WHEN ?9 IS NULL THEN best_cost ELSE ?10 END " +
           kHeldBy);
       bind_lease(update, lease)
-          .bind_text(4, state_text(state))
+          .bind_text(4, state_text(end.state))
           .bind_text(5, now_rfc3339())
-          .bind_text_or_null(6, result)
-          .bind_text_or_null(7, error)
-          .bind_text_or_null(8, dataset_id);
+          .bind_text_or_null(6, end.result)
+          .bind_text_or_null(7, end.error)
+          .bind_text_or_null(8, end.dataset_id);
+      if (end.evaluations) update.bind_integer(9, *end.evaluations);
+      if (end.evaluations) update.bind_real_or_null(10, end.best_cost);
       update.run();
       if (connection->changes() == 0) return false;
+      write_history(*connection, lease.job_id, end.history, thetas);
       auto clear = connection->prepare("DELETE FROM estimates WHERE job_id = ?1");
       clear.bind_text(1, lease.job_id);
       clear.run();
-      for (const auto& estimate : estimates) {
+      for (const auto& estimate : end.estimates) {
         auto insert = connection->prepare(
             "INSERT OR REPLACE INTO estimates (job_id, name, value, std_error) VALUES (?1, ?2, ?3, ?4)");
         insert.bind_text(1, lease.job_id).bind_text(2, estimate.name).bind_real(3, estimate.value).bind_real_or_null(
@@ -624,6 +619,26 @@ class SqliteStore final : public Store {
   }
 
   /// The guarded update of a held lease: progress and/or a new expiry; what it learned.
+  /// Each entry's θ as a blob, made before the transaction (no encoding under the write lock).
+  static std::vector<std::vector<unsigned char>> encode_thetas(const std::vector<api::HistoryEntry>& batch) {
+    std::vector<std::vector<unsigned char>> thetas;
+    thetas.reserve(batch.size());
+    for (const auto& entry : batch) thetas.push_back(encode_doubles(entry.theta.data(), entry.theta.size()));
+    return thetas;
+  }
+
+  /// History entries of job `id`; an index written again replaces its row.
+  static void write_history(Connection& connection, const std::string& id, const std::vector<api::HistoryEntry>& batch,
+                            const std::vector<std::vector<unsigned char>>& thetas) {
+    for (std::size_t i = 0; i < batch.size(); ++i) {
+      auto insert =
+          connection.prepare("INSERT OR REPLACE INTO job_history (job_id, idx, cost, theta) VALUES (?1, ?2, ?3, ?4)");
+      insert.bind_text(1, id).bind_integer(2, batch[i].index).bind_real(3, batch[i].cost);
+      insert.bind_blob_or_null(4, thetas[i]);  // an empty θ is NULL and reads back empty
+      insert.run();
+    }
+  }
+
   static LeaseStatus extend(Connection& connection, const Lease& lease, std::optional<std::chrono::milliseconds> duration,
                             const Progress* progress) {
     std::string sql = "UPDATE jobs SET ";
