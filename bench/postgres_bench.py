@@ -14,12 +14,15 @@ binary, with the paper case (fixed filter M = 100, Ωg = 0.2):
 PostgreSQL runs as a private cluster (tests/server/postgres_cluster.sh: Unix socket, fsync off —
 what a test cluster trades; a production server with fsync on commits slower).
 
+The three cases run in turn, --rounds times (default 3); the ratio is of the medians.
+
 Usage: python3 bench/postgres_bench.py [--binary build/release/server/manipid] [--runs 30] [--jobs 200]
-       [--workers 2]
+       [--workers 2] [--rounds 3]
 """
 import argparse
 import concurrent.futures
 import os
+import statistics
 import subprocess
 import sys
 import tempfile
@@ -82,6 +85,7 @@ def main():
     parser.add_argument("--runs", type=int, default=30)
     parser.add_argument("--jobs", type=int, default=200)
     parser.add_argument("--workers", type=int, default=2)
+    parser.add_argument("--rounds", type=int, default=3)
     arguments = parser.parse_args()
     os.environ["MANIPID_BIN"] = os.path.abspath(arguments.binary)
     store_bench = os.path.join(os.path.dirname(os.path.abspath(arguments.binary)), "..", "bench", "store_bench")
@@ -105,12 +109,20 @@ def main():
             csv = harness.simulate_csv(os.path.join(directory, "paper.csv"))
             print(f"manipid PostgreSQL bench: {os.cpu_count()} CPUs, {arguments.workers} job threads in all, "
                   f"{arguments.runs} sequential runs, {arguments.jobs} jobs for throughput", flush=True)
-            sqlite = run_case("SQLite, 1 process", os.path.join(directory, "jobs.db"), 1, arguments.workers, csv,
-                              arguments, directory)
-            one = run_case("PostgreSQL, 1 process", database("bench_one"), 1, arguments.workers, csv, arguments,
-                           directory)
-            two = run_case("PostgreSQL, 2 processes", database("bench_two"), 2, arguments.workers, csv, arguments,
-                           directory)
+            # The three cases in turn, --rounds times: on a shared machine one run's figure moves
+            # by ±5 %; rounds side by side and their medians compare like with like.
+            rates = {"sqlite": [], "one": [], "two": []}
+            for round_ in range(arguments.rounds):
+                print(f"round {round_ + 1} of {arguments.rounds}", flush=True)
+                rates["sqlite"].append(run_case("SQLite, 1 process", os.path.join(directory, f"jobs{round_}.db"), 1,
+                                                arguments.workers, csv, arguments, directory))
+                rates["one"].append(run_case("PostgreSQL, 1 process", database(f"bench_one{round_}"), 1,
+                                             arguments.workers, csv, arguments, directory))
+                rates["two"].append(run_case("PostgreSQL, 2 processes", database(f"bench_two{round_}"), 2,
+                                             arguments.workers, csv, arguments, directory))
+            sqlite, one, two = (statistics.median(rates[case]) for case in ("sqlite", "one", "two"))
+            print(f"median sustained over {arguments.rounds} round(s): SQLite {sqlite:.1f}, PostgreSQL {one:.1f} "
+                  f"(1 process), {two:.1f} jobs/s (2 processes)")
             print(f"PostgreSQL / SQLite, sustained: {one / sqlite:.2f} (1 process), {two / sqlite:.2f} (2 processes)")
             if os.access(store_bench, os.X_OK):
                 for url in (os.path.join(directory, "claims.db"), database("bench_claims")):

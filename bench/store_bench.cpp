@@ -48,6 +48,9 @@ int main(int argc, char** argv) {
   for (int i = 0; i < jobs; ++i) ids.push_back(store->submit_job(job, std::nullopt, 0).job.id);
   const double submit_seconds = seconds_since(started);
 
+  store::JobEnd succeeded;
+  succeeded.state = manipid::api::JobState::succeeded;
+  succeeded.result = "{}";
   std::mutex mutex;
   std::multiset<std::string> claimed;
   std::vector<std::thread> claimers;
@@ -59,7 +62,7 @@ int main(int argc, char** argv) {
       std::vector<std::string> mine;
       while (auto next = store->claim_next_job(owner, std::chrono::seconds(30))) {
         const store::Lease lease{next->id, next->worker, next->attempts};
-        if (!store->finish_job(lease, {.state = manipid::api::JobState::succeeded, .result = "{}"})) ++lost;
+        if (!store->finish_job(lease, succeeded)) ++lost;
         mine.push_back(next->id);
       }
       std::lock_guard lock(mutex);
