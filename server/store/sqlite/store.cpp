@@ -618,7 +618,6 @@ class SqliteStore final : public Store {
     return statement.bind_text(1, lease.job_id).bind_text(2, lease.owner).bind_integer(3, lease.attempt);
   }
 
-  /// The guarded update of a held lease: progress and/or a new expiry; what it learned.
   /// Each entry's θ as a blob, made before the transaction (no encoding under the write lock).
   static std::vector<std::vector<unsigned char>> encode_thetas(const std::vector<api::HistoryEntry>& batch) {
     std::vector<std::vector<unsigned char>> thetas;
@@ -639,6 +638,7 @@ class SqliteStore final : public Store {
     }
   }
 
+  /// The guarded update of a held lease: progress and/or a new expiry; what it learned.
   static LeaseStatus extend(Connection& connection, const Lease& lease, std::optional<std::chrono::milliseconds> duration,
                             const Progress* progress) {
     std::string sql = "UPDATE jobs SET ";
