@@ -172,7 +172,8 @@ class Store {
   /// Calls `on_event`, from a thread of the store's own, for every job change any process on
   /// the database commits (this one's too), until replaced by another call (an empty function:
   /// none). Returns false when this backend cannot tell (SQLite: callers look at the store
-  /// again from time to time instead); events may also be missed while the database is away, so
+  /// again from time to time instead). Once it returns true, every change committed after that
+  /// is heard while the database can be reached; events may be missed while it is away, so
   /// callers poll as well, only less often. Replacing waits for a call in progress to return.
   virtual bool watch_jobs(std::function<void(const JobEvent&)> on_event) {
     (void)on_event;

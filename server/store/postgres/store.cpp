@@ -400,8 +400,14 @@ class PostgresStore final : public Store {
       std::lock_guard lock(watcher_mutex_);  // waits for an event being handed over
       on_event_ = std::move(on_event);
     }
-    std::lock_guard lock(listen_mutex_);
-    if (watch && !listener_.joinable()) listener_ = std::thread([this] { listen(); });
+    std::unique_lock lock(listen_mutex_);
+    if (watch && !listener_.joinable()) {
+      listener_ = std::thread([this] { listen(); });
+      // Heard from here on: return once the first LISTEN has been tried (a notification sent
+      // before it would be missed). A database that is away does not hold this up for long:
+      // the attempt fails and the watcher polls meanwhile.
+      listen_wake_.wait_for(lock, std::chrono::seconds(10), [this] { return listen_attempted_ || stop_listening_; });
+    }
     return true;
   }
 
@@ -1074,9 +1080,17 @@ class PostgresStore final : public Store {
       return stop_listening_;
     };
     while (!stopping()) {
+      const auto attempted = [this] {
+        {
+          std::lock_guard lock(listen_mutex_);
+          listen_attempted_ = true;
+        }
+        listen_wake_.notify_all();
+      };
       try {
         Connection connection(pool_.conninfo());
         connection.execute(std::string("LISTEN ") + kChannel);
+        attempted();
         pause = std::chrono::milliseconds(100);
         while (!stopping()) {
           for (const std::string& payload : connection.notifications(std::chrono::milliseconds(200))) {
@@ -1088,6 +1102,7 @@ class PostgresStore final : public Store {
         }
       } catch (const StoreError&) {
         // The database is away: try again after a pause that grows to 5 s.
+        attempted();
       }
       std::unique_lock lock(listen_mutex_);
       listen_wake_.wait_for(lock, pause, [this] { return stop_listening_; });
@@ -1103,6 +1118,7 @@ class PostgresStore final : public Store {
   std::mutex listen_mutex_;
   std::condition_variable listen_wake_;
   bool stop_listening_ = false;
+  bool listen_attempted_ = false;  ///< the listener's first LISTEN has succeeded or failed
   std::thread listener_;  ///< last: joined (in the destructor) before the members it uses go
 };
 
