@@ -124,19 +124,16 @@ class HistoryWriter {
   /// The entries not yet written go with the job's end (one transaction with the result), with
   /// the progress counters.
   void hand_over(store::JobEnd& end) {
-    const double best = live_.best_cost.load(std::memory_order_relaxed);
     end.history = std::move(batch_);
     batch_.clear();
     end.evaluations = live_.evaluations.load(std::memory_order_relaxed);
-    end.best_cost = std::isfinite(best) ? std::optional<double>(best) : std::nullopt;
+    end.best_cost = best_cost();
   }
 
   void flush() {
     if (live_.lost.load()) return;
-    const double best = live_.best_cost.load(std::memory_order_relaxed);
     try {
-      heed(store_.record_progress(live_.lease, live_.evaluations.load(std::memory_order_relaxed),
-                                  std::isfinite(best) ? std::optional<double>(best) : std::nullopt, batch_),
+      heed(store_.record_progress(live_.lease, live_.evaluations.load(std::memory_order_relaxed), best_cost(), batch_),
            live_);
     } catch (const store::StoreUnavailable&) {
       // The database is away for a moment (a PostgreSQL restart): the batch waits for the next
@@ -150,6 +147,12 @@ class HistoryWriter {
   }
 
  private:
+  /// The lowest cost so far; none while every cost was non-finite.
+  std::optional<double> best_cost() const {
+    const double best = live_.best_cost.load(std::memory_order_relaxed);
+    return std::isfinite(best) ? std::optional<double>(best) : std::nullopt;
+  }
+
   store::Store& store_;
   LiveJob& live_;
   const RunnerOptions& options_;

@@ -411,8 +411,7 @@ class SqliteStore final : public Store {
           .bind_text_or_null(6, end.result)
           .bind_text_or_null(7, end.error)
           .bind_text_or_null(8, end.dataset_id);
-      if (end.evaluations) update.bind_integer(9, *end.evaluations);
-      if (end.evaluations) update.bind_real_or_null(10, end.best_cost);
+      if (end.evaluations) update.bind_integer(9, *end.evaluations).bind_real_or_null(10, end.best_cost);
       update.run();
       if (connection->changes() == 0) return false;
       write_history(*connection, lease.job_id, end.history, thetas);
