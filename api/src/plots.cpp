@@ -1,5 +1,6 @@
 // plots.cpp — series for drawing (plots.h).
 #include "manipid/api/plots.h"
+#include "json_numbers.h"
 
 #include "manipid/api/records.h"
 #include "manipid/api/requests.h"
@@ -15,8 +16,8 @@ namespace manipid::api {
 namespace {
 
 using Json = nlohmann::ordered_json;
+using json_numbers::number;
 
-Json number(double value) { return std::isfinite(value) ? Json(value) : Json(nullptr); }
 
 template <class Column>
 Json pick(const Column& column, const std::vector<long>& indices) {

@@ -17,8 +17,6 @@
 namespace manipid::api {
 namespace {
 
-using fields::Json;
-
 /// The sample arrays of the body — t, and each joint of q, tau, ref, qd, qdd — as they came:
 /// what the checks below need (sizes, types, the first entry that is not a number), never a
 /// document of every number.
@@ -26,7 +24,7 @@ struct Series {
   std::vector<double> values;  ///< the entries, while they are numbers
   std::size_t size = 0;        ///< entries in all
   std::size_t bad = std::numeric_limits<std::size_t>::max();  ///< the first entry that is not a finite number
-  Json bad_value;
+  fields::Json bad_value;
   bool has_bad() const { return bad != std::numeric_limits<std::size_t>::max(); }
 };
 
@@ -34,7 +32,7 @@ struct Series {
 /// a block) or, when it is anything else, that value itself.
 struct Streamed {
   bool is_array = false;
-  Json value;                    ///< when not an array
+  fields::Json value;                    ///< when not an array
   Series series;                 ///< t, a joint
   std::vector<Streamed> joints;  ///< a block
   std::size_t size() const { return joints.empty() ? series.size : joints.size(); }
@@ -49,16 +47,16 @@ bool is_block(std::string_view key) {
 /// The body's members: the small ones as JSON (with a null standing for t and the blocks, so
 /// ObjectFields sees every key), t and the blocks in `streamed`.
 struct Members {
-  Json object = Json::object();
+  fields::Json object = fields::Json::object();
   std::map<std::string, Streamed, std::less<>> streamed;
 };
 
-Series series_from_json(const Json& value) {
+Series series_from_json(const fields::Json& value) {
   Series series;
   series.size = value.size();
   series.values.reserve(value.size());
   for (std::size_t i = 0; i < value.size(); ++i) {
-    const Json& element = value[i];
+    const fields::Json& element = value[i];
     if (!element.is_number() || !std::isfinite(element.get<double>())) {
       series.bad = i;
       series.bad_value = element;
@@ -70,7 +68,7 @@ Series series_from_json(const Json& value) {
 }
 
 /// A document (the unit tests', or any caller's) in the form the SAX reader produces.
-Members members_from_json(const Json& body) {
+Members members_from_json(const fields::Json& body) {
   Members members;
   if (!body.is_object()) {
     members.object = body;  // ObjectFields refuses it with the usual words
@@ -89,7 +87,7 @@ Members members_from_json(const Json& body) {
     } else if (key == "t") {
       streamed.series = series_from_json(value);
     } else {
-      for (const Json& joint : value) {
+      for (const fields::Json& joint : value) {
         Streamed& entry = streamed.joints.emplace_back();
         entry.is_array = joint.is_array();
         if (entry.is_array) {
@@ -111,25 +109,25 @@ Members members_from_json(const Json& body) {
 /// body, so a body that is not JSON is answered as such whatever it holds.
 class DatasetReader {
  public:
-  using number_integer_t = Json::number_integer_t;
-  using number_unsigned_t = Json::number_unsigned_t;
-  using number_float_t = Json::number_float_t;
-  using string_t = Json::string_t;
-  using binary_t = Json::binary_t;
+  using number_integer_t = fields::Json::number_integer_t;
+  using number_unsigned_t = fields::Json::number_unsigned_t;
+  using number_float_t = fields::Json::number_float_t;
+  using string_t = fields::Json::string_t;
+  using binary_t = fields::Json::binary_t;
 
-  bool null() { return scalar(nullptr, Json(nullptr)); }
-  bool boolean(bool value) { return scalar(nullptr, Json(value)); }
+  bool null() { return scalar(nullptr, fields::Json(nullptr)); }
+  bool boolean(bool value) { return scalar(nullptr, fields::Json(value)); }
   bool number_integer(number_integer_t value) {
     const double number = static_cast<double>(value);
-    return scalar(&number, Json(value));
+    return scalar(&number, fields::Json(value));
   }
   bool number_unsigned(number_unsigned_t value) {
     const double number = static_cast<double>(value);
-    return scalar(&number, Json(value));
+    return scalar(&number, fields::Json(value));
   }
-  bool number_float(number_float_t value, const string_t&) { return scalar(&value, Json(value)); }
-  bool string(string_t& value) { return scalar(nullptr, Json(std::move(value))); }
-  bool binary(binary_t&) { return scalar(nullptr, Json()); }  // never in JSON text
+  bool number_float(number_float_t value, const string_t&) { return scalar(&value, fields::Json(value)); }
+  bool string(string_t& value) { return scalar(nullptr, fields::Json(std::move(value))); }
+  bool binary(binary_t&) { return scalar(nullptr, fields::Json()); }  // never in JSON text
   bool start_object(std::size_t) { return open(true); }
   bool start_array(std::size_t) { return open(false); }
   bool end_object() { return close(); }
@@ -165,12 +163,12 @@ class DatasetReader {
     std::size_t count = 0;  ///< an array's entries so far
     std::set<std::string> keys;
     std::string key;  ///< an object's current key
-    Json* container = nullptr;
+    fields::Json* container = nullptr;
     Streamed* streamed = nullptr;
     Series* series = nullptr;
   };
 
-  static Frame make_frame(Kind kind, bool object, Json* container = nullptr, Streamed* streamed = nullptr,
+  static Frame make_frame(Kind kind, bool object, fields::Json* container = nullptr, Streamed* streamed = nullptr,
                           Series* series = nullptr) {
     Frame frame{kind, object, 0, {}, {}, container, streamed, series};
     return frame;
@@ -193,7 +191,7 @@ class DatasetReader {
   }
 
   /// A number (with `number`) or another scalar arriving in the innermost frame.
-  bool scalar(const double* number, Json value) {
+  bool scalar(const double* number, fields::Json value) {
     if (frames_.empty()) return true;  // a scalar body: refused at the end
     Frame& frame = frames_.back();
     switch (frame.kind) {
@@ -219,7 +217,7 @@ class DatasetReader {
   }
 
   /// A slot for the next value in a top, block or capture frame (which counts it).
-  Json* place(Frame& frame) {
+  fields::Json* place(Frame& frame) {
     // Values built as JSON are few in a dataset (a name, dt, t0; a wrong value for a message):
     // a member holding many is refused before its document outgrows the body.
     if (++captured_values_ > max_captured_values) {
@@ -281,11 +279,11 @@ class DatasetReader {
       const bool first_bad = !series.has_bad();
       if (first_bad) {
         series.bad = series.size;
-        series.bad_value = object ? Json::object() : Json::array();
+        series.bad_value = object ? fields::Json::object() : fields::Json::array();
       }
       ++series.size;
       ++frame.count;
-      Json* container = first_bad ? &series.bad_value : nullptr;
+      fields::Json* container = first_bad ? &series.bad_value : nullptr;
       frames_.push_back(make_frame(first_bad ? Kind::capture : Kind::skip, object, container));
       return true;
     }
@@ -294,8 +292,8 @@ class DatasetReader {
       frames_.push_back(make_frame(Kind::skip, object));
       return true;
     }
-    Json* slot = place(frame);
-    *slot = object ? Json::object() : Json::array();
+    fields::Json* slot = place(frame);
+    *slot = object ? fields::Json::object() : fields::Json::array();
     frames_.push_back(make_frame(Kind::capture, object, slot));
     return true;
   }
@@ -414,10 +412,10 @@ Eigen::VectorXd read_times(Streamed& value, SampleCount& count) {
 DatasetUpload dataset_from_members(Members& members) {
   const fields::ObjectFields object(members.object, "", {"name", "t", "dt", "t0", "q", "tau", "ref", "qd", "qdd"});
   DatasetUpload upload;
-  if (const Json* name = object.find("name")) upload.name = fields::read_label(*name, "name");
+  if (const fields::Json* name = object.find("name")) upload.name = fields::read_label(*name, "name");
 
   const bool times = object.has("t");
-  const Json* period = object.find("dt");
+  const fields::Json* period = object.find("dt");
   if (times && period) throw InputError("dt", "give either t (the sample times) or dt (the sample period), not both");
   if (!times && !period) {
     throw InputError("t", "missing t: give the sample times t or the sample period dt (with an optional t0)");
@@ -473,7 +471,7 @@ DatasetUpload dataset_from_json(const nlohmann::json& body) {
 
 DatasetUpload dataset_from_json_text(std::string_view text) {
   DatasetReader reader;
-  Json::sax_parse(text, &reader);
+  fields::Json::sax_parse(text, &reader);
   return dataset_from_members(reader.members());
 }
 

@@ -11,8 +11,6 @@
 namespace manipid::api {
 namespace {
 
-using fields::Json;
-
 constexpr std::size_t max_dataset_id_length = 64;
 constexpr long long max_half_length = 1'000'000;  // the differential filter's limit (filters.cpp)
 constexpr double max_seconds_limit = 86'400.0;    // one day
@@ -33,7 +31,7 @@ std::string joined(const std::vector<std::string>& names) {
 std::string data_field(const IdentificationSpec& spec) { return spec.simulation ? "simulation" : "dataset_id"; }
 std::string data_noun(const IdentificationSpec& spec) { return spec.simulation ? "the simulated data" : "the dataset"; }
 
-void read_free(const Json& value, int joints, std::vector<std::string>& free) {
+void read_free(const fields::Json& value, int joints, std::vector<std::string>& free) {
   if (!value.is_array()) {
     throw InputError("free", "free must be an array of parameter names ([\"m2\", \"l2\", ...]), got " + fields::describe(value));
   }
@@ -58,8 +56,8 @@ void read_free(const Json& value, int joints, std::vector<std::string>& free) {
 /// Reads "lower" and "upper" into 2n-entry bound vectors (defaults [0, +∞), the core's) and
 /// checks each given bound against the other bound and against the initial value.
 void read_bounds(const fields::ObjectFields& object, int joints, IdentificationOptions& options) {
-  const Json* lower = object.find("lower");
-  const Json* upper = object.find("upper");
+  const fields::Json* lower = object.find("lower");
+  const fields::Json* upper = object.find("upper");
   if (!lower && !upper) return;  // the core's defaults
   const int count = 2 * joints;
   options.lower = Eigen::VectorXd::Zero(count);
@@ -112,8 +110,8 @@ IdentificationSpec identification_from_json(const nlohmann::json& body) {
   IdentificationSpec spec;
 
   // The data: an uploaded dataset, or a simulation to run first.
-  const Json* dataset_id = object.find("dataset_id");
-  const Json* simulation = object.find("simulation");
+  const fields::Json* dataset_id = object.find("dataset_id");
+  const fields::Json* simulation = object.find("simulation");
   if (dataset_id && simulation) throw InputError("simulation", "give either dataset_id or simulation, not both");
   if (!dataset_id && !simulation) {
     throw InputError("dataset_id", "missing dataset_id: give the data as dataset_id (an uploaded dataset) or "
@@ -132,7 +130,7 @@ IdentificationSpec identification_from_json(const nlohmann::json& body) {
 
   // The model: by default the simulation's robot, else the paper's.
   KineticEnergy kinetic_energy = spec.simulation ? spec.simulation->preset.model.kinetic_energy : KineticEnergy::complete;
-  if (const Json* value = object.find("kinetic_energy")) {
+  if (const fields::Json* value = object.find("kinetic_energy")) {
     kinetic_energy = parse_kinetic_energy(fields::read_string(*value, "kinetic_energy"), "kinetic_energy");
   }
   const std::string preset_name = object.has("preset")       ? fields::read_string(*object.find("preset"), "preset")
@@ -154,10 +152,10 @@ IdentificationSpec identification_from_json(const nlohmann::json& body) {
   if (spec.simulation) options.controller = spec.simulation->preset.controller;
   options.assumed_controller = spec.preset.controller;
 
-  if (const Json* method = object.find("method")) {
+  if (const fields::Json* method = object.find("method")) {
     options.method = parse_identification_method(fields::read_string(*method, "method"), "method");
   }
-  if (const Json* algorithm = object.find("algorithm")) {
+  if (const fields::Json* algorithm = object.find("algorithm")) {
     const std::string name = fields::read_string(*algorithm, "algorithm");
     const std::vector<std::string> algorithms = identification_algorithms();
     if (std::find(algorithms.begin(), algorithms.end(), name) == algorithms.end()) {
@@ -167,8 +165,8 @@ IdentificationSpec identification_from_json(const nlohmann::json& body) {
   }
   // Output-error has no gradient (core's resolve_algorithm owns the rule): say so now.
   resolve_algorithm(options.method, options.algorithm);
-  if (const Json* free = object.find("free")) read_free(*free, joints, options.free);
-  if (const Json* initial = object.find("initial")) {
+  if (const fields::Json* free = object.find("free")) read_free(*free, joints, options.free);
+  if (const fields::Json* initial = object.find("initial")) {
     Eigen::VectorXd theta = options.initial.vector();
     fields::read_parameter_object(*initial, "initial", joints, true,
                                   [&](int index, double number, const std::string&) { theta[index] = number; });
@@ -176,13 +174,13 @@ IdentificationSpec identification_from_json(const nlohmann::json& body) {
     check_parameter_ranges(options.initial, "initial");
   }
   read_bounds(object, joints, options);
-  const Json* kp = object.find("kp");
-  const Json* kd = object.find("kd");
+  const fields::Json* kp = object.find("kp");
+  const fields::Json* kd = object.find("kd");
   if ((kp || kd) && !options.controller) options.controller = spec.preset.controller;  // one given: the other the preset's
   if (kp) options.controller->kp = fields::read_gains(*kp, "kp", joints);
   if (kd) options.controller->kd = fields::read_gains(*kd, "kd", joints);
 
-  if (const Json* half_length = object.find("half_length")) {
+  if (const fields::Json* half_length = object.find("half_length")) {
     if (half_length->is_string() && half_length->get_ref<const std::string&>() == "auto") {
       options.half_length = 0;
     } else if (half_length->is_number()) {
@@ -192,7 +190,7 @@ IdentificationSpec identification_from_json(const nlohmann::json& body) {
                                           ", got " + fields::describe(*half_length));
     }
   }
-  if (const Json* band = object.find("band")) {
+  if (const fields::Json* band = object.find("band")) {
     if (band->is_string() && band->get_ref<const std::string&>() == "auto") {
       options.band = 0.0;
     } else if (band->is_number()) {
@@ -201,33 +199,33 @@ IdentificationSpec identification_from_json(const nlohmann::json& body) {
       throw InputError("band", "band must be \"auto\" or a number in (0, pi] rad/sample, got " + fields::describe(*band));
     }
   }
-  if (const Json* source = object.find("torque_source")) {
+  if (const fields::Json* source = object.find("torque_source")) {
     const std::string text = fields::read_choice(*source, "torque_source", {"auto", "measured", "reference"});
     options.torque_source = text == "measured"    ? TorqueSource::measured
                             : text == "reference" ? TorqueSource::reference
                                                   : TorqueSource::automatic;
   }
-  if (const Json* weights = object.find("weights")) {
+  if (const fields::Json* weights = object.find("weights")) {
     const std::string text = fields::read_choice(*weights, "weights", {"unit", "inverse-variance"});
     options.weighting = text == "inverse-variance" ? JointWeighting::inverse_variance : JointWeighting::unit;
   }
-  if (const Json* evaluations = object.find("max_evaluations")) {
+  if (const fields::Json* evaluations = object.find("max_evaluations")) {
     options.max_evaluations = static_cast<int>(fields::read_integer(*evaluations, "max_evaluations", 1, 100'000'000));
   }
-  if (const Json* seconds = object.find("max_seconds")) {
+  if (const fields::Json* seconds = object.find("max_seconds")) {
     options.max_seconds = fields::read_positive(*seconds, "max_seconds", max_seconds_limit, " s");
   }
-  if (const Json* tolerance = object.find("relative_x_tolerance")) {
+  if (const fields::Json* tolerance = object.find("relative_x_tolerance")) {
     options.relative_x_tolerance = fields::read_non_negative(*tolerance, "relative_x_tolerance");
   }
-  if (const Json* tolerance = object.find("relative_f_tolerance")) {
+  if (const fields::Json* tolerance = object.find("relative_f_tolerance")) {
     options.relative_f_tolerance = fields::read_non_negative(*tolerance, "relative_f_tolerance");
   }
-  if (const Json* iterations = object.find("output_error_iterations")) {
+  if (const fields::Json* iterations = object.find("output_error_iterations")) {
     options.output_error_iterations = static_cast<int>(fields::read_integer(*iterations, "output_error_iterations", 0, 1000));
   }
 
-  if (const Json* truth = object.find("truth")) {
+  if (const fields::Json* truth = object.find("truth")) {
     spec.truth = Eigen::VectorXd::Constant(2 * joints, std::numeric_limits<double>::quiet_NaN());
     fields::read_parameter_object(*truth, "truth", joints, true,
                                   [&](int index, double number, const std::string&) { spec.truth[index] = number; });

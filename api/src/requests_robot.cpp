@@ -9,27 +9,25 @@
 namespace manipid::api {
 namespace {
 
-using fields::Json;
-
 constexpr std::size_t max_id_length = 64;
 /// The largest URDF a robot may have: real arms' files are tens of kilobytes (with meshes referenced,
 /// not inlined); 4 MiB leaves room for generated documents without letting one request fill the store.
 constexpr std::size_t max_urdf_bytes = 4u << 20;
 
-std::string read_id(const Json& value, const std::string& field) {
+std::string read_id(const fields::Json& value, const std::string& field) {
   const std::string id = fields::read_string(value, field);
   if (id.empty()) throw InputError(field, field + " is empty");
   if (id.size() > max_id_length) throw InputError(field, field + " is longer than " + std::to_string(max_id_length) + " characters");
   return id;
 }
 
-int half_length_field(const Json& value, const std::string& field) {
+int half_length_field(const fields::Json& value, const std::string& field) {
   if (value.is_string() && value.get_ref<const std::string&>() == "auto") return 0;
   if (value.is_number()) return static_cast<int>(fields::read_integer(value, field, 2, 1'000'000));
   throw InputError(field, field + " must be \"auto\" or an integer in 2..1000000, got " + fields::describe(value));
 }
 
-double band_field(const Json& value, const std::string& field) {
+double band_field(const fields::Json& value, const std::string& field) {
   if (value.is_string() && value.get_ref<const std::string&>() == "auto") return 0.0;
   if (value.is_number()) return fields::read_positive(value, field, std::numbers::pi, " rad/sample");
   throw InputError(field, field + " must be \"auto\" or a number in (0, pi] rad/sample, got " + fields::describe(value));
@@ -38,7 +36,7 @@ double band_field(const Json& value, const std::string& field) {
 /// `friction` (an array of viscous, coulomb, offset; [] for none) and `armature`, when present,
 /// into the parameter layout: identifications and excitation designs take them alike.
 void read_layout(const fields::ObjectFields& object, robot::ParameterLayout& layout) {
-  if (const Json* friction = object.find("friction")) {
+  if (const fields::Json* friction = object.find("friction")) {
     if (!friction->is_array()) {
       throw InputError("friction", "friction must be an array of viscous, coulomb, offset (or [] for none), got " +
                                        fields::describe(*friction));
@@ -50,7 +48,7 @@ void read_layout(const fields::ObjectFields& object, robot::ParameterLayout& lay
     if (terms.empty()) terms.emplace_back("none");
     parse_friction(terms, layout, "friction");
   }
-  if (const Json* armature = object.find("armature")) {
+  if (const fields::Json* armature = object.find("armature")) {
     if (!armature->is_boolean()) throw InputError("armature", "armature must be true or false, got " + fields::describe(*armature));
     layout.armature = armature->get<bool>();
   }
@@ -61,13 +59,13 @@ void read_layout(const fields::ObjectFields& object, robot::ParameterLayout& lay
 RobotUpload robot_from_json(const nlohmann::json& body) {
   const fields::ObjectFields object(body, "", {"name", "urdf", "base", "tip"});
   RobotUpload upload;
-  const Json* urdf = object.find("urdf");
+  const fields::Json* urdf = object.find("urdf");
   if (!urdf) throw InputError("urdf", "missing urdf: the robot's URDF document as a string");
   if (!urdf->is_string()) throw InputError("urdf", "urdf must be the URDF document as a string, got " + fields::describe(*urdf));
   upload.urdf = urdf->get<std::string>();
-  if (const Json* name = object.find("name")) upload.name = fields::read_label(*name, "name");
-  if (const Json* base = object.find("base")) upload.base = fields::read_string(*base, "base");
-  if (const Json* tip = object.find("tip")) upload.tip = fields::read_string(*tip, "tip");
+  if (const fields::Json* name = object.find("name")) upload.name = fields::read_label(*name, "name");
+  if (const fields::Json* base = object.find("base")) upload.base = fields::read_string(*base, "base");
+  if (const fields::Json* tip = object.find("tip")) upload.tip = fields::read_string(*tip, "tip");
   return upload;
 }
 
@@ -116,40 +114,40 @@ RobotIdentificationSpec robot_identification_from_json(const nlohmann::json& bod
                                      "trim", "dt", "half_length", "band", "comparison_half_length", "comparison_band",
                                      "weights"});
   RobotIdentificationSpec spec;
-  const Json* robot_id = object.find("robot_id");
+  const fields::Json* robot_id = object.find("robot_id");
   spec.robot_id = read_id(*robot_id, "robot_id");
-  const Json* dataset_id = object.find("dataset_id");
+  const fields::Json* dataset_id = object.find("dataset_id");
   if (!dataset_id) throw InputError("dataset_id", "missing dataset_id: the measured run to identify from");
   spec.dataset_id = read_id(*dataset_id, "dataset_id");
-  if (const Json* validation = object.find("validation_dataset_id")) {
+  if (const fields::Json* validation = object.find("validation_dataset_id")) {
     spec.validation_dataset_id = read_id(*validation, "validation_dataset_id");
   }
   robot::IdentificationOptions& options = spec.options;
   read_layout(object, options.layout);
-  if (const Json* physical = object.find("physical")) {
+  if (const fields::Json* physical = object.find("physical")) {
     if (!physical->is_boolean()) throw InputError("physical", "physical must be true or false, got " + fields::describe(*physical));
     spec.physical = physical->get<bool>();
     options.physical = spec.physical;
   }
-  if (const Json* trim = object.find("trim")) {
+  if (const fields::Json* trim = object.find("trim")) {
     if (!trim->is_array() || trim->size() != 2) {
       throw InputError("trim", "trim must be [start, end]: the seconds dropped at each end, got " + fields::describe(*trim));
     }
     options.preparation.trim_start = fields::read_non_negative((*trim)[0], "trim[0]");
     options.preparation.trim_end = fields::read_non_negative((*trim)[1], "trim[1]");
   }
-  if (const Json* dt = object.find("dt")) {
+  if (const fields::Json* dt = object.find("dt")) {
     options.preparation.uniform.dt = fields::read_positive(*dt, "dt", kLongestSamplePeriod, " s");
     if (options.preparation.uniform.dt < kShortestSamplePeriod) {
       throw InputError("dt", "dt must be at least " + fields::format_number(kShortestSamplePeriod) + " s");
     }
   }
-  if (const Json* value = object.find("half_length")) options.half_length = half_length_field(*value, "half_length");
-  if (const Json* value = object.find("band")) options.band = band_field(*value, "band");
-  if (const Json* value = object.find("comparison_half_length")) {
+  if (const fields::Json* value = object.find("half_length")) options.half_length = half_length_field(*value, "half_length");
+  if (const fields::Json* value = object.find("band")) options.band = band_field(*value, "band");
+  if (const fields::Json* value = object.find("comparison_half_length")) {
     options.comparison_half_length = half_length_field(*value, "comparison_half_length");
   }
-  if (const Json* value = object.find("comparison_band")) options.comparison_band = band_field(*value, "comparison_band");
+  if (const fields::Json* value = object.find("comparison_band")) options.comparison_band = band_field(*value, "comparison_band");
   if ((options.half_length > 0) != (options.band > 0.0)) {
     throw InputError(options.band > 0.0 ? "half_length" : "band", "give half_length and band together, or neither");
   }
@@ -157,7 +155,7 @@ RobotIdentificationSpec robot_identification_from_json(const nlohmann::json& bod
     throw InputError(options.comparison_band > 0.0 ? "comparison_half_length" : "comparison_band",
                      "give comparison_half_length and comparison_band together, or neither");
   }
-  if (const Json* weights = object.find("weights")) {
+  if (const fields::Json* weights = object.find("weights")) {
     options.weighting = fields::read_choice(*weights, "weights", {"unit", "per-joint"}) == "per-joint"
                             ? robot::JointWeighting::per_joint
                             : robot::JointWeighting::unit;
@@ -171,20 +169,20 @@ ExcitationSpec excitation_from_json(const nlohmann::json& body) {
                                      "position_margin", "duration", "dt", "friction", "armature", "seed", "max_seconds",
                                      "max_evaluations"});
   ExcitationSpec spec;
-  const Json* robot_id = object.find("robot_id");
+  const fields::Json* robot_id = object.find("robot_id");
   if (!robot_id) throw InputError("robot_id", "missing robot_id: the robot to design the excitation for");
   spec.robot_id = read_id(*robot_id, "robot_id");
   robot::ExcitationOptions& options = spec.options;
-  if (const Json* name = object.find("name")) spec.name = fields::read_label(*name, "name");
-  if (const Json* period = object.find("period")) options.period = fields::read_positive(*period, "period", 3600.0, " s");
-  if (const Json* harmonics = object.find("harmonics")) {
+  if (const fields::Json* name = object.find("name")) spec.name = fields::read_label(*name, "name");
+  if (const fields::Json* period = object.find("period")) options.period = fields::read_positive(*period, "period", 3600.0, " s");
+  if (const fields::Json* harmonics = object.find("harmonics")) {
     options.harmonics = static_cast<int>(fields::read_integer(*harmonics, "harmonics", 2, 20));
   }
-  if (const Json* criterion = object.find("criterion")) {
+  if (const fields::Json* criterion = object.find("criterion")) {
     options.criterion = robot::parse_excitation_criterion(
         fields::read_choice(*criterion, "criterion", {"condition", "logdet"}), "criterion");
   }
-  if (const Json* acceleration = object.find("max_acceleration")) {
+  if (const fields::Json* acceleration = object.find("max_acceleration")) {
     if (acceleration->is_number()) {
       options.max_acceleration = Eigen::VectorXd::Constant(1, fields::read_positive(*acceleration, "max_acceleration"));
     } else if (acceleration->is_array() && !acceleration->empty()) {
@@ -198,18 +196,18 @@ ExcitationSpec excitation_from_json(const nlohmann::json& body) {
                                                fields::describe(*acceleration));
     }
   }
-  if (const Json* margin = object.find("position_margin")) {
+  if (const fields::Json* margin = object.find("position_margin")) {
     options.position_margin = fields::read_non_negative(*margin, "position_margin");
   }
-  if (const Json* dt = object.find("dt")) spec.dt = fields::read_positive(*dt, "dt", 1.0, " s");
-  if (const Json* duration = object.find("duration")) {
+  if (const fields::Json* dt = object.find("dt")) spec.dt = fields::read_positive(*dt, "dt", 1.0, " s");
+  if (const fields::Json* duration = object.find("duration")) {
     spec.periods = robot::whole_periods(fields::read_positive(*duration, "duration", 86'400.0, " s"), options.period);
   }
   read_layout(object, options.layout);
-  if (const Json* seed = object.find("seed")) options.seed = fields::read_unsigned(*seed, "seed");
-  if (const Json* seconds = object.find("max_seconds")) options.max_seconds = fields::read_positive(*seconds, "max_seconds", 600.0, " s");
+  if (const fields::Json* seed = object.find("seed")) options.seed = fields::read_unsigned(*seed, "seed");
+  if (const fields::Json* seconds = object.find("max_seconds")) options.max_seconds = fields::read_positive(*seconds, "max_seconds", 600.0, " s");
   // The budget that makes a design reproducible (max_seconds depends on the machine).
-  if (const Json* evaluations = object.find("max_evaluations")) {
+  if (const fields::Json* evaluations = object.find("max_evaluations")) {
     options.max_evaluations = static_cast<int>(fields::read_integer(*evaluations, "max_evaluations", 1, 1'000'000));
   }
   robot::check_sampling(options.period, options.harmonics, spec.dt, spec.periods);

@@ -1,5 +1,6 @@
 // resources_json.cpp — datasets, jobs and histories as JSON and CSV (resources_json.h).
 #include "manipid/api/resources_json.h"
+#include "json_numbers.h"
 
 #include "manipid/api/csv.h"
 #include "manipid/core/model.h"
@@ -10,9 +11,9 @@ namespace manipid::api {
 namespace {
 
 using Json = nlohmann::ordered_json;
+using json_numbers::number;
 
 Json text_or_null(const std::string& text) { return text.empty() ? Json(nullptr) : Json(text); }
-Json number(double value) { return std::isfinite(value) ? Json(value) : Json(nullptr); }
 
 /// Stored JSON text back to JSON; text that does not parse (never written by manipid) is
 /// passed on as a string rather than failing the whole response.

@@ -1,5 +1,6 @@
 // result_json.cpp — identification results to JSON (result_json.h).
 #include "manipid/api/result_json.h"
+#include "json_numbers.h"
 
 #include <cmath>
 #include <limits>
@@ -7,13 +8,9 @@
 namespace manipid::api {
 namespace {
 
-nlohmann::ordered_json number(double value) { return std::isfinite(value) ? nlohmann::ordered_json(value) : nlohmann::ordered_json(nullptr); }
-
-nlohmann::ordered_json by_name(const std::vector<std::string>& names, const Eigen::VectorXd& values) {
-  nlohmann::ordered_json object = nlohmann::ordered_json::object();
-  for (std::size_t i = 0; i < names.size(); ++i) object[names[i]] = number(values[static_cast<Eigen::Index>(i)]);
-  return object;
-}
+using json_numbers::by_name;
+using json_numbers::number;
+using json_numbers::numbers;
 
 const char* source_name(TorqueSource source) {
   switch (source) {
@@ -21,12 +18,6 @@ const char* source_name(TorqueSource source) {
     case TorqueSource::measured: return "measured";
     default: return "automatic";
   }
-}
-
-nlohmann::ordered_json numbers(const Eigen::VectorXd& values) {
-  nlohmann::ordered_json array = nlohmann::ordered_json::array();
-  for (Eigen::Index i = 0; i < values.size(); ++i) array.push_back(number(values[i]));
-  return array;
 }
 
 nlohmann::ordered_json gains_to_json(const IdentificationResult& result) {

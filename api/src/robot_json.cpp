@@ -1,5 +1,6 @@
 // robot_json.cpp — rigid-body identification results to JSON and parameter vectors back (robot_json.h).
 #include "manipid/api/robot_json.h"
+#include "json_numbers.h"
 
 #include "manipid/core/model.h"
 #include "manipid/core/robot/base_parameters.h"
@@ -14,20 +15,9 @@ namespace manipid::api {
 namespace {
 
 using Json = nlohmann::ordered_json;
-
-Json number(double value) { return std::isfinite(value) ? Json(value) : Json(nullptr); }
-
-Json numbers(const Eigen::VectorXd& values) {
-  Json array = Json::array();
-  for (Eigen::Index i = 0; i < values.size(); ++i) array.push_back(number(values[i]));
-  return array;
-}
-
-Json by_name(const std::vector<std::string>& names, const Eigen::VectorXd& values) {
-  Json object = Json::object();
-  for (std::size_t i = 0; i < names.size(); ++i) object[names[i]] = number(values[static_cast<Eigen::Index>(i)]);
-  return object;
-}
+using json_numbers::by_name;
+using json_numbers::number;
+using json_numbers::numbers;
 
 Json filter_json(const FilterSettings& filter) {
   return {{"half_length", filter.half_length},

@@ -1,5 +1,6 @@
 // least_squares.cpp — Levenberg–Marquardt with bounds, the "LM" algorithm (least_squares.h).
 #include "least_squares.h"
+#include "numbers.h"
 
 #include <Eigen/SVD>
 
@@ -21,12 +22,6 @@ using Clock = std::chrono::steady_clock;
 constexpr double kInitialDamping = 1e-3;
 constexpr double kAcceptRatio = 1e-4;
 constexpr int kMaxRejections = 60;  // λ grows at least 2× per rejection: 2^60 ends any stall
-
-std::string number(double value) {
-  std::ostringstream text;
-  text << value;
-  return text.str();
-}
 
 struct Point {
   Eigen::VectorXd x;         // scaled free parameters
@@ -118,7 +113,7 @@ class Solver {
         const double predicted = current.residual.squaredNorm() - (current.residual + current.jacobian * step).squaredNorm();
         if (tiny_step || !(predicted > 0)) {
           // Nothing left that the linear model can gain: the minimum, within rounding.
-          stop_reason_ = "converged: relative step below " + number(xtol);
+          stop_reason_ = "converged: relative step below " + message_number(xtol);
           break;
         }
         if (!evaluate(x, candidate)) break;
@@ -131,13 +126,13 @@ class Solver {
           damping *= std::max(1.0 / 3.0, 1.0 - std::pow(2.0 * ratio - 1.0, 3));
           growth = 2.0;
           accepted = true;
-          if (relative_change <= ftol) stop_reason_ = "converged: relative cost change below " + number(ftol);
+          if (relative_change <= ftol) stop_reason_ = "converged: relative cost change below " + message_number(ftol);
           break;
         }
         damping *= growth;
         growth *= 2.0;
       }
-      if (!accepted && stop_reason_.empty()) stop_reason_ = "converged: relative step below " + number(xtol);
+      if (!accepted && stop_reason_.empty()) stop_reason_ = "converged: relative step below " + message_number(xtol);
     }
     return finish();
   }

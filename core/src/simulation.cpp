@@ -5,6 +5,7 @@
 
 #include "manipid/core/dynamics.h"
 #include "manipid/core/filters.h"
+#include "numbers.h"
 
 #include <boost/numeric/odeint/stepper/controlled_runge_kutta.hpp>
 #include <boost/numeric/odeint/stepper/dense_output_runge_kutta.hpp>
@@ -26,6 +27,8 @@
 namespace manipid {
 namespace {
 
+using manipid::detail::message_number;
+
 namespace odeint = boost::numeric::odeint;
 
 // A std::vector state with odeint's default range algebra. Measured on 8 states, the
@@ -40,12 +43,6 @@ constexpr double max_samples = 1e7;
 // steps collapse): at most this many accepted steps per output sample. The paper needs 0.4.
 constexpr long max_steps_per_sample = 100;
 
-std::string number(double value) {
-  std::ostringstream text;
-  text << value;
-  return text.str();
-}
-
 void require_finite_vector(const std::string& field, const Eigen::VectorXd& values) {
   for (Eigen::Index i = 0; i < values.size(); ++i) {
     if (!std::isfinite(values[i])) {
@@ -56,7 +53,7 @@ void require_finite_vector(const std::string& field, const Eigen::VectorXd& valu
 
 void require_positive(const std::string& field, double value) {
   if (!std::isfinite(value) || value <= 0.0) {
-    throw InputError(field, field + " must be positive and finite, got " + number(value));
+    throw InputError(field, field + " must be positive and finite, got " + message_number(value));
   }
 }
 
@@ -64,12 +61,12 @@ void require_positive(const std::string& field, double value) {
 long interval_count(const std::string& duration_field, double duration, double dt) {
   const double intervals = std::round(duration / dt);
   if (intervals < 1.0) {
-    throw InputError(duration_field, duration_field + " (" + number(duration) +
-                                         " s) must be at least one sample period dt (" + number(dt) + " s)");
+    throw InputError(duration_field, duration_field + " (" + message_number(duration) +
+                                         " s) must be at least one sample period dt (" + message_number(dt) + " s)");
   }
   if (intervals + 1.0 > max_samples) {
-    throw InputError(duration_field, duration_field + " / dt gives " + number(intervals + 1.0) +
-                                         " samples; at most " + number(max_samples) + " are allowed");
+    throw InputError(duration_field, duration_field + " / dt gives " + message_number(intervals + 1.0) +
+                                         " samples; at most " + message_number(max_samples) + " are allowed");
   }
   return static_cast<long>(intervals);
 }
@@ -93,7 +90,7 @@ void check_controller(const PdController& controller, int joints) {
     for (Eigen::Index i = 0; i < gain->size(); ++i) {
       if (!std::isfinite((*gain)[i]) || (*gain)[i] < 0.0) {
         throw InputError(field, std::string(field) + std::to_string(i + 1) +
-                                    " must be finite and non-negative, got " + number((*gain)[i]));
+                                    " must be finite and non-negative, got " + message_number((*gain)[i]));
       }
     }
   }
@@ -107,7 +104,7 @@ void check_reference(const SampledReference& reference, int joints) {
   if (reference.values.rows() < 1) throw InputError("reference", "the reference has no samples");
   if (!std::isfinite(reference.t0)) throw InputError("reference", "the reference's t0 is not finite");
   if (!std::isfinite(reference.dt) || reference.dt <= 0.0) {
-    throw InputError("reference", "the reference's dt must be positive, got " + number(reference.dt));
+    throw InputError("reference", "the reference's dt must be positive, got " + message_number(reference.dt));
   }
   if (!reference.values.allFinite()) throw InputError("reference", "the reference has non-finite values");
 }
@@ -269,7 +266,7 @@ Trajectory simulate_closed_loop(const RobotModel& model, const Parameters& param
   if (!std::isfinite(options.relative_tolerance) || options.relative_tolerance < 1e-14 ||
       options.relative_tolerance >= 1.0) {
     throw InputError("relative_tolerance", "relative_tolerance must lie in [1e-14, 1), got " +
-                                               number(options.relative_tolerance));
+                                               message_number(options.relative_tolerance));
   }
   const Eigen::VectorXd q0 = initial_vector("q0", options.q0, n);
   const Eigen::VectorXd qd0 = initial_vector("qd0", options.qd0, n);
@@ -313,17 +310,17 @@ Trajectory simulate_closed_loop(const RobotModel& model, const Parameters& param
         stepper.do_step(system);
       } catch (const odeint::odeint_error& error) {
         throw std::runtime_error("simulation: the integrator failed near t = " +
-                                 number(stepper.current_time()) + " s (" + error.what() + ")");
+                                 message_number(stepper.current_time()) + " s (" + error.what() + ")");
       }
       ++steps;
       if (const int joint = diverged_joint(stepper.current_state(), n); joint >= 0) {
         throw std::runtime_error("simulation: the closed loop diverged near t = " +
-                                 number(stepper.current_time()) + " s (joint " + std::to_string(joint + 1) +
-                                 " at q = " + number(stepper.current_state()[joint]) + " rad)");
+                                 message_number(stepper.current_time()) + " s (joint " + std::to_string(joint + 1) +
+                                 " at q = " + message_number(stepper.current_state()[joint]) + " rad)");
       }
       if (steps > max_steps || !(stepper.current_time() > stepper.previous_time())) {
         throw std::runtime_error("simulation: the integrator could not get past t = " +
-                                 number(stepper.current_time()) + " s in " + std::to_string(steps) +
+                                 message_number(stepper.current_time()) + " s in " + std::to_string(steps) +
                                  " steps (tolerances too tight for this model?)");
       }
       if (stop_requested()) throw SimulationStopped(stepper.current_time(), steps);
@@ -350,14 +347,14 @@ Trajectory simulate_closed_loop(const RobotModel& model, const Parameters& param
 
 void apply_measurement_noise(Trajectory& trajectory, const MeasurementNoise& noise) {
   if (!std::isfinite(noise.q_sigma) || noise.q_sigma < 0.0) {
-    throw InputError("q_sigma", "q_sigma must be finite and non-negative, got " + number(noise.q_sigma));
+    throw InputError("q_sigma", "q_sigma must be finite and non-negative, got " + message_number(noise.q_sigma));
   }
   if (!std::isfinite(noise.tau_sigma) || noise.tau_sigma < 0.0) {
-    throw InputError("tau_sigma", "tau_sigma must be finite and non-negative, got " + number(noise.tau_sigma));
+    throw InputError("tau_sigma", "tau_sigma must be finite and non-negative, got " + message_number(noise.tau_sigma));
   }
   if (!std::isfinite(noise.tau_relative_sigma) || noise.tau_relative_sigma < 0.0) {
     throw InputError("tau_relative_sigma",
-                     "tau_relative_sigma must be finite and non-negative, got " + number(noise.tau_relative_sigma));
+                     "tau_relative_sigma must be finite and non-negative, got " + message_number(noise.tau_relative_sigma));
   }
   if (noise.quantize_bits < 0 || noise.quantize_bits > 62) {
     throw InputError("quantize_bits", "quantize_bits must lie in 0..62 (0 = no quantisation), got " +

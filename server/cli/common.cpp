@@ -121,6 +121,13 @@ long long parse_integer_option(const std::string& text, const std::string& optio
 
 // ---- Files -------------------------------------------------------------------------------
 
+std::string format(double value, int digits) {
+  if (!std::isfinite(value)) return "-";
+  char buffer[64];
+  std::snprintf(buffer, sizeof buffer, "%.*g", digits, value);
+  return buffer;
+}
+
 std::string input_name(const std::string& path) { return path == "-" ? "stdin" : path; }
 std::string output_name(const std::string& path) { return path == "-" ? "stdout" : path; }
 

@@ -63,6 +63,11 @@ void write_table(const std::string& path, const api::CsvTable& table);
 /// Rethrows an InputError about `source` (a file name or option) with `source` in front.
 [[noreturn]] void rethrow_with_source(const InputError& error, const std::string& source);
 
+// ---- Tables printed to the terminal --------------------------------------------------------
+
+/// A value in a printed table: `digits` significant digits (printf's %g), "-" when not finite.
+std::string format(double value, int digits = 6);
+
 // ---- Option validators (numbers parsed like the CSV reader: strict, finite) --------------
 
 CLI::Validator finite_number();

@@ -20,7 +20,7 @@ namespace {
 
 /// Core names its settings after the C++ fields; users know the options. A joint's or the model's
 /// problem is the URDF's.
-std::string option_for_field(const std::string& field, const std::string& urdf) {
+std::string excitation_option(const std::string& field, const std::string& urdf) {
   if (field == "period") return "--period";
   if (field == "harmonics") return "--harmonics";
   if (field == "max_acceleration") return "--max-acceleration";
@@ -146,7 +146,7 @@ int run_excitation(const ExcitationOptions& options) {
     limits = robot::excitation_limits(model, design_options);
     robot::check_sampling(options.period, options.harmonics, options.dt, periods);
   } catch (const InputError& error) {
-    rethrow_with_source(error, option_for_field(error.field(), urdf_name));
+    rethrow_with_source(error, excitation_option(error.field(), urdf_name));
   }
   print_urdf_warnings(options.urdf, parsed);
 
@@ -156,7 +156,7 @@ int run_excitation(const ExcitationOptions& options) {
     design = robot::design_excitation(model, design_options);
     sampled = robot::sample_excitation(design.trajectory, options.dt, periods);
   } catch (const InputError& error) {
-    rethrow_with_source(error, option_for_field(error.field(), urdf_name));  // "model": no parameter to see
+    rethrow_with_source(error, excitation_option(error.field(), urdf_name));  // "model": no parameter to see
   }
 
   // What is written never leaves a limit: the design guarantees it for every t; this checks the rows.

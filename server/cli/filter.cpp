@@ -43,7 +43,7 @@ double time_step(const Eigen::VectorXd& t) {
   return period;
 }
 
-std::string option_for_field(const std::string& field) {
+std::string filter_option(const std::string& field) {
   if (field == "half_length") return "--half-length";
   if (field == "band") return "--band";
   if (field == "dt") return "--dt";
@@ -105,7 +105,7 @@ int run_filter(const FilterOptions& options) {
   try {
     settings.validate();
   } catch (const InputError& error) {
-    rethrow_with_source(error, option_for_field(error.field()));
+    rethrow_with_source(error, filter_option(error.field()));
   }
   const int outputs = input.rows() - 2 * settings.half_length - 1;
   if (outputs < 1) {
@@ -122,7 +122,7 @@ int run_filter(const FilterOptions& options) {
   try {
     filter = cached_filter(settings);
   } catch (const InputError& error) {
-    rethrow_with_source(error, option_for_field(error.field()));
+    rethrow_with_source(error, filter_option(error.field()));
   }
 
   const FilterOrder order = static_cast<FilterOrder>(options.order);

@@ -25,13 +25,6 @@ std::vector<std::string> split_list(const std::string& text) {
   return items;
 }
 
-std::string format(double value, int digits = 6) {
-  if (!std::isfinite(value)) return "-";
-  char buffer[64];
-  std::snprintf(buffer, sizeof buffer, "%.*g", digits, value);
-  return buffer;
-}
-
 std::string list(const Eigen::VectorXd& values, int digits = 6, const char* unit = "") {
   std::string text = "(";
   for (Eigen::Index j = 0; j < values.size(); ++j) text += (j ? ", " : "") + format(values[j], digits) + unit;

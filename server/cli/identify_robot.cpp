@@ -16,13 +16,6 @@
 namespace manipid::server::cli {
 namespace {
 
-std::string format(double value, int digits = 6) {
-  if (!std::isfinite(value)) return "-";
-  char buffer[64];
-  std::snprintf(buffer, sizeof buffer, "%.*g", digits, value);
-  return buffer;
-}
-
 std::string percent(double value) { return std::isfinite(value) ? format(100.0 * value, 3) + " %" : "-"; }
 
 std::string hertz(const FilterSettings& filter) { return format(filter.band / (2.0 * std::numbers::pi * filter.dt), 3) + " Hz"; }

@@ -13,7 +13,7 @@ namespace manipid::server::cli {
 namespace {
 
 /// Core names its settings after the C++ fields; users know the options.
-std::string option_for_field(const std::string& field) {
+std::string simulate_option(const std::string& field) {
   if (field == "relative_tolerance") return "--rtol";
   if (field == "absolute_tolerance") return "--atol";
   if (field == "duration") return "--duration";
@@ -91,7 +91,7 @@ int run_simulate(const SimulateOptions& options) {
                                       simulation, &summary);
     if (noise.any()) apply_measurement_noise(trajectory, noise);
   } catch (const InputError& error) {
-    rethrow_with_source(error, option_for_field(error.field()));
+    rethrow_with_source(error, simulate_option(error.field()));
   }
 
   write_table(options.output, api::trajectory_to_csv(trajectory));

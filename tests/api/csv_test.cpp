@@ -1,6 +1,7 @@
 // csv_test.cpp — the CSV codec (api/csv.h): exact round trips, tolerant whitespace and line
 // ends, and, for every malformed input, an InputError that names the column and the line.
 #include "manipid/api/csv.h"
+#include "text_assertions.h"
 
 #include <gtest/gtest.h>
 
@@ -12,11 +13,7 @@
 namespace manipid::api {
 namespace {
 
-/// EXPECT_TRUE(contains(message, part)) prints both on failure (gmock is not linked).
-::testing::AssertionResult contains(std::string_view text, std::string_view part) {
-  if (text.find(part) != std::string_view::npos) return ::testing::AssertionSuccess();
-  return ::testing::AssertionFailure() << "'" << text << "' does not contain '" << part << "'";
-}
+using test_support::contains;
 
 /// Runs parse_csv expecting an InputError; returns it for inspection of field and message.
 InputError parse_error(std::string_view text, const CsvLimits& limits = {}) {

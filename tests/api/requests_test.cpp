@@ -7,6 +7,7 @@
 #include "manipid/api/problem.h"
 
 #include "manipid/core/resample.h"
+#include "text_assertions.h"
 
 #include <gtest/gtest.h>
 
@@ -21,10 +22,7 @@ namespace {
 
 using nlohmann::json;
 
-::testing::AssertionResult contains(std::string_view text, std::string_view part) {
-  if (text.find(part) != std::string_view::npos) return ::testing::AssertionSuccess();
-  return ::testing::AssertionFailure() << "'" << text << "' does not contain '" << part << "'";
-}
+using test_support::contains;
 
 /// Runs `action`, expecting InputError naming `field` with `part` in its message.
 void expect_error(const std::function<void()>& action, const std::string& field, std::string_view part = "") {

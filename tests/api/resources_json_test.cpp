@@ -10,7 +10,7 @@
 namespace manipid::api {
 namespace {
 
-using Json = nlohmann::ordered_json;
+using OrderedJson = nlohmann::ordered_json;
 
 JobInfo finished_identification() {
   JobInfo job;
@@ -26,9 +26,9 @@ JobInfo finished_identification() {
   job.attempts = 1;
   job.worker = "host:12:0";
   // As the runner stores them: compact dump() text, key order kept, numbers as dump() writes them.
-  job.request = Json{{"dataset_id", "ds_1"}, {"half_length", 100}, {"band", 0.2}, {"name", "a \"quoted\" \u00e9"}}.dump();
-  job.result = Json{{"final_cost", 0.020929312345678912}, {"estimates", {{"m1", 1e-7}, {"m2", -3.5e300}}},
-                    {"warnings", Json::array()}, {"nested", {{"list", {1, 2.5, nullptr, true}}}}}
+  job.request = OrderedJson{{"dataset_id", "ds_1"}, {"half_length", 100}, {"band", 0.2}, {"name", "a \"quoted\" \u00e9"}}.dump();
+  job.result = OrderedJson{{"final_cost", 0.020929312345678912}, {"estimates", {{"m1", 1e-7}, {"m2", -3.5e300}}},
+                    {"warnings", OrderedJson::array()}, {"nested", {{"list", {1, 2.5, nullptr, true}}}}}
                    .dump();
   return job;
 }
@@ -36,10 +36,10 @@ JobInfo finished_identification() {
 TEST(JobText, IsValidJsonWhoseDumpIsTheSameBytes) {
   const JobInfo job = finished_identification();
   const std::string text = job_to_text(job);
-  const Json parsed = Json::parse(text);  // throws on a bad splice
+  const OrderedJson parsed = OrderedJson::parse(text);  // throws on a bad splice
   EXPECT_EQ(parsed.dump(), text);
-  EXPECT_EQ(parsed["request"], Json::parse(job.request));
-  EXPECT_EQ(parsed["result"], Json::parse(job.result));
+  EXPECT_EQ(parsed["request"], OrderedJson::parse(job.request));
+  EXPECT_EQ(parsed["result"], OrderedJson::parse(job.result));
   EXPECT_EQ(parsed["result"]["estimates"]["m2"].get<double>(), -3.5e300);
   EXPECT_EQ(parsed["progress"]["best_cost"].get<double>(), 0.0209293);
   EXPECT_FALSE(parsed.contains("error"));
@@ -56,8 +56,8 @@ TEST(JobText, IsValidJsonWhoseDumpIsTheSameBytes) {
 
 TEST(JobText, AListItemHasEverythingButTheRequest) {
   const JobInfo job = finished_identification();
-  Json whole = Json::parse(job_to_text(job));
-  const Json item = Json::parse(job_to_text(job, JobText::without_request));
+  OrderedJson whole = OrderedJson::parse(job_to_text(job));
+  const OrderedJson item = OrderedJson::parse(job_to_text(job, JobText::without_request));
   whole.erase("request");
   EXPECT_EQ(item, whole);
 }
@@ -67,7 +67,7 @@ TEST(JobText, StoredTextThatIsNotJsonGoesOutAsAString) {
   job.result = "{\"final_cost\": 1,";  // cut short: never written by manipid
   job.error = "plain words";
   job.request.clear();
-  const Json parsed = Json::parse(job_to_text(job));
+  const OrderedJson parsed = OrderedJson::parse(job_to_text(job));
   EXPECT_EQ(parsed["result"], "{\"final_cost\": 1,");
   EXPECT_EQ(parsed["error"], "plain words");
   EXPECT_EQ(parsed["request"], "");
@@ -79,7 +79,7 @@ TEST(JobText, ARunningJobShowsItsWorkerAndNoResult) {
   job.finished_at.clear();
   job.result.clear();
   job.best_cost.reset();
-  const Json parsed = Json::parse(job_to_text(job));
+  const OrderedJson parsed = OrderedJson::parse(job_to_text(job));
   EXPECT_EQ(parsed["worker"], "host:12:0");
   EXPECT_TRUE(parsed["finished_at"].is_null());
   EXPECT_TRUE(parsed["progress"]["best_cost"].is_null());
@@ -90,7 +90,7 @@ TEST(JobText, ARobotIdentificationLinksItsRobotAndUrdfNotAHistory) {
   JobInfo job = finished_identification();
   job.robot_id = "rb_1";
   job.validation_dataset_id = "ds_2";
-  const Json links = Json::parse(job_to_text(job))["links"];
+  const OrderedJson links = OrderedJson::parse(job_to_text(job))["links"];
   EXPECT_FALSE(links.contains("history"));
   EXPECT_EQ(links["robot"], "/v1/robots/rb_1");
   EXPECT_EQ(links["urdf"], "/v1/jobs/job_0123456789abcdef/urdf");

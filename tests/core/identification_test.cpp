@@ -5,6 +5,7 @@
 #include "manipid/core/input_error.h"
 #include "manipid/core/presets.h"
 #include "test_models.h"
+#include "input_error_expectations.h"
 
 #include <gtest/gtest.h>
 
@@ -15,6 +16,8 @@
 
 namespace manipid {
 namespace {
+
+using test_support::expect_input_error;
 
 // The paper's run (noise-free), simulated once per kinetic-energy variant.
 const Trajectory& paper_run(KineticEnergy energy) {
@@ -373,18 +376,6 @@ TEST(Identification, FlagsNothingWhenEverythingIsIdentifiable) {
   EXPECT_TRUE(result.identifiability.combinations.empty());
   EXPECT_LE(largest_identifiable_error(result, truth), 1e-4);
   for (int i = 0; i < 4; ++i) EXPECT_FALSE(std::isnan(result.std_errors[i])) << i;
-}
-
-/// Runs `action`, expects an InputError naming `field`, returns its message.
-std::string expect_input_error(const std::function<void()>& action, const std::string& field) {
-  try {
-    action();
-    ADD_FAILURE() << "expected InputError on " << field;
-  } catch (const InputError& error) {
-    EXPECT_EQ(error.field(), field) << error.what();
-    return error.what();
-  }
-  return "";
 }
 
 TEST(Identification, RejectsUnusableRequestsNamingTheField) {

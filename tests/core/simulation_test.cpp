@@ -7,6 +7,7 @@
 #include "manipid/core/dynamics.h"
 #include "manipid/core/presets.h"
 #include "manipid/core/trajectory.h"
+#include "input_error_expectations.h"
 
 #include <gtest/gtest.h>
 
@@ -20,17 +21,7 @@
 namespace manipid {
 namespace {
 
-// Runs `action` and checks that it throws InputError naming `field`; returns the message.
-std::string expect_input_error(const std::function<void()>& action, const std::string& field) {
-  try {
-    action();
-  } catch (const InputError& error) {
-    EXPECT_EQ(error.field(), field) << error.what();
-    return error.what();
-  }
-  ADD_FAILURE() << "expected InputError(" << field << ")";
-  return {};
-}
+using test_support::expect_input_error;
 
 Eigen::Index sample_at(double t, double dt) { return static_cast<Eigen::Index>(std::lround(t / dt)); }
 

@@ -22,7 +22,7 @@ namespace {
 
 namespace fs = std::filesystem;
 
-NewJob identification_job() {
+NewJob stored_identification_job() {
   NewJob job;
   job.kind = api::JobKind::identification;
   job.request = R"({"upload_id":"ds_x"})";
@@ -112,7 +112,7 @@ TEST_F(SqliteStoreTest, WriterWaitsForAnotherConnectionsLockInsteadOfFailing) {
   });
   const auto start = std::chrono::steady_clock::now();
   SubmitOutcome outcome;
-  EXPECT_NO_THROW(outcome = store_->submit_job(identification_job(), std::nullopt, 0));
+  EXPECT_NO_THROW(outcome = store_->submit_job(stored_identification_job(), std::nullopt, 0));
   const auto waited = std::chrono::steady_clock::now() - start;
   release.join();
   sqlite3_close(other);
@@ -123,7 +123,7 @@ TEST_F(SqliteStoreTest, WriterWaitsForAnotherConnectionsLockInsteadOfFailing) {
 }
 
 TEST_F(SqliteStoreTest, ADamagedPageIsFoundAtOpenNotByAFailingReadLater) {
-  for (int i = 0; i < 5; ++i) store_->submit_job(identification_job(), std::nullopt, 0);
+  for (int i = 0; i < 5; ++i) store_->submit_job(stored_identification_job(), std::nullopt, 0);
   store_.reset();  // the last connection checkpoints the WAL into the file
   damage_table(path_, "jobs");
   try {
@@ -137,7 +137,7 @@ TEST_F(SqliteStoreTest, ADamagedPageIsFoundAtOpenNotByAFailingReadLater) {
 }
 
 TEST_F(SqliteStoreTest, CheckFileSaysWhatIsWrongAndChangesNothing) {
-  store_->submit_job(identification_job(), std::nullopt, 0);
+  store_->submit_job(stored_identification_job(), std::nullopt, 0);
   store_.reset();
   const sqlite::FileCheck sound = sqlite::check_file(path_);
   EXPECT_TRUE(sound.findings.empty());
@@ -157,7 +157,7 @@ TEST_F(SqliteStoreTest, CheckFileSaysWhatIsWrongAndChangesNothing) {
 
 TEST_F(SqliteStoreTest, OpenStoreReadsTheDbValue) {
   // A plain path and sqlite:PATH name the same file: a job stored through one is seen by the other.
-  const auto id = store_->submit_job(identification_job(), std::nullopt, 0).job.id;
+  const auto id = store_->submit_job(stored_identification_job(), std::nullopt, 0).job.id;
   EXPECT_TRUE(open_store(path_)->find_job(id));
   EXPECT_TRUE(open_store("sqlite:" + path_)->find_job(id));
   try {

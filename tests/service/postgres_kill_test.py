@@ -24,7 +24,7 @@ sys.path.insert(0, os.path.dirname(__file__))
 from harness import Server, postgres_database, postgres_sql, postgres_template, temporary_directory  # noqa: E402
 
 LEASE = "2"
-JOB = {"simulation": {"duration": 1.0}, "half_length": 100, "band": 0.2, "free": ["m2"]}
+JOB = {"simulation": {"duration": 0.5}, "half_length": 50, "band": 0.2, "free": ["m2"]}
 SLOW_JOB = {"simulation": {"duration": 3.0}, "method": "output-error", "max_evaluations": 40}
 
 

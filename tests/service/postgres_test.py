@@ -123,6 +123,10 @@ class OnPostgres(unittest.TestCase):
             status, _, ended = a.request("GET", f"/v1/jobs/{job['id']}?wait=60", timeout=120)
             self.assertEqual(status, 200, ended)
             self.assertEqual(ended["state"], "cancelled", ended)
+            # C writes its log line after the end is committed, which is what woke the wait above.
+            deadline = time.time() + 10
+            while "cancelled" not in c.read_log() and time.time() < deadline:
+                time.sleep(0.05)
             self.assertIn("cancelled", c.read_log())
 
     def test_a_long_poll_on_one_process_wakes_when_another_ends_the_job(self):

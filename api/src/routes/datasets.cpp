@@ -10,6 +10,7 @@
 #include "http/request_helpers.h"  // includes httplib.h, after the manipid headers
 #include "http/responses.h"
 #include "routes/handlers.h"
+#include "../json_numbers.h"
 
 #include <algorithm>
 #include <cmath>
@@ -110,7 +111,7 @@ void send_json_samples(httplib::Response& response, std::shared_ptr<const Trajec
                   nlohmann::ordered_json array = nlohmann::ordered_json::array();
                   for (Eigen::Index i = offset; i < offset + count; ++i) {
                     const double value = numbers.values[i];
-                    array.push_back(std::isfinite(value) ? nlohmann::ordered_json(value) : nlohmann::ordered_json(nullptr));
+                    array.push_back(json_numbers::number(value));
                   }
                   const std::string text = array.dump();
                   if (offset > 0) piece += ',';

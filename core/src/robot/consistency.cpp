@@ -3,6 +3,7 @@
 
 #include "inertia_internal.h"
 #include "manipid/core/model.h"
+#include "../numbers.h"
 
 #include <Eigen/Eigenvalues>
 
@@ -14,14 +15,9 @@
 namespace manipid::robot {
 namespace {
 
-constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
+using manipid::detail::kNaN;
+using manipid::detail::short_number;
 
-std::string number(double value) {
-  std::ostringstream text;
-  text.precision(3);
-  text << value;
-  return text.str();
-}
 
 // I_O as a matrix from π's six inertia entries (Ixx, Ixy, Ixz, Iyy, Iyz, Izz).
 Eigen::Matrix3d inertia_matrix(const Vector10d& link) {
@@ -143,7 +139,7 @@ LinkConsistency check_link(const Vector10d& link, const std::string& name, std::
   const double mass = link[0];
   result.mass_positive = mass > 0.0;
   if (!result.mass_positive) {
-    say("the mass is not positive (" + number(mass) + " kg)");
+    say("the mass is not positive (" + short_number(mass) + " kg)");
   } else {
     const Eigen::Vector3d com = link.segment<3>(1) / mass;
     const Eigen::Matrix3d inertia = inertia_matrix(link);
@@ -151,7 +147,7 @@ LinkConsistency check_link(const Vector10d& link, const std::string& name, std::
     const Eigen::Matrix3d about_com = inertia - parallel;
     if (!about_com.allFinite()) {
       // A mass so small against h that c = h/m overflows: no centre of mass to speak of.
-      say("the centre of mass h/m is not a finite number (mass " + number(mass) + " kg)");
+      say("the centre of mass h/m is not a finite number (mass " + short_number(mass) + " kg)");
     } else {
       result.centre_of_mass = com;
       result.inertia_about_com = about_com;
@@ -170,15 +166,15 @@ LinkConsistency check_link(const Vector10d& link, const std::string& name, std::
 
       if (!result.inertia_about_com_positive_definite) {
         say("the inertia about the centre of mass is not positive definite (smallest eigenvalue " +
-            number(moments[0]) + " kg·m²)");
+            short_number(moments[0]) + " kg·m²)");
       }
       if (!result.triangle_inequalities) {
         const std::string moments_text =
-            "(" + number(moments[0]) + ", " + number(moments[1]) + ", " + number(moments[2]) + " kg·m²)";
+            "(" + short_number(moments[0]) + ", " + short_number(moments[1]) + ", " + short_number(moments[2]) + " kg·m²)";
         if (result.triangle_margin < -tolerance) {
           say("the principal moments of inertia about the centre of mass " + moments_text +
               " violate the triangle inequality: the largest exceeds the sum of the other two by " +
-              number(-result.triangle_margin) + " kg·m²");
+              short_number(-result.triangle_margin) + " kg·m²");
         } else {
           say("the principal moments of inertia about the centre of mass " + moments_text +
               " meet the triangle inequality only with equality: a body with no thickness");
@@ -188,7 +184,7 @@ LinkConsistency check_link(const Vector10d& link, const std::string& name, std::
   }
   if (!result.pseudo_inertia_positive_definite) {
     say("the pseudo-inertia is not positive definite (smallest eigenvalue " +
-        number(result.pseudo_inertia_eigenvalues[0]) + "): no distribution of mass has these parameters");
+        short_number(result.pseudo_inertia_eigenvalues[0]) + "): no distribution of mass has these parameters");
   }
   return result;
 }
@@ -213,7 +209,7 @@ ConsistencyReport check_consistency(const ParameterStructure& structure, const E
     check.index = index;
     check.value = pi[index];
     check.ok = pi[index] >= 0.0;
-    if (!check.ok) report.findings.push_back(check.name + ": must not be negative, is " + number(check.value));
+    if (!check.ok) report.findings.push_back(check.name + ": must not be negative, is " + short_number(check.value));
     report.non_negative.push_back(check);
   }
   return report;
@@ -260,11 +256,11 @@ LinkProjection project_link(const Vector10d& link, const ProjectionOptions& opti
   if (!std::isfinite(options.length_scale) || options.length_scale < 0.0) {
     throw InputError("projection.length_scale",
                      "the length scale must be a finite number ≥ 0 m (0: the link's own), got " +
-                         number(options.length_scale));
+                         short_number(options.length_scale));
   }
   if (!(options.relative_floor > 0.0 && options.relative_floor < 1.0)) {
     throw InputError("projection.relative_floor", "the relative eigenvalue floor must lie in (0, 1), got " +
-                                                      number(options.relative_floor));
+                                                      short_number(options.relative_floor));
   }
   const double length = options.length_scale > 0.0 ? options.length_scale : detail::link_length_scale(link);
   const std::optional<LinkProjection> result = detail::try_project_link(link, length, options.relative_floor);

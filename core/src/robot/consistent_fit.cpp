@@ -20,6 +20,7 @@
 #include "inertia_internal.h"
 #include "manipid/core/model.h"
 #include "manipid/core/robot/log_cholesky.h"
+#include "../numbers.h"
 
 #include <Eigen/Cholesky>
 #include <Eigen/Eigenvalues>
@@ -35,8 +36,10 @@
 namespace manipid::robot {
 namespace {
 
-constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
-constexpr double kInfinity = std::numeric_limits<double>::infinity();
+using manipid::detail::kNaN;
+using manipid::detail::kInfinity;
+using manipid::detail::short_number;
+
 constexpr double kEpsilon = std::numeric_limits<double>::epsilon();
 // Marquardt damping λ stays in [kMinDamping, kMaxDamping] (Ceres: trust region radius 1e16 ↔
 // λ = 1e-16). Past kMaxDamping every step is a rounding-sized gradient step that still fails
@@ -64,13 +67,6 @@ constexpr double kStartFloor = 1e-2;
 // link's largest eigenvalue): a link projected at that floor is then strictly inside.
 constexpr double kFitFloorShare = 0.1;
 
-std::string number(double value) {
-  std::ostringstream text;
-  text.precision(3);
-  text << value;
-  return text.str();
-}
-
 void require_finite(const Eigen::Ref<const Eigen::MatrixXd>& value, const char* field, const char* what) {
   if (!value.allFinite()) {
     throw InputError(field, std::string(field) + " has an entry that is not a finite number (" + what + ")");
@@ -87,7 +83,7 @@ void require_size(const Eigen::VectorXd& value, Eigen::Index size, const char* f
 void validate_options(const ConsistentFitOptions& options, int p) {
   if (!std::isfinite(options.regularization) || options.regularization < 0.0) {
     throw InputError("options.regularization", "the regularisation weight ε must be a finite number ≥ 0, got " +
-                                                   number(options.regularization));
+                                                   short_number(options.regularization));
   }
   if (options.parameter_scale.size() != 0) {
     require_size(options.parameter_scale, p, "options.parameter_scale", "one scale per parameter, or none");
@@ -97,11 +93,11 @@ void validate_options(const ConsistentFitOptions& options, int p) {
   }
   if (!std::isfinite(options.projection.length_scale) || options.projection.length_scale < 0.0) {
     throw InputError("options.projection.length_scale", "the length scale must be a finite number ≥ 0 m, got " +
-                                                            number(options.projection.length_scale));
+                                                            short_number(options.projection.length_scale));
   }
   if (!(options.projection.relative_floor > 0.0 && options.projection.relative_floor < 1.0)) {
     throw InputError("options.projection.relative_floor", "the relative eigenvalue floor must lie in (0, 1), got " +
-                                                              number(options.projection.relative_floor));
+                                                              short_number(options.projection.relative_floor));
   }
   if (options.max_iterations < 0) {
     throw InputError("options.max_iterations", "must be ≥ 0, got " + std::to_string(options.max_iterations));
@@ -111,12 +107,12 @@ void validate_options(const ConsistentFitOptions& options, int p) {
                                                         {"options.step_tolerance", options.step_tolerance}};
   for (const auto& [field, value] : tolerances) {
     if (!std::isfinite(value) || value < 0.0) {
-      throw InputError(field, "must be a finite number ≥ 0, got " + number(value));
+      throw InputError(field, "must be a finite number ≥ 0, got " + short_number(value));
     }
   }
   if (!std::isfinite(options.initial_damping) || !(options.initial_damping > 0.0)) {
     throw InputError("options.initial_damping", "must be a positive finite number, got " +
-                                                    number(options.initial_damping));
+                                                    short_number(options.initial_damping));
   }
 }
 
@@ -151,7 +147,7 @@ struct LinkBarrier {
 };
 
 // The data after validation, reduced to at most p rows, with what every iteration needs.
-struct Data {
+struct FitData {
   int p = 0;
   Eigen::MatrixXd R;            // m'×p, m' ≤ p
   Eigen::VectorXd z;            // m'
@@ -179,7 +175,7 @@ struct Point {
   bool finite() const { return std::isfinite(data) && std::isfinite(prior) && std::isfinite(barrier); }
 };
 
-void evaluate(const Data& d, Point& point) {
+void evaluate(const FitData& d, Point& point) {
   point.pi = point.y;
   point.jacobians.resize(d.links.size());
   point.shifted.resize(d.links.size());
@@ -206,7 +202,7 @@ void evaluate(const Data& d, Point& point) {
 }
 
 // g = Pᵀ∇_π(½F) and H = Pᵀ ∇²_π(½F) P (block structure: O(p²·10)).
-void linearise(const Data& d, const Point& point, Eigen::VectorXd& g, Eigen::MatrixXd& curvature,
+void linearise(const FitData& d, const Point& point, Eigen::VectorXd& g, Eigen::MatrixXd& curvature,
                Eigen::MatrixXd& gp, Eigen::MatrixXd& h) {
   Eigen::VectorXd w = d.R.transpose() * point.data_residual;
   w += d.gamma * (point.pi - d.prior).cwiseProduct(d.inv_scale.cwiseAbs2());
@@ -414,7 +410,7 @@ ConsistentFitSummary fit_consistent(const ParameterStructure& structure, const C
   require_finite(problem.z, "z", "check the measured torques");
   if (!std::isfinite(problem.residual_offset) || problem.residual_offset < 0.0) {
     throw InputError("residual_offset", "the residual outside R's range must be a finite number ≥ 0, got " +
-                                            number(problem.residual_offset));
+                                            short_number(problem.residual_offset));
   }
   require_size(problem.unconstrained, p, "unconstrained", "the least-squares estimate, one per parameter");
   require_finite(problem.unconstrained, "unconstrained", "the least-squares estimate");
@@ -427,7 +423,7 @@ ConsistentFitSummary fit_consistent(const ParameterStructure& structure, const C
   validate_options(options, p);
   if (problem.R.cwiseAbs().maxCoeff() == 0.0) throw InputError("R", "R is zero: the data determine no parameter");
 
-  Data d;
+  FitData d;
   d.p = p;
   d.links = structure.link_offsets;
   d.lower = Eigen::VectorXd::Constant(p, -kInfinity);
@@ -782,14 +778,14 @@ ConsistentFitSummary fit_consistent(const ParameterStructure& structure, const C
   switch (termination) {
     case FitTermination::converged_gradient:
       summary.message = "the gradient is orthogonal to every direction the parameters can still move in (cosine ≤ " +
-                        number(options.gradient_tolerance) + ")";
+                        short_number(options.gradient_tolerance) + ")";
       break;
     case FitTermination::converged_cost:
-      summary.message = "the last step decreased the cost by less than " + number(options.function_tolerance) +
+      summary.message = "the last step decreased the cost by less than " + short_number(options.function_tolerance) +
                         " of its value";
       break;
     case FitTermination::converged_step:
-      summary.message = "the last step moved no parameter by more than " + number(options.step_tolerance) +
+      summary.message = "the last step moved no parameter by more than " + short_number(options.step_tolerance) +
                         " of its scale";
       break;
     case FitTermination::converged_exact:

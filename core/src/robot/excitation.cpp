@@ -33,6 +33,7 @@
 #include "manipid/core/robot/data.h"
 #include "manipid/core/robot/regressor.h"
 #include "manipid/core/trajectory.h"
+#include "../numbers.h"
 
 #include <Eigen/Eigenvalues>
 #include <Eigen/QR>
@@ -53,8 +54,9 @@
 namespace manipid::robot {
 namespace {
 
+using manipid::detail::kInfinity;
+
 using Clock = std::chrono::steady_clock;
-constexpr double kInfinity = std::numeric_limits<double>::infinity();
 constexpr double kTwoPi = 2.0 * std::numbers::pi;
 
 constexpr int kMinHarmonics = 2;   // the two rest conditions take one coefficient each of a and b

@@ -3,12 +3,15 @@
 
 #include "inertia_internal.h"
 #include "manipid/core/model.h"
+#include "../numbers.h"
 
 #include <cmath>
 #include <sstream>
 
 namespace manipid::robot {
 namespace {
+
+using manipid::detail::short_number;
 
 // Û = U/e^α: upper triangular, unit bottom-right, diagonal e^{d_i}.
 Eigen::Matrix4d scaled_factor(const LogCholesky& theta) {
@@ -34,13 +37,6 @@ constexpr Entry kEntries[10] = {{3, 3},                  // α scales the whole 
                                 {0, 0}, {1, 1}, {2, 2},  // d1, d2, d3 (through e^{d_i})
                                 {0, 1}, {1, 2}, {0, 2},  // s12, s23, s13
                                 {0, 3}, {1, 3}, {2, 3}};  // t1, t2, t3
-
-std::string number(double value) {
-  std::ostringstream text;
-  text.precision(3);
-  text << value;
-  return text.str();
-}
 
 }  // namespace
 
@@ -105,10 +101,10 @@ LogCholesky log_cholesky_from_standard(const Vector10d& link, const std::string&
     case detail::LogCholeskyStatus::ok:
       return theta;
     case detail::LogCholeskyStatus::mass:
-      throw InputError(field, field + ": the mass is not positive (" + number(link[0]) +
+      throw InputError(field, field + ": the mass is not positive (" + short_number(link[0]) +
                                   " kg), so the link has no log-Cholesky coordinates; project it first");
     case detail::LogCholeskyStatus::centre_of_mass:
-      throw InputError(field, field + ": the centre of mass h/m is not a finite number (mass " + number(link[0]) +
+      throw InputError(field, field + ": the centre of mass h/m is not a finite number (mass " + short_number(link[0]) +
                                   " kg)");
     case detail::LogCholeskyStatus::pivot_z: pivot = "z"; break;
     case detail::LogCholeskyStatus::pivot_y: pivot = "y given z"; break;

@@ -16,7 +16,7 @@ namespace manipid::robot {
 namespace {
 
 /// Shortest text that reads back to the same double.
-std::string number(double value) {
+std::string round_trip_text(double value) {
   char text[32];
   for (int digits = 6; digits <= 17; ++digits) {
     std::snprintf(text, sizeof text, "%.*g", digits, value);
@@ -25,7 +25,9 @@ std::string number(double value) {
   return text;
 }
 
-std::string triple(const Eigen::Vector3d& v) { return number(v.x()) + " " + number(v.y()) + " " + number(v.z()); }
+std::string triple(const Eigen::Vector3d& v) {
+  return round_trip_text(v.x()) + " " + round_trip_text(v.y()) + " " + round_trip_text(v.z());
+}
 
 /// The document's <link name="..."> and <joint name="..."> elements.
 std::map<std::string, TiXmlElement*> named_children(TiXmlElement* robot, const char* tag) {
@@ -69,7 +71,7 @@ std::string write_identified_urdf(const std::string& xml, const Model& model, co
     const InertialParameters inertia = InertialParameters::from_vector(pi.segment<kInertialParametersPerBody>(kInertialParametersPerBody * k));
     // What a URDF can hold: a positive mass and an inertia about the centre of mass that is a body's.
     if (!(inertia.mass > 0.0)) {
-      throw InputError("parameters", "link " + joint.link + " has mass " + number(inertia.mass) +
+      throw InputError("parameters", "link " + joint.link + " has mass " + round_trip_text(inertia.mass) +
                                          " kg: a URDF holds only physical bodies; identify with the physical-consistency "
                                          "option");
     }
@@ -77,7 +79,7 @@ std::string write_identified_urdf(const std::string& xml, const Model& model, co
     const double smallest = Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d>(about_com, Eigen::EigenvaluesOnly).eigenvalues()[0];
     if (smallest < -1e-12 * std::max(1.0, about_com.trace())) {
       throw InputError("parameters", "link " + joint.link + "'s inertia about its centre of mass is not positive "
-                                         "semi-definite (smallest eigenvalue " + number(smallest) +
+                                         "semi-definite (smallest eigenvalue " + round_trip_text(smallest) +
                                          " kg m^2): a URDF holds only physical bodies; identify with the "
                                          "physical-consistency option");
     }
@@ -89,15 +91,15 @@ std::string write_identified_urdf(const std::string& xml, const Model& model, co
     origin.SetAttribute("rpy", "0 0 0");
     inertial.InsertEndChild(origin);
     TiXmlElement mass("mass");
-    mass.SetAttribute("value", number(inertia.mass));
+    mass.SetAttribute("value", round_trip_text(inertia.mass));
     inertial.InsertEndChild(mass);
     TiXmlElement tensor("inertia");
-    tensor.SetAttribute("ixx", number(about_com(0, 0)));
-    tensor.SetAttribute("ixy", number(about_com(0, 1)));
-    tensor.SetAttribute("ixz", number(about_com(0, 2)));
-    tensor.SetAttribute("iyy", number(about_com(1, 1)));
-    tensor.SetAttribute("iyz", number(about_com(1, 2)));
-    tensor.SetAttribute("izz", number(about_com(2, 2)));
+    tensor.SetAttribute("ixx", round_trip_text(about_com(0, 0)));
+    tensor.SetAttribute("ixy", round_trip_text(about_com(0, 1)));
+    tensor.SetAttribute("ixz", round_trip_text(about_com(0, 2)));
+    tensor.SetAttribute("iyy", round_trip_text(about_com(1, 1)));
+    tensor.SetAttribute("iyz", round_trip_text(about_com(1, 2)));
+    tensor.SetAttribute("izz", round_trip_text(about_com(2, 2)));
     inertial.InsertEndChild(tensor);
     replace_child(link->second, "inertial", inertial);
     // The links merged into this body: their inertia is in the body's now.
@@ -112,15 +114,15 @@ std::string write_identified_urdf(const std::string& xml, const Model& model, co
     if (layout.viscous || layout.coulomb) {
       TiXmlElement dynamics("dynamics");
       if (const TiXmlElement* old = element->second->FirstChildElement("dynamics")) dynamics = *old;
-      if (layout.viscous) dynamics.SetAttribute("damping", number(pi[layout.viscous_begin(n) + k]));
-      if (layout.coulomb) dynamics.SetAttribute("friction", number(pi[layout.coulomb_begin(n) + k]));
+      if (layout.viscous) dynamics.SetAttribute("damping", round_trip_text(pi[layout.viscous_begin(n) + k]));
+      if (layout.coulomb) dynamics.SetAttribute("friction", round_trip_text(pi[layout.coulomb_begin(n) + k]));
       replace_child(element->second, "dynamics", dynamics);
     }
     if (layout.offset || layout.armature) {
       std::ostringstream note;
       note << " identified by manipid, no URDF element for them:";
-      if (layout.offset) note << " torque offset fo = " << number(pi[layout.offset_begin(n) + k]) << (joint.is_prismatic() ? " N;" : " N m;");
-      if (layout.armature) note << " rotor inertia Ia = " << number(pi[layout.armature_begin(n) + k]) << (joint.is_prismatic() ? " kg;" : " kg m^2;");
+      if (layout.offset) note << " torque offset fo = " << round_trip_text(pi[layout.offset_begin(n) + k]) << (joint.is_prismatic() ? " N;" : " N m;");
+      if (layout.armature) note << " rotor inertia Ia = " << round_trip_text(pi[layout.armature_begin(n) + k]) << (joint.is_prismatic() ? " kg;" : " kg m^2;");
       note << " ";
       TiXmlComment comment(note.str().c_str());
       element->second->InsertEndChild(comment);

@@ -3,6 +3,7 @@
 
 #include "manipid/core/model.h"
 #include "rigid_bodies.h"
+#include "../input_error_expectations.h"
 
 #include <Eigen/Eigenvalues>
 #include <gtest/gtest.h>
@@ -13,6 +14,8 @@
 
 namespace manipid::robot {
 namespace {
+
+using test_support::field_of;
 
 using testing::box_inertia;
 using testing::cylinder_inertia;
@@ -214,15 +217,6 @@ TEST(Consistency, ReportNamesLinksAndNonNegativeParameters) {
   const ConsistencyReport fixed = check_consistency(structure, pi);
   EXPECT_TRUE(fixed.consistent());
   EXPECT_TRUE(fixed.findings.empty()) << joined(fixed.findings);
-}
-
-std::string field_of(const std::function<void()>& call) {
-  try {
-    call();
-  } catch (const InputError& error) {
-    return error.field();
-  }
-  return "(no InputError)";
 }
 
 TEST(Consistency, UnusableStructureOrVectorNamesTheField) {

@@ -4,6 +4,7 @@
 #include "manipid/core/model.h"
 #include "manipid/core/robot/log_cholesky.h"
 #include "rigid_bodies.h"
+#include "../input_error_expectations.h"
 
 #include <Eigen/Eigenvalues>
 #include <Eigen/QR>
@@ -15,6 +16,8 @@
 
 namespace manipid::robot {
 namespace {
+
+using test_support::field_of;
 
 using testing::arm_structure;
 using testing::random_log_cholesky;
@@ -384,15 +387,6 @@ TEST(ConsistentFit, MaxIterationsIsReportedAsNotConverged) {
   EXPECT_EQ(summary.termination, FitTermination::max_iterations);
   EXPECT_EQ(summary.iterations, 1);
   EXPECT_NE(summary.message.find("max_iterations"), std::string::npos);
-}
-
-std::string field_of(const std::function<void()>& call) {
-  try {
-    call();
-  } catch (const InputError& error) {
-    return error.field();
-  }
-  return "(no InputError)";
 }
 
 TEST(ConsistentFit, BadInputNamesTheField) {

@@ -14,7 +14,7 @@ namespace {
 
 using testing::random_vector;
 
-const ParameterLayout kRigid{.viscous = false, .coulomb = false};
+using testing::kRigid;
 const Eigen::Vector3d kGravity(0.0, 0.0, -9.81);
 constexpr double kTolerance = 1e-10;  // relative to the largest torque of the state
 

@@ -15,7 +15,7 @@ namespace {
 
 using testing::random_vector;
 
-const ParameterLayout kRigid{.viscous = false, .coulomb = false};
+using testing::kRigid;
 
 /// A pendulum: link "rod" turns about `axis` at the base's origin, centre of mass (l, 0, 0), inertia about it
 /// diag(a, b, c).

@@ -70,6 +70,9 @@ inline InertialParameters random_body(std::mt19937_64& engine) {
   return InertialParameters::from_centre_of_mass(mass, com, R * principal * R.transpose());
 }
 
+/// Rigid bodies only: no viscous or Coulomb friction columns.
+inline const ParameterLayout kRigid{.viscous = false, .coulomb = false};
+
 /// π for `joint_count` joints: random consistent bodies, friction and armature in plausible ranges.
 inline Eigen::VectorXd random_parameters(std::mt19937_64& engine, int joint_count, const ParameterLayout& layout) {
   Eigen::VectorXd pi(layout.size(joint_count));
