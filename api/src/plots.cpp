@@ -18,7 +18,6 @@ namespace {
 using Json = nlohmann::ordered_json;
 using json_numbers::number;
 
-
 template <class Column>
 Json pick(const Column& column, const std::vector<long>& indices) {
   Json values = Json::array();

@@ -295,5 +295,4 @@ nlohmann::ordered_json excitation_to_json(const robot::Model& model, const robot
   };
 }
 
-
 }  // namespace manipid::api

@@ -18,7 +18,6 @@ namespace {
 using manipid::detail::kNaN;
 using manipid::detail::short_number;
 
-
 // I_O as a matrix from π's six inertia entries (Ixx, Ixy, Ixz, Iyy, Iyz, Izz).
 Eigen::Matrix3d inertia_matrix(const Vector10d& link) {
   Eigen::Matrix3d inertia;
