@@ -119,7 +119,7 @@ long long parse_integer_option(const std::string& text, const std::string& optio
   return *value;
 }
 
-// ---- Files -------------------------------------------------------------------------------
+// ---- Tables printed to the terminal --------------------------------------------------------
 
 std::string format(double value, int digits) {
   if (!std::isfinite(value)) return "-";
@@ -127,6 +127,8 @@ std::string format(double value, int digits) {
   std::snprintf(buffer, sizeof buffer, "%.*g", digits, value);
   return buffer;
 }
+
+// ---- Files -------------------------------------------------------------------------------
 
 std::string input_name(const std::string& path) { return path == "-" ? "stdin" : path; }
 std::string output_name(const std::string& path) { return path == "-" ? "stdout" : path; }
