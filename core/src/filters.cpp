@@ -5,7 +5,12 @@
 
 #include "manipid/core/model.h"  // InputError
 
+#include "vector_clones.h"
+
+#include <unsupported/Eigen/FFT>
+
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <functional>
 #include <map>
@@ -98,23 +103,8 @@ Eigen::VectorXd mirrored(const std::vector<double>& half, int half_length, doubl
 // Output blocks small enough that x's window and the outputs stay in L1 across all taps.
 constexpr Index block_size = 512;
 
-// The build targets generic x86-64 (SSE2). On x86-64 with GCC/Clang the kernels are also
-// compiled for AVX2 and picked at load time (function multiversioning): twice the vector
-// width for the same binary. "avx2" does not enable FMA, and vectorising across outputs
-// keeps each output's operation order, so both versions give bit-identical results.
-// Define MANIPID_NO_FUNCTION_CLONES to build the generic version only. The kernels are kept
-// out of line either way: inlined into their callers they lose registers to spills.
-// ThreadSanitizer crashes in the clones' load-time resolvers, so TSan builds go generic.
-#if defined(__SANITIZE_THREAD__) && !defined(MANIPID_NO_FUNCTION_CLONES)
-#define MANIPID_NO_FUNCTION_CLONES
-#endif
-#if defined(__x86_64__) && defined(__GNUC__) && defined(__linux__) && !defined(MANIPID_NO_FUNCTION_CLONES)
-#define MANIPID_VECTOR_CLONES __attribute__((target_clones("avx2", "default"), noinline))
-#elif defined(__GNUC__)
-#define MANIPID_VECTOR_CLONES __attribute__((noinline))
-#else
-#define MANIPID_VECTOR_CLONES
-#endif
+// The kernels are compiled for baseline x86-64 and for AVX2 (vector_clones.h). Vectorising
+// across outputs keeps each output's operation order, so both versions agree bit for bit.
 
 // y[j] = c[0] x[j] + Σ_{n=1}^{M} c[n] (x[j+n] + parity·x[j−n]) for j in [0, count), where
 // `centre` points at the input the first output is centred on and `taps` at c[0] (the
@@ -193,6 +183,36 @@ MANIPID_VECTOR_CLONES void correlate_folded_all(const double* lowpass, const dou
       }
     }
   }
+}
+
+// Long filters through the FFT, by overlap-save: blocks of B inputs (B a power of two, at least
+// 4(2M + 1), so a block yields B − 2M ≥ 3/4 B outputs) are transformed once, multiplied by
+// each filter's conjugate spectrum (a correlation, as the direct sum), and transformed back;
+// the first B − 2M outputs of a block are free of wrap-around. A direct output costs ~M
+// multiply-adds; an FFT output ~4(log₂ B)/(1 − 2M/B) operations whatever M is. Eigen's FFT
+// module (kissfft, header-only, in libeigen3-dev) is used; its real transforms are fast for
+// lengths that are multiples of 4. Rounding differs from the direct sum's, not its size: both
+// are a few ulps of Σ|c[n]|·max|x| (tests/core/filters_test.cpp compares the two).
+Index fft_block_length(int half_length) {
+  Index length = 1024;
+  while (length < 4 * (2 * static_cast<Index>(half_length) + 1)) length *= 2;
+  return length;
+}
+
+// The FFT path pays when the filter is long and there is at least a block's worth of outputs.
+bool use_fft(int half_length, Index outputs) {
+  return half_length >= DifferentialFilter::fft_min_half_length && half_length <= DifferentialFilter::fft_max_half_length &&
+         outputs >= fft_block_length(half_length) - 2 * static_cast<Index>(half_length);
+}
+
+// One transform object per thread: Eigen's FFT keeps its plans in itself and is not thread-safe.
+Eigen::FFT<double>& thread_fft() {
+  thread_local Eigen::FFT<double> fft = [] {
+    Eigen::FFT<double> made;
+    made.SetFlag(Eigen::FFT<double>::HalfSpectrum);
+    return made;
+  }();
+  return fft;
 }
 
 bool overlaps(const double* a, Index a_size, const double* b, Index b_size) {
@@ -292,6 +312,57 @@ void check_output_size(Index expected, Index actual, const char* name) {
 
 }  // namespace
 
+struct DifferentialFilter::Spectra {
+  Index block = 0;  // B
+  std::array<std::vector<std::complex<double>>, 3> of;  // by FilterOrder: conj(FFT of the taps padded to B)
+};
+
+const DifferentialFilter::Spectra& DifferentialFilter::spectra() const {
+  std::call_once(spectra_once_, [this] {
+    auto made = std::make_shared<Spectra>();
+    made->block = fft_block_length(settings_.half_length);
+    std::vector<double> padded(static_cast<std::size_t>(made->block), 0.0);
+    for (const FilterOrder order : {FilterOrder::lowpass, FilterOrder::derivative1, FilterOrder::derivative2}) {
+      const Eigen::VectorXd& taps = coefficients(order);
+      std::copy(taps.data(), taps.data() + taps.size(), padded.begin());
+      auto& spectrum = made->of[static_cast<std::size_t>(order)];
+      thread_fft().fwd(spectrum, padded);
+      for (auto& value : spectrum) value = std::conj(value);
+    }
+    spectra_ = std::move(made);
+  });
+  return *spectra_;
+}
+
+namespace {
+
+// y_k[j] = Σ_n c_k[n] x[j + M + n], j < outputs, for the orders asked (null outputs are skipped).
+void correlate_by_fft(const DifferentialFilter& filter, const std::array<const std::vector<std::complex<double>>*, 3>& spectra,
+                      Index block, const double* x, Index samples, const std::array<double*, 3>& outputs, Index count) {
+  const Index step = block - 2 * static_cast<Index>(filter.settings().half_length);
+  Eigen::FFT<double>& fft = thread_fft();
+  thread_local std::vector<double> input, output;
+  thread_local std::vector<std::complex<double>> transform, product;
+  input.resize(static_cast<std::size_t>(block));
+  output.resize(static_cast<std::size_t>(block));
+  for (Index first = 0; first < count; first += step) {
+    const Index available = std::min(block, samples - first);
+    std::copy(x + first, x + first + available, input.begin());
+    std::fill(input.begin() + available, input.end(), 0.0);
+    fft.fwd(transform, input);
+    const Index kept = std::min(step, count - first);
+    for (std::size_t k = 0; k < 3; ++k) {
+      if (!outputs[k]) continue;
+      product.resize(transform.size());
+      for (std::size_t i = 0; i < transform.size(); ++i) product[i] = transform[i] * (*spectra[k])[i];
+      fft.inv(output.data(), product.data(), block);
+      std::copy(output.begin(), output.begin() + kept, outputs[k] + first);
+    }
+  }
+}
+
+}  // namespace
+
 void DifferentialFilter::apply(FilterOrder order, const Eigen::Ref<const Eigen::VectorXd>& x,
                                Eigen::Ref<Eigen::VectorXd> y) const {
   const Index outputs = checked_output_length(*this, x.size());
@@ -304,6 +375,15 @@ void DifferentialFilter::apply(FilterOrder order, const Eigen::Ref<const Eigen::
   const double* input = x.data();
   if (overlaps(x.data(), x.size(), y.data(), y.size())) input = (copy = x).data();
 
+  if (use_fft(m, outputs)) {
+    const Spectra& transforms = spectra();
+    std::array<const std::vector<std::complex<double>>*, 3> chosen{};
+    std::array<double*, 3> out{};
+    chosen[static_cast<std::size_t>(order)] = &transforms.of[static_cast<std::size_t>(order)];
+    out[static_cast<std::size_t>(order)] = y.data();
+    correlate_by_fft(*this, chosen, transforms.block, input, x.size(), out, outputs);
+    return;
+  }
   const double* centre = input + m;
   const double* upper_taps = taps.data() + m;
   if (order == FilterOrder::derivative1) {
@@ -334,6 +414,12 @@ void DifferentialFilter::apply_all(const Eigen::Ref<const Eigen::VectorXd>& x, E
       overlaps(x.data(), x.size(), derivative1.data(), outputs) ||
       overlaps(x.data(), x.size(), derivative2.data(), outputs)) {
     input = (copy = x).data();
+  }
+  if (use_fft(m, outputs)) {
+    const Spectra& transforms = spectra();
+    correlate_by_fft(*this, {&transforms.of[0], &transforms.of[1], &transforms.of[2]}, transforms.block, input, x.size(),
+                     {lowpass.data(), derivative1.data(), derivative2.data()}, outputs);
+    return;
   }
   correlate_folded_all(lowpass_.data() + m, derivative1_.data() + m, derivative2_.data() + m, m, input + m,
                        lowpass.data(), derivative1.data(), derivative2.data(), outputs);

@@ -8,6 +8,7 @@
 // function of (q, q̇, q̈): one column of Y per distinct product.
 #include "manipid/core/regressor.h"
 
+#include "dynamics_kernels.h"  // sine_cosine
 #include "frame_update.h"
 
 #include <algorithm>
@@ -50,8 +51,7 @@ void rotational_kinematics(const RobotModel& model, DynamicsWorkspace& w, const 
                            const Eigen::Ref<const Eigen::VectorXd>& qdd) {
   const int n = model.joint_count();
   for (int k = 0; k < n; ++k) {
-    w.joint_cos[k] = std::cos(q[k]);
-    w.joint_sin[k] = std::sin(q[k]);
+    detail::sine_cosine(q[k], w.joint_sin[k], w.joint_cos[k]);
   }
   for (int k = 1; k <= n; ++k) {
     detail::update_rotation(w.rotation[k - 1], w.joint_cos[k - 1], w.joint_sin[k - 1], w.twist_cos[k - 1], w.twist_sin[k - 1], w.rotation[k]);

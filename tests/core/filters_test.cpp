@@ -423,6 +423,54 @@ TEST(Filters, ApplyAllEqualsTheThreeSingleApplies) {
   }
 }
 
+// Long filters on long records go through the FFT (filters.h); short records of the same
+// filters through the direct sum. Both against a long-double sum of the taps, each output.
+TEST(Filters, LongFiltersThroughTheFftAgreeWithTheDirectSum) {
+  for (const FilterSettings& settings : {make_settings(DifferentialFilter::fft_min_half_length, 0.3, 0.001),
+                                         make_settings(400, 2.4, 0.001), make_settings(1000, 0.1, 0.002)}) {
+    const DifferentialFilter filter(settings);
+    const int m = settings.half_length;
+    // 9(2M + 1) + 7 outputs: more than a block's (B ≤ 8(2M + 1)), the last block partial; and
+    // 2M outputs, fewer than a block, for the direct sum.
+    for (const int outputs : {9 * (2 * m + 1) + 7, 2 * m}) {
+      const Eigen::VectorXd x = sampled(2 * m + 1 + outputs, 0.0, 1.0, [](double i) {
+        return std::sin(0.01 * i) + 0.3 * std::cos(0.37 * i * i) + 1e-3 * i;
+      });
+      Eigen::VectorXd all[3] = {Eigen::VectorXd(outputs), Eigen::VectorXd(outputs), Eigen::VectorXd(outputs)};
+      filter.apply_all(x, all[0], all[1], all[2]);
+      for (int order = 0; order < 3; ++order) {
+        const Eigen::VectorXd& taps = filter.coefficients(all_orders[order]);
+        const Eigen::VectorXd single = filter.apply(all_orders[order], x);
+        const double scale = taps.cwiseAbs().sum() * x.cwiseAbs().maxCoeff();
+        double worst_all = 0.0, worst_single = 0.0;
+        for (int j = 0; j < outputs; ++j) {
+          long double sum = 0.0L;
+          for (int n = 0; n <= 2 * m; ++n) sum += static_cast<long double>(taps[n]) * x[j + n];
+          worst_all = std::max(worst_all, std::abs(all[order][j] - static_cast<double>(sum)));
+          worst_single = std::max(worst_single, std::abs(single[j] - static_cast<double>(sum)));
+        }
+        EXPECT_LE(worst_all, 1e-14 * scale) << "M " << m << ", order " << order << ", " << outputs << " outputs";
+        EXPECT_LE(worst_single, 1e-14 * scale) << "M " << m << ", order " << order << ", " << outputs << " outputs";
+      }
+    }
+  }
+}
+
+// The FFT path's transforms are made once per filter, whichever thread comes first.
+TEST(Filters, ThreadsShareALongFiltersTransforms) {
+  const DifferentialFilter filter(make_settings(400, 0.2, 0.001));
+  const Eigen::VectorXd x = sampled(20'000, 0.0, 0.001, [](double t) { return std::sin(3 * t) + 0.1 * t * t; });
+  std::vector<Eigen::VectorXd> results(4);
+  std::vector<std::thread> threads;
+  for (auto& result : results) {
+    threads.emplace_back([&filter, &x, &result] { result = filter.apply(FilterOrder::derivative2, x); });
+  }
+  for (auto& thread : threads) thread.join();
+  for (const auto& result : results) EXPECT_EQ(result, results.front());
+  // q̈ of sin(3t) + 0.1 t² is −9 sin(3t) + 0.2, well inside the band (to the filter's passband ripple).
+  EXPECT_NEAR(results.front()[5'000], -9 * std::sin(3 * 5.4) + 0.2, 1e-4);
+}
+
 TEST(Filters, OutputMayOverwriteItsOwnInput) {
   const DifferentialFilter filter(make_settings(20, 0.4, 0.01));
   const Eigen::VectorXd x = sampled(500, 0.0, 0.01, [](double t) { return std::exp(-t) * std::sin(3 * t); });

@@ -18,6 +18,7 @@
 
 #include <complex>
 #include <memory>
+#include <mutex>
 
 namespace manipid {
 
@@ -48,7 +49,9 @@ class DifferentialFilter {
   int first_output_index() const { return settings_.half_length; }
 
   /// Filters x into y (y must have output_length(x.size()) entries). Throws InputError
-  /// ("samples") when x is too short.
+  /// ("samples") when x is too short. Long filters (M ≥ fft_min_half_length) on enough data go
+  /// through the FFT (overlap-save): the same outputs up to rounding, at a cost that hardly
+  /// grows with M where the direct sum's grows as M.
   void apply(FilterOrder order, const Eigen::Ref<const Eigen::VectorXd>& x,
              Eigen::Ref<Eigen::VectorXd> y) const;
   Eigen::VectorXd apply(FilterOrder order, const Eigen::Ref<const Eigen::VectorXd>& x) const;
@@ -59,9 +62,19 @@ class DifferentialFilter {
   /// H(Ω) = Σ_n c[n] e^{iΩn}, Ω in rad/sample (the response to e^{iΩt/Δ}, in physical units).
   std::complex<double> frequency_response(FilterOrder order, double omega) const;
 
+  /// Half-lengths from which apply() and apply_all() use the FFT (see filters.cpp).
+  static constexpr int fft_min_half_length = 192;
+  static constexpr int fft_max_half_length = 16384;
+
  private:
+  struct Spectra;
+  const Spectra& spectra() const;
+
   FilterSettings settings_;
   Eigen::VectorXd lowpass_, derivative1_, derivative2_;
+  // The taps' transforms for the FFT path, made on first use (long filters only).
+  mutable std::shared_ptr<const Spectra> spectra_;
+  mutable std::once_flag spectra_once_;
 };
 
 /// A shared filter for these settings, built once and reused (thread-safe cache).
