@@ -34,11 +34,32 @@ double estimate_noise(const Eigen::Ref<const Eigen::VectorXd>& signal) {
   return 1.4826 * *middle / std::sqrt(70.0);
 }
 
+NoiseLevels estimate_noise_levels(const Trajectory& data) {
+  const int n = data.joint_count();
+  NoiseLevels levels;
+  levels.q.resize(n);
+  for (int j = 0; j < n; ++j) levels.q[j] = estimate_noise(data.q.col(j));
+  if (data.has_torque()) {
+    levels.tau.resize(n);
+    levels.tau_rms.resize(n);
+    for (int j = 0; j < n; ++j) {
+      levels.tau[j] = estimate_noise(data.tau.col(j));
+      levels.tau_rms[j] = std::sqrt(data.tau.col(j).squaredNorm() / static_cast<double>(data.samples()));
+    }
+  }
+  return levels;
+}
+
+bool NoiseLevels::noise_free(bool torque_measured) const {
+  for (Eigen::Index j = 0; j < q.size(); ++j) {
+    if (q[j] >= kNoiseFreeAngle) return false;
+    if (torque_measured && tau.size() > 0 && tau[j] >= kNoiseFreeTorque * tau_rms[j]) return false;
+  }
+  return true;
+}
+
 namespace {
 
-// Data whose noise is below these (the noise_free thresholds of identification.cpp) are clean.
-constexpr double kNoiseFreeAngle = 1e-8;   // rad
-constexpr double kNoiseFreeTorque = 1e-7;  // of each joint's torque RMS
 // Every kChoiceStride-th filtered sample is enough to compare candidates (and 16× cheaper).
 constexpr int kChoiceStride = 16;
 
@@ -376,10 +397,10 @@ Eigen::VectorXd fit_parameters(const ParameterProducts& products, const Eigen::M
 
 }  // namespace
 
-FilterChoice choose_filter(const RobotModel& model, const Trajectory& data, const IdentificationOptions& options,
-                           bool use_reference) {
+FilterChoice choose_filter(const RobotModel& model, const Trajectory& data, const NoiseLevels& noise,
+                           const IdentificationOptions& options, bool use_reference) {
   FilterChoice choice;
-  for (int j = 0; j < data.joint_count(); ++j) choice.q_noise = std::max(choice.q_noise, estimate_noise(data.q.col(j)));
+  choice.q_noise = noise.q.size() > 0 ? noise.q.maxCoeff() : 0.0;
   choice.settings.dt = data.dt();
   choice.settings.half_length = options.half_length;
   choice.settings.band = options.band;
@@ -393,13 +414,7 @@ FilterChoice choose_filter(const RobotModel& model, const Trajectory& data, cons
     if (data.samples() >= 4 * (2 * length + 1)) lengths.push_back(length);  // keep most of the data
   }
   const std::vector<double> bands = options.band > 0.0 ? std::vector<double>{options.band} : kAutoBands;
-  bool noisy = choice.q_noise >= kNoiseFreeAngle;
-  if (!use_reference && data.has_torque()) {
-    for (int j = 0; j < data.joint_count(); ++j) {
-      const double rms = std::sqrt(data.tau.col(j).squaredNorm() / static_cast<double>(data.samples()));
-      noisy = noisy || estimate_noise(data.tau.col(j)) >= kNoiseFreeTorque * rms;
-    }
-  }
+  const bool noisy = !noise.noise_free(!use_reference);
   int reach = kYardstickWide.half_length + kYardstickNarrow.half_length;
   for (int length : lengths) reach = std::max(reach, length);
   const std::vector<int> instants = common_instants(data.samples(), reach, kChoiceStride);

@@ -35,6 +35,22 @@ struct FilterChoice {
 /// smooth signal is tiny, of white noise it has variance 70σ²; the median makes it robust.
 double estimate_noise(const Eigen::Ref<const Eigen::VectorXd>& signal);
 
+/// Below these the data carry no measurable noise (simulated or computed data); identification.cpp
+/// argues the values where it uses the rule to judge the residual.
+inline constexpr double kNoiseFreeAngle = 1e-8;   // rad
+inline constexpr double kNoiseFreeTorque = 1e-7;  // of each joint's torque RMS
+
+/// The white noise on each measured signal (estimate_noise), estimated once per identification
+/// and read by the filter choice and the residual's assessment.
+struct NoiseLevels {
+  Eigen::VectorXd q;        ///< rad, per joint
+  Eigen::VectorXd tau;      ///< per joint; empty when the data have no τ columns
+  Eigen::VectorXd tau_rms;  ///< each joint's τ RMS; empty likewise
+  /// No measurable noise on q, nor on τ when the torque is the measured one.
+  bool noise_free(bool torque_measured) const;
+};
+NoiseLevels estimate_noise_levels(const Trajectory& data);
+
 /// Given settings pass through; a zero band or half-length is chosen from the data, by what
 /// each candidate does to the estimate. On noisy data (q or measured τ noise above the
 /// noise-free thresholds) every candidate's parameters are fitted (Gauss–Newton on its
@@ -43,7 +59,7 @@ double estimate_noise(const Eigen::Ref<const Eigen::VectorXd>& signal);
 /// (The lowest least-squares floor J*, the rule before, lets narrow bands win on noisy data —
 /// they remove τ noise from the floor while bending the regressor, which is nonlinear in q.)
 /// On noise-free data the floor J* measures the filter's distortion alone, and the lowest wins.
-FilterChoice choose_filter(const RobotModel& model, const Trajectory& data, const IdentificationOptions& options,
-                           bool use_reference);
+FilterChoice choose_filter(const RobotModel& model, const Trajectory& data, const NoiseLevels& noise,
+                           const IdentificationOptions& options, bool use_reference);
 
 }  // namespace manipid::detail

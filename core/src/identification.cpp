@@ -345,24 +345,12 @@ PdController settle_gains(const IdentificationOptions& options, const FilteredDa
 // integrator's rough q dominates the residual) and 2.9 (clean, M = 100, Ωg = 0.2) against 2.8 and
 // 2.2 on the noisy case — no threshold between them.
 constexpr double kBiasRatio = 10.0;
-constexpr double kNoiseFreeAngle = 1e-8;   // rad
-constexpr double kNoiseFreeTorque = 1e-7;  // of each joint's torque RMS
+using detail::kNoiseFreeAngle;   // the rule's limits (filter_choice.h)
+using detail::kNoiseFreeTorque;
 
 /// RMS over all entries; NaN for an empty matrix.
 double rms(const Eigen::Ref<const Eigen::MatrixXd>& x) {
   return x.size() ? std::sqrt(x.squaredNorm() / static_cast<double>(x.size())) : std::numeric_limits<double>::quiet_NaN();
-}
-
-/// (b): no measurable noise in q, nor in τ when it is measured.
-bool noise_free(const Trajectory& data, bool torque_measured) {
-  for (int k = 0; k < data.joint_count(); ++k) {
-    if (detail::estimate_noise(data.q.col(k)) >= kNoiseFreeAngle) return false;
-    if (torque_measured && data.has_torque() &&
-        detail::estimate_noise(data.tau.col(k)) >= kNoiseFreeTorque * rms(data.tau.col(k))) {
-      return false;
-    }
-  }
-  return true;
 }
 
 void judge_residual(double residual_rms, double noise_rms, bool data_noise_free, IdentificationResult& result) {
@@ -388,11 +376,11 @@ void judge_residual(double residual_rms, double noise_rms, bool data_noise_free,
 }
 
 /// Output-error: the residual q̂ − q (stacked joint after joint) against the noise on q.
-void assess_output_error_residual(const Trajectory& data, const Eigen::VectorXd& residual, IdentificationResult& result) {
+void assess_output_error_residual(const detail::NoiseLevels& noise, const Eigen::VectorXd& residual,
+                                  IdentificationResult& result) {
   if (!residual.allFinite()) return;
-  double noise_variance = 0.0;
-  for (int k = 0; k < data.joint_count(); ++k) noise_variance += std::pow(detail::estimate_noise(data.q.col(k)), 2);
-  judge_residual(rms(residual), std::sqrt(noise_variance / data.joint_count()), noise_free(data, false), result);
+  judge_residual(rms(residual), std::sqrt(noise.q.squaredNorm() / static_cast<double>(noise.q.size())),
+                 noise.noise_free(false), result);
 }
 
 // Gauss–Newton polish of an input-error minimum. The Gram form makes each step exact and
@@ -457,6 +445,7 @@ int refine_input_error(const InputErrorCost& cost, Eigen::VectorXd& theta, doubl
 struct Problem {
   const RobotModel& model;
   const Trajectory& data;
+  const detail::NoiseLevels& noise;  // of `data`, estimated once
   const IdentificationOptions& options;
   const Setup& setup;
   detail::EvaluationLog& log;
@@ -474,7 +463,7 @@ InputErrorStage run_input_error(const Problem& problem, IdentificationResult& re
   const Setup& setup = problem.setup;
   const IdentificationOptions& options = problem.options;
   InputErrorStage stage;
-  stage.choice = detail::choose_filter(problem.model, problem.data, options, setup.use_reference);
+  stage.choice = detail::choose_filter(problem.model, problem.data, problem.noise, options, setup.use_reference);
   result.filter = stage.choice.settings;
   result.filter_chosen_automatically = stage.choice.automatic;
   result.torque_source = setup.use_reference ? TorqueSource::reference : TorqueSource::measured;
@@ -559,8 +548,7 @@ void assess_input_error_residual(const Problem& problem, const InputErrorStage& 
   const auto filter = cached_filter(stage.choice.settings);
   const double lowpass_gain = filter->coefficients(FilterOrder::lowpass).norm();
   const double acceleration_gain = filter->coefficients(FilterOrder::derivative2).norm();
-  Eigen::VectorXd q_noise(n);
-  for (int k = 0; k < n; ++k) q_noise[k] = detail::estimate_noise(data.q.col(k));
+  const Eigen::VectorXd& q_noise = problem.noise.q;
   // The mass matrix's squared entries, averaged over 16 samples of the filtered motion.
   Eigen::MatrixXd mass_squared = Eigen::MatrixXd::Zero(n, n);
   DynamicsWorkspace workspace(problem.model);
@@ -575,7 +563,7 @@ void assess_input_error_residual(const Problem& problem, const InputErrorStage& 
   for (int j = 0; j < n; ++j) {
     double tau_part = 0.0;
     if (result.torque_source == TorqueSource::measured) {
-      tau_part = detail::estimate_noise(data.tau.col(j)) * lowpass_gain;
+      tau_part = problem.noise.tau[j] * lowpass_gain;
     } else if (result.controller) {
       tau_part = result.controller->kp[j] * q_noise[j] * lowpass_gain;  // τ^f formed from q^f
     }
@@ -583,7 +571,7 @@ void assess_input_error_residual(const Problem& problem, const InputErrorStage& 
     for (int k = 0; k < n; ++k) noise_variance += mass_squared(j, k) * std::pow(q_noise[k] * acceleration_gain, 2);
   }
   judge_residual(rms(fit.residual()), std::sqrt(noise_variance / n),
-                 noise_free(data, result.torque_source == TorqueSource::measured), result);
+                 problem.noise.noise_free(result.torque_source == TorqueSource::measured), result);
 }
 
 void identify_input_error(const Problem& problem, IdentificationResult& result) {
@@ -619,7 +607,7 @@ void identify_output_error(const Problem& problem, IdentificationResult& result)
   output_error.evaluate(Parameters::from_vector(result.estimate), &residual);
   const Eigen::MatrixXd jacobian = detail::output_error_jacobian(output_error, result.estimate, residual, setup.free, basis);
   assess_output_error(problem, output_error, structure, residual, jacobian, result);
-  assess_output_error_residual(problem.data, residual, result);
+  assess_output_error_residual(problem.noise, residual, result);
 }
 
 void identify_two_stage(const Problem& problem, IdentificationResult& result) {
@@ -643,7 +631,7 @@ void identify_two_stage(const Problem& problem, IdentificationResult& result) {
   result.cancelled = outcome.cancelled;
   require_finite_costs(result);
   assess_output_error(problem, output_error, *stage.cost, outcome.residual, outcome.jacobian, result);
-  assess_output_error_residual(problem.data, outcome.residual, result);
+  assess_output_error_residual(problem.noise, outcome.residual, result);
 }
 
 }  // namespace
@@ -671,7 +659,8 @@ IdentificationResult identify(const RobotModel& model, const Trajectory& measure
     settled.controller = settle_gains(options, measured ? &*measured : nullptr, data, result);
   }
   detail::EvaluationLog log(options.history_limit, options.on_evaluation);
-  const Problem problem{model, data, settled, setup, log};
+  const detail::NoiseLevels noise = detail::estimate_noise_levels(data);
+  const Problem problem{model, data, noise, settled, setup, log};
   // One function per method, as Ceres dispatches its minimisers.
   switch (options.method) {
     case IdentificationMethod::input_error: identify_input_error(problem, result); break;
