@@ -224,6 +224,12 @@ if [[ -n "$binary" ]]; then
 else
   echo "skip  ldd coverage (no binary given)"
 fi
+# Loaded with dlopen when PostgreSQL is first used, so ldd does not list it (server/store/postgres/libpq.h).
+if grep -qx libpq5 <<<"$runtime"; then
+  pass "[runtime] has libpq5 (libpq.so.5, loaded at run time)"
+else
+  fail "[runtime] has libpq5 (libpq.so.5, loaded at run time)"
+fi
 
 # Without a binary, a hint instead: the shared-library packages the [build] -dev packages pull
 # (libsqlite3-dev → libsqlite3-0) that [runtime] lacks. Not all are linked, so not a failure.

@@ -47,20 +47,20 @@ int hex_value(char c) {
 // ---- Result ----
 
 long Result::changed() const {
-  const char* count = PQcmdTuples(result_);
+  const char* count = libpq().PQcmdTuples(result_);
   return count == nullptr || *count == '\0' ? 0 : std::atol(count);
 }
 
 std::string Result::text(int row, int column) const {
   if (null(row, column)) return {};
-  return std::string(PQgetvalue(result_, row, column), static_cast<std::size_t>(PQgetlength(result_, row, column)));
+  return std::string(libpq().PQgetvalue(result_, row, column), static_cast<std::size_t>(libpq().PQgetlength(result_, row, column)));
 }
 
 std::int64_t Result::integer(int row, int column) const {
   if (null(row, column)) return 0;
-  const char* value = PQgetvalue(result_, row, column);
+  const char* value = libpq().PQgetvalue(result_, row, column);
   std::int64_t number = 0;
-  const auto [end, error] = std::from_chars(value, value + PQgetlength(result_, row, column), number);
+  const auto [end, error] = std::from_chars(value, value + libpq().PQgetlength(result_, row, column), number);
   if (error != std::errc()) throw StoreError("a whole number in the database does not read as one");
   return number;
 }
@@ -71,13 +71,13 @@ std::optional<double> Result::real_or_null(int row, int column) const {
   if (null(row, column)) return std::nullopt;
   // strtod reads PostgreSQL's shortest exact digits back to the same double, and its
   // "Infinity", "-Infinity" and "NaN".
-  return std::strtod(PQgetvalue(result_, row, column), nullptr);
+  return std::strtod(libpq().PQgetvalue(result_, row, column), nullptr);
 }
 
 std::vector<unsigned char> Result::bytes(int row, int column) const {
   if (null(row, column)) return {};
-  const char* value = PQgetvalue(result_, row, column);
-  const auto length = static_cast<std::size_t>(PQgetlength(result_, row, column));
+  const char* value = libpq().PQgetvalue(result_, row, column);
+  const auto length = static_cast<std::size_t>(libpq().PQgetlength(result_, row, column));
   // bytea_output = hex (the default since 9.0, set per connection): "\x" then two digits a byte.
   if (length < 2 || value[0] != '\\' || value[1] != 'x' || length % 2 != 0) {
     throw StoreError("a binary column in the database is not in hex form");
@@ -93,8 +93,8 @@ std::vector<unsigned char> Result::bytes(int row, int column) const {
 
 std::int64_t Result::binary_integer(int row, int column) const {
   if (null(row, column)) return 0;
-  const auto* bytes = reinterpret_cast<const unsigned char*>(PQgetvalue(result_, row, column));
-  const int length = PQgetlength(result_, row, column);
+  const auto* bytes = reinterpret_cast<const unsigned char*>(libpq().PQgetvalue(result_, row, column));
+  const int length = libpq().PQgetlength(result_, row, column);
   std::uint64_t value = 0;
   for (int i = 0; i < length; ++i) value = (value << 8) | bytes[i];  // network byte order
   if (length == 4) return static_cast<std::int32_t>(static_cast<std::uint32_t>(value));
@@ -103,8 +103,8 @@ std::int64_t Result::binary_integer(int row, int column) const {
 
 std::span<const unsigned char> Result::binary_bytes(int row, int column) const {
   if (null(row, column)) return {};
-  return {reinterpret_cast<const unsigned char*>(PQgetvalue(result_, row, column)),
-          static_cast<std::size_t>(PQgetlength(result_, row, column))};
+  return {reinterpret_cast<const unsigned char*>(libpq().PQgetvalue(result_, row, column)),
+          static_cast<std::size_t>(libpq().PQgetlength(result_, row, column))};
 }
 
 // ---- Params ----
@@ -164,12 +164,12 @@ std::vector<int> Params::formats() const {
 
 // ---- Connection ----
 
-Connection::Connection(const std::string& conninfo) : connection_(PQconnectdb(conninfo.c_str())) {
+Connection::Connection(const std::string& conninfo) : connection_(libpq().PQconnectdb(conninfo.c_str())) {
   if (connection_ == nullptr) throw StoreError("cannot connect to PostgreSQL: out of memory");
   try {
-    if (PQstatus(connection_) != CONNECTION_OK) {
+    if (libpq().PQstatus(connection_) != CONNECTION_OK) {
       // libpq's reason names host, port and user, never the password.
-      const std::string reason = first_line(PQerrorMessage(connection_));
+      const std::string reason = first_line(libpq().PQerrorMessage(connection_));
       const bool refused = reason.find("password") != std::string::npos ||
                            reason.find("does not exist") != std::string::npos ||
                            reason.find("authentication") != std::string::npos;
@@ -178,20 +178,20 @@ Connection::Connection(const std::string& conninfo) : connection_(PQconnectdb(co
     }
     // Fixed per-connection settings: UTC stamps, hex bytea, no notices on stderr, and a bound
     // on how long a statement waits for a row lock (a stuck peer must not hang a request).
-    PQsetNoticeProcessor(connection_, [](void*, const char*) {}, nullptr);
+    libpq().PQsetNoticeProcessor(connection_, [](void*, const char*) {}, nullptr);
     execute("SET TIME ZONE 'UTC'; SET bytea_output = 'hex'; SET lock_timeout = '30s'; "
             "SET idle_in_transaction_session_timeout = '60s'");
   } catch (...) {
-    PQfinish(connection_);  // the destructor does not run for a constructor that throws
+    libpq().PQfinish(connection_);  // the destructor does not run for a constructor that throws
     throw;
   }
 }
 
 void Connection::fail(const PGresult* result, const std::string& what) {
-  const char* sqlstate = result == nullptr ? nullptr : PQresultErrorField(result, PG_DIAG_SQLSTATE);
+  const char* sqlstate = result == nullptr ? nullptr : libpq().PQresultErrorField(result, PG_DIAG_SQLSTATE);
   Failure failure = classify(sqlstate);
-  if (PQstatus(connection_) != CONNECTION_OK) failure = Failure::unavailable;
-  const std::string message = first_line(result != nullptr ? PQresultErrorMessage(result) : PQerrorMessage(connection_));
+  if (libpq().PQstatus(connection_) != CONNECTION_OK) failure = Failure::unavailable;
+  const std::string message = first_line(result != nullptr ? libpq().PQresultErrorMessage(result) : libpq().PQerrorMessage(connection_));
   switch (failure) {
     case Failure::disk_full: throw StorageFull("the disk holding the database is full (" + message + ")");
     case Failure::unavailable: throw StoreUnavailable("the PostgreSQL connection was lost: " + message);
@@ -204,67 +204,67 @@ Result Connection::exec(const std::string& sql, const Params& params, bool binar
   auto found = prepared_.find(sql);
   if (found == prepared_.end()) {
     std::string name = "s" + std::to_string(prepared_.size());
-    Result prepared(PQprepare(connection_, name.c_str(), sql.c_str(), params.size(), nullptr));
-    if (PQresultStatus(prepared.get()) != PGRES_COMMAND_OK) fail(prepared.get(), "a statement could not be prepared");
+    Result prepared(libpq().PQprepare(connection_, name.c_str(), sql.c_str(), params.size(), nullptr));
+    if (libpq().PQresultStatus(prepared.get()) != PGRES_COMMAND_OK) fail(prepared.get(), "a statement could not be prepared");
     found = prepared_.emplace(sql, std::move(name)).first;
   }
   const auto values = params.pointers();
   const auto lengths = params.lengths();
   const auto formats = params.formats();
-  Result result(PQexecPrepared(connection_, found->second.c_str(), params.size(), values.data(), lengths.data(),
+  Result result(libpq().PQexecPrepared(connection_, found->second.c_str(), params.size(), values.data(), lengths.data(),
                                formats.data(), binary_results ? 1 : 0));
   const PGresult* raw = result.get();
-  const auto status = PQresultStatus(raw);
+  const auto status = libpq().PQresultStatus(raw);
   if (status != PGRES_COMMAND_OK && status != PGRES_TUPLES_OK) fail(raw, "a statement failed");
   changes_ += result.changed();
   return result;
 }
 
 void Connection::execute(const std::string& sql) {
-  Result result(PQexec(connection_, sql.c_str()));
+  Result result(libpq().PQexec(connection_, sql.c_str()));
   const PGresult* raw = result.get();
-  const auto status = PQresultStatus(raw);
+  const auto status = libpq().PQresultStatus(raw);
   if (status != PGRES_COMMAND_OK && status != PGRES_TUPLES_OK) fail(raw, "a statement failed");
 }
 
 void Connection::copy_in(const std::string& sql, const std::string& data) {
   {
-    Result start(PQexec(connection_, sql.c_str()));
+    Result start(libpq().PQexec(connection_, sql.c_str()));
     const PGresult* raw = start.get();
-    if (PQresultStatus(raw) != PGRES_COPY_IN) fail(raw, "COPY did not start");
+    if (libpq().PQresultStatus(raw) != PGRES_COPY_IN) fail(raw, "COPY did not start");
   }
-  if (PQputCopyData(connection_, data.data(), static_cast<int>(data.size())) != 1 ||
-      PQputCopyEnd(connection_, nullptr) != 1) {
+  if (libpq().PQputCopyData(connection_, data.data(), static_cast<int>(data.size())) != 1 ||
+      libpq().PQputCopyEnd(connection_, nullptr) != 1) {
     fail(nullptr, "COPY failed");
   }
-  for (PGresult* raw; (raw = PQgetResult(connection_)) != nullptr;) {
+  for (PGresult* raw; (raw = libpq().PQgetResult(connection_)) != nullptr;) {
     Result end(raw);
-    if (PQresultStatus(raw) != PGRES_COMMAND_OK) fail(raw, "COPY failed");
+    if (libpq().PQresultStatus(raw) != PGRES_COMMAND_OK) fail(raw, "COPY failed");
     changes_ += end.changed();
   }
 }
 
 std::vector<std::string> Connection::notifications(std::chrono::milliseconds timeout) {
-  pollfd descriptor{PQsocket(connection_), POLLIN, 0};
+  pollfd descriptor{libpq().PQsocket(connection_), POLLIN, 0};
   if (descriptor.fd < 0) throw StoreUnavailable("the PostgreSQL connection was lost");
   if (::poll(&descriptor, 1, static_cast<int>(timeout.count())) < 0 && errno != EINTR) {
     throw StoreUnavailable("the PostgreSQL connection was lost");
   }
-  if (PQconsumeInput(connection_) == 0) {
-    throw StoreUnavailable("the PostgreSQL connection was lost: " + first_line(PQerrorMessage(connection_)));
+  if (libpq().PQconsumeInput(connection_) == 0) {
+    throw StoreUnavailable("the PostgreSQL connection was lost: " + first_line(libpq().PQerrorMessage(connection_)));
   }
   std::vector<std::string> payloads;
-  while (PGnotify* notification = PQnotifies(connection_)) {
+  while (PGnotify* notification = libpq().PQnotifies(connection_)) {
     payloads.emplace_back(notification->extra);
-    PQfreemem(notification);
+    libpq().PQfreemem(notification);
   }
   return payloads;
 }
 
 void Connection::rollback_quietly() noexcept {
-  if (PQstatus(connection_) != CONNECTION_OK) return;
-  if (PQtransactionStatus(connection_) == PQTRANS_IDLE) return;
-  PQclear(PQexec(connection_, "ROLLBACK"));
+  if (libpq().PQstatus(connection_) != CONNECTION_OK) return;
+  if (libpq().PQtransactionStatus(connection_) == PQTRANS_IDLE) return;
+  libpq().PQclear(libpq().PQexec(connection_, "ROLLBACK"));
 }
 
 // ---- ConnectionPool ----

@@ -4,7 +4,8 @@
 // libpq directly rather than libpqxx: the store needs a handful of calls (parameters bound out of
 // line, COPY, SQLSTATE codes, connection reset), and libpq is the C library PostgreSQL itself
 // ships; libpqxx 7.7 would add a second large C++ dependency whose headers cost every translation
-// unit that includes them compile time, for conveniences these ~200 lines give.
+// unit that includes them compile time, for conveniences these ~200 lines give. libpq is loaded
+// when the store first connects, not at start-up (libpq.h says why), so its calls go through libpq().
 //
 // Every value travels as a bound parameter (PQexecParams), never inside the SQL text.
 #pragma once
@@ -12,7 +13,7 @@
 #include "store/store.h"
 #include "store/write_health.h"
 
-#include <libpq-fe.h>
+#include "store/postgres/libpq.h"
 
 #include <chrono>
 #include <condition_variable>
@@ -36,13 +37,13 @@ class Result {
   Result(Result&& other) noexcept : result_(other.result_) { other.result_ = nullptr; }
   Result& operator=(Result&&) = delete;
   Result(const Result&) = delete;
-  ~Result() { PQclear(result_); }
+  ~Result() { libpq().PQclear(result_); }
 
   PGresult* get() const noexcept { return result_; }
-  int rows() const { return PQntuples(result_); }
+  int rows() const { return libpq().PQntuples(result_); }
   /// Rows changed by an INSERT, UPDATE or DELETE.
   long changed() const;
-  bool null(int row, int column) const { return PQgetisnull(result_, row, column) != 0; }
+  bool null(int row, int column) const { return libpq().PQgetisnull(result_, row, column) != 0; }
   std::string text(int row, int column) const;  ///< "" for NULL
   std::int64_t integer(int row, int column) const;
   double real(int row, int column) const;
@@ -51,7 +52,7 @@ class Result {
   std::vector<unsigned char> bytes(int row, int column) const;  ///< bytea; empty for NULL
   // Binary-format results (exec(…, true)):
   std::int64_t binary_integer(int row, int column) const;  ///< int4 or int8
-  bool binary_boolean(int row, int column) const { return !null(row, column) && *PQgetvalue(result_, row, column) != 0; }
+  bool binary_boolean(int row, int column) const { return !null(row, column) && *libpq().PQgetvalue(result_, row, column) != 0; }
   /// A bytea's raw bytes (empty for NULL), valid while this Result lives.
   std::span<const unsigned char> binary_bytes(int row, int column) const;
 
@@ -97,7 +98,7 @@ class Connection {
   explicit Connection(const std::string& conninfo);
   Connection(const Connection&) = delete;
   Connection& operator=(const Connection&) = delete;
-  ~Connection() { PQfinish(connection_); }
+  ~Connection() { libpq().PQfinish(connection_); }
 
   /// Runs one statement. Throws StorageFull (a full disk), StoreUnavailable (the connection is
   /// gone or the server is shutting down), ConflictRetry (serialization failure, deadlock) or
@@ -110,7 +111,7 @@ class Connection {
   /// COPY … FROM STDIN with `data` in COPY's text format.
   void copy_in(const std::string& sql, const std::string& data);
   /// False once the server connection is gone (the pool then opens a new one).
-  bool usable() const { return PQstatus(connection_) == CONNECTION_OK; }
+  bool usable() const { return libpq().PQstatus(connection_) == CONNECTION_OK; }
   /// LISTEN: waits up to `timeout` for the server to send something; then the payloads of the
   /// notifications that arrived. Throws StoreUnavailable when the connection is lost.
   std::vector<std::string> notifications(std::chrono::milliseconds timeout);
