@@ -13,7 +13,6 @@
 #include <Eigen/Eigenvalues>
 #include <Eigen/SVD>
 
-
 #include <algorithm>
 
 #include <cmath>
