@@ -3,14 +3,64 @@
 
 #include "manipid/core/dynamics.h"
 
+#include "vector_clones.h"
+
 #include <Eigen/QR>
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
 
 #include <string>
 
 namespace manipid {
+namespace {
+
+// One block of the QR below: [R z; B b] (R p × p upper triangular, B m × p new rows) made upper
+// triangular again by p Householder reflections, each touching row k of the triangle and the m
+// rows below it only (the triangle's rows under the diagonal are zero, so a reflection of the
+// whole column would change nothing there). The same reflections as Eigen's HouseholderQR of
+// the stacked matrix (beta = −sign(α)·‖column‖, v = [1; x/(α − beta)], tau = (beta − α)/beta), in
+// a loop over raw columns, compiled for SSE2 and AVX2: Eigen's unblocked kernel for matrices this
+// narrow cost ~1,500 instructions a row here. `work` is column-major with leading dimension `ld`:
+// rows 0..p−1 [R z], rows p..p+m−1 [B b]; B is overwritten. Returns |b|² after the reflections,
+// what of the torque no β reaches in this block.
+// Σ x[i]·y[i] in four interleaved partial sums, which the compiler vectorises (one sum would be
+// a chain it may not reorder).
+[[gnu::always_inline]] inline double dot(const double* x, const double* y, Eigen::Index m) {
+  double lanes[4] = {0.0, 0.0, 0.0, 0.0};
+  Eigen::Index i = 0;
+  for (; i + 4 <= m; i += 4) {
+    for (int lane = 0; lane < 4; ++lane) lanes[lane] += x[i + lane] * y[i + lane];
+  }
+  for (; i < m; ++i) lanes[0] += x[i] * y[i];
+  return (lanes[0] + lanes[1]) + (lanes[2] + lanes[3]);
+}
+
+MANIPID_VECTOR_CLONES double triangularise_block(double* work, Eigen::Index ld, int p, Eigen::Index m) {
+  for (int k = 0; k < p; ++k) {
+    double* x = work + k * ld + p;
+    const double sigma = dot(x, x, m);
+    const double alpha = work[k * ld + k];
+    if (sigma <= std::numeric_limits<double>::min()) continue;  // already triangular (Eigen: tau = 0)
+    const double norm = std::sqrt(alpha * alpha + sigma);
+    const double beta = alpha >= 0.0 ? -norm : norm;
+    const double scale = 1.0 / (alpha - beta);
+    for (Eigen::Index i = 0; i < m; ++i) x[i] *= scale;
+    const double tau = (beta - alpha) / beta;
+    work[k * ld + k] = beta;
+    for (int j = k + 1; j <= p; ++j) {  // j = p: the torque column z, b
+      double* y = work + j * ld + p;
+      const double w = tau * (work[j * ld + k] + dot(x, y, m));
+      work[j * ld + k] -= w;
+      for (Eigen::Index i = 0; i < m; ++i) y[i] -= w * x[i];
+    }
+  }
+  const double* b = work + p * ld + p;
+  return dot(b, b, m);
+}
+
+}  // namespace
 
 FilteredData filter_for_input_error(const Trajectory& data, const FilterSettings& filter, bool use_reference,
                                     const std::optional<PdController>& controller) {
@@ -108,12 +158,7 @@ InputErrorCost::InputErrorCost(const RobotModel& model, const FilteredData& data
       work.block(row, 0, n, p) = root_weights.matrix().asDiagonal() * Y;
       work.block(row, p, n, 1) = (root_weights * data.tau.row(t).transpose().array()).matrix();
     }
-    const Eigen::Index rows = p + static_cast<Eigen::Index>(count) * n;
-    const Eigen::HouseholderQR<Eigen::MatrixXd> qr(work.topLeftCorner(rows, p));
-    const Eigen::VectorXd rotated = qr.householderQ().adjoint() * work.col(p).head(rows);
-    work.topLeftCorner(p, p) = qr.matrixQR().topRows(p).triangularView<Eigen::Upper>();
-    work.col(p).head(p) = rotated.head(p);
-    orthogonal_ += rotated.tail(rows - p).squaredNorm();
+    orthogonal_ += triangularise_block(work.data(), work.rows(), p, static_cast<Eigen::Index>(count) * n);
   }
   triangle_ = work.topLeftCorner(p, p);
   rotated_ = work.col(p).head(p);
