@@ -51,7 +51,9 @@ class DifferentialFilter {
   /// Filters x into y (y must have output_length(x.size()) entries). Throws InputError
   /// ("samples") when x is too short. Long filters (M ≥ fft_min_half_length) on enough data go
   /// through the FFT (overlap-save): the same outputs up to rounding, at a cost that hardly
-  /// grows with M where the direct sum's grows as M.
+  /// grows with M where the direct sum's grows as M. (A NaN or infinity in x then spoils its
+  /// whole block of outputs, not only the windows that hold it; trajectories are checked
+  /// finite before they are filtered.)
   void apply(FilterOrder order, const Eigen::Ref<const Eigen::VectorXd>& x,
              Eigen::Ref<Eigen::VectorXd> y) const;
   Eigen::VectorXd apply(FilterOrder order, const Eigen::Ref<const Eigen::VectorXd>& x) const;
