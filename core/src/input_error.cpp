@@ -16,15 +16,6 @@
 namespace manipid {
 namespace {
 
-// One block of the QR below: [R z; B b] (R p × p upper triangular, B m × p new rows) made upper
-// triangular again by p Householder reflections, each touching row k of the triangle and the m
-// rows below it only (the triangle's rows under the diagonal are zero, so a reflection of the
-// whole column would change nothing there). The same reflections as Eigen's HouseholderQR of
-// the stacked matrix (beta = −sign(α)·‖column‖, v = [1; x/(α − beta)], tau = (beta − α)/beta), in
-// a loop over raw columns, compiled for SSE2 and AVX2: Eigen's unblocked kernel for matrices this
-// narrow cost ~1,500 instructions a row here. `work` is column-major with leading dimension `ld`:
-// rows 0..p−1 [R z], rows p..p+m−1 [B b]; B is overwritten. Returns |b|² after the reflections,
-// what of the torque no β reaches in this block.
 // Σ x[i]·y[i] in four interleaved partial sums, which the compiler vectorises (one sum would be
 // a chain it may not reorder).
 [[gnu::always_inline]] inline double dot(const double* x, const double* y, Eigen::Index m) {
@@ -37,6 +28,15 @@ namespace {
   return (lanes[0] + lanes[1]) + (lanes[2] + lanes[3]);
 }
 
+// One block of the QR below: [R z; B b] (R p × p upper triangular, B m × p new rows) made upper
+// triangular again by p Householder reflections, each touching row k of the triangle and the m
+// rows below it only (the triangle's rows under the diagonal are zero, so a reflection of the
+// whole column would change nothing there). The same reflections as Eigen's HouseholderQR of
+// the stacked matrix (beta = −sign(α)·‖column‖, v = [1; x/(α − beta)], tau = (beta − α)/beta), in
+// a loop over raw columns, compiled for SSE2 and AVX2: Eigen's unblocked kernel for matrices this
+// narrow cost ~1,500 instructions a row here. `work` is column-major with leading dimension `ld`:
+// rows 0..p−1 [R z], rows p..p+m−1 [B b]; B is overwritten. Returns |b|² after the reflections,
+// what of the torque no β reaches in this block.
 MANIPID_VECTOR_CLONES double triangularise_block(double* work, Eigen::Index ld, int p, Eigen::Index m) {
   for (int k = 0; k < p; ++k) {
     double* x = work + k * ld + p;
