@@ -101,6 +101,9 @@ double floor_of(const RobotModel& model, const ParameterProducts& products, cons
   }
   Eigen::MatrixXd gram = Eigen::MatrixXd::Zero(p, p);
   gram.selfadjointView<Eigen::Lower>().rankUpdate(Y.transpose());
+  // Nothing non-finite reaches the eigensolver (Eigen 3.4's reads out of bounds on NaN, see
+  // uncertainty.cpp): data whose regressor overflows have no floor, and are never chosen.
+  if (!gram.allFinite() || !tau.allFinite()) return kNaN;
   const Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd> eigen(gram.selfadjointView<Eigen::Lower>());
   const Eigen::VectorXd& values = eigen.eigenvalues();  // ascending
   const double cut = kGramRank * std::max(values[p - 1], 0.0);
@@ -172,9 +175,9 @@ struct Packed {
 // next bound exceeds the lowest floor by kBoundMargin (rounding, and the directions the Gram
 // solve leaves out, keep a bound from being exact). On the paper's clean run 4 of the 30 are fitted
 // in full (on its variant with the printed kinetic energy, whose floors lie close, 29).
-std::vector<double> floors_for_length(const RobotModel& model, const Trajectory& data, int M, const std::vector<double>& bands,
-                                      bool use_reference, const std::optional<PdController>& controller, int stride,
-                                      double& lowest) {
+std::vector<double> floors_for_length(const RobotModel& model, const ParameterProducts& products, const Trajectory& data, int M,
+                                      const std::vector<double>& bands, bool use_reference,
+                                      const std::optional<PdController>& controller, int stride, double& lowest) {
   constexpr int kBoundStep = 4;
   constexpr double kBoundMargin = 1e-3;
   constexpr int kWindowRows = 256;  // a multiple of kTileRows
@@ -190,7 +193,6 @@ std::vector<double> floors_for_length(const RobotModel& model, const Trajectory&
   const int window_rows = std::min(rows, kWindowRows);
   Packed<kTileRows> sums(window_rows, M + 1), differences(window_rows, M);
   std::vector<double> floors;
-  const ParameterProducts products = parameter_products(model);
   for (std::size_t first = 0; first < bands.size(); first += static_cast<std::size_t>(group)) {
     const int count = static_cast<int>(std::min(bands.size() - first, static_cast<std::size_t>(group)));
     // The taps from the centre out (c[M], …, c[2M]); symmetric: filter 2b band b's low-pass,
@@ -447,6 +449,7 @@ FilterChoice choose_filter(const RobotModel& model, const Trajectory& data, cons
   for (int length : lengths) reach = std::max(reach, length);
   const std::vector<int> instants = common_instants(data.samples(), reach, kChoiceStride);
   double best = std::numeric_limits<double>::infinity();
+  const ParameterProducts products = parameter_products(model);  // both rules' regressor columns
   // Two-stage's first stage only gives the output-error stage its start and structure; its
   // coverage (tests/core/coverage_test.cpp: 140 of 140, worst 0.029 %) was validated with the
   // floor rule and fell to 110 of 135, worst 1.3 %, with the yardstick's choice — not yet
@@ -454,7 +457,6 @@ FilterChoice choose_filter(const RobotModel& model, const Trajectory& data, cons
   const bool by_yardstick = noisy && options.method == IdentificationMethod::input_error;
   if (by_yardstick && !lengths.empty() && instants.size() >= 64) {
     // Noisy data: each candidate's estimate against the yardstick's (filter_choice.h).
-    const ParameterProducts products = parameter_products(model);
     const int n = data.joint_count();
     const Rows yardstick = yardstick_rows(model, products, data, FilterSettings{kYardstickWide.half_length, kYardstickWide.band, data.dt()},
                                           FilterSettings{kYardstickNarrow.half_length, kYardstickNarrow.band, data.dt()},
@@ -500,7 +502,7 @@ FilterChoice choose_filter(const RobotModel& model, const Trajectory& data, cons
     double lowest = kInfinity;
     for (int length : lengths) {
       const std::vector<double> floors =
-          floors_for_length(model, data, length, bands, use_reference, options.controller, kChoiceStride, lowest);
+          floors_for_length(model, products, data, length, bands, use_reference, options.controller, kChoiceStride, lowest);
       for (std::size_t b = 0; b < bands.size(); ++b) {
         if (floors[b] < best) {
           best = floors[b];

@@ -337,9 +337,9 @@ const DifferentialFilter::Spectra& DifferentialFilter::spectra() const {
 namespace {
 
 // y_k[j] = Σ_n c_k[n] x[j + M + n], j < outputs, for the orders asked (null outputs are skipped).
-void correlate_by_fft(const DifferentialFilter& filter, const std::array<const std::vector<std::complex<double>>*, 3>& spectra,
+void correlate_by_fft(int half_length, const std::array<const std::vector<std::complex<double>>*, 3>& spectra,
                       Index block, const double* x, Index samples, const std::array<double*, 3>& outputs, Index count) {
-  const Index step = block - 2 * static_cast<Index>(filter.settings().half_length);
+  const Index step = block - 2 * static_cast<Index>(half_length);
   Eigen::FFT<double>& fft = thread_fft();
   thread_local std::vector<double> input, output;
   thread_local std::vector<std::complex<double>> transform, product;
@@ -381,7 +381,7 @@ void DifferentialFilter::apply(FilterOrder order, const Eigen::Ref<const Eigen::
     std::array<double*, 3> out{};
     chosen[static_cast<std::size_t>(order)] = &transforms.of[static_cast<std::size_t>(order)];
     out[static_cast<std::size_t>(order)] = y.data();
-    correlate_by_fft(*this, chosen, transforms.block, input, x.size(), out, outputs);
+    correlate_by_fft(m, chosen, transforms.block, input, x.size(), out, outputs);
     return;
   }
   const double* centre = input + m;
@@ -417,7 +417,7 @@ void DifferentialFilter::apply_all(const Eigen::Ref<const Eigen::VectorXd>& x, E
   }
   if (use_fft(m, outputs)) {
     const Spectra& transforms = spectra();
-    correlate_by_fft(*this, {&transforms.of[0], &transforms.of[1], &transforms.of[2]}, transforms.block, input, x.size(),
+    correlate_by_fft(m, {&transforms.of[0], &transforms.of[1], &transforms.of[2]}, transforms.block, input, x.size(),
                      {lowpass.data(), derivative1.data(), derivative2.data()}, outputs);
     return;
   }
