@@ -63,37 +63,35 @@ namespace {
 // Every kChoiceStride-th filtered sample is enough to compare candidates (and 16× cheaper).
 constexpr int kChoiceStride = 16;
 
-// J* of one candidate's thin data: the mean over samples of min_β |Y β − τ|² (what
-// InputErrorCost(model, data).floor() gives, with unit joint weights), from the semi-normal
-// equations with one step of refinement. The columns are scaled to unit norm, their Gram
-// matrix is one rank update (p²/2 multiplies a row, where Eigen's Householder QR of a matrix
-// this narrow runs an unblocked kernel at ~1,500 instructions a row), the directions the data
-// do not excite (eigenvalues of the scaled Gram matrix below kGramRank of the largest) are left
-// out as QR's rank-revealing solve leaves them, and the floor is the residual of the refined β
-// computed from the rows themselves: an error δ in β raises it by |Y δ|² only, second order,
-// so the candidates' floors agree with QR's to far better than they differ from each other.
-// With `step` > 1 only every step-th sample's rows are fitted, and the sum is still divided by
-// all samples: a lower bound of the floor (fewer rows, the same freedom in β), at 1/step of
-// the cost.
-double floor_of(const RobotModel& model, const ParameterProducts& products, const FilteredData& data, int step = 1) {
+// J* of one candidate's thin data: min_β |Y β − τ|² over its rows, divided by `samples` (what
+// InputErrorCost(model, data).floor() gives, with unit joint weights, when `samples` is the
+// rows' count), from the semi-normal equations with one step of refinement. The columns are
+// scaled to unit norm, their Gram matrix is one rank update (p²/2 multiplies a row, where
+// Eigen's Householder QR of a matrix this narrow runs an unblocked kernel at ~1,500
+// instructions a row), the directions the data do not excite (eigenvalues of the scaled Gram
+// matrix below kGramRank of the largest) are left out as QR's rank-revealing solve leaves
+// them, and the floor is the residual of the refined β computed from the rows themselves: an
+// error δ in β raises it by |Y δ|² only, second order, so the candidates' floors agree with
+// QR's to far better than they differ from each other. Fitted on a sparser subset of a
+// candidate's rows and divided by the count of all of them, it is a lower bound of the floor
+// (fewer rows, the same freedom in β).
+double floor_of(const RobotModel& model, const ParameterProducts& products, const FilteredData& data, double samples) {
   constexpr double kGramRank = 1e-13;
   const int n = model.joint_count();
   const int p = products.size();
-  const int used = (data.samples() + step - 1) / step;
-  const Eigen::Index rows = static_cast<Eigen::Index>(used) * n;
+  const Eigen::Index rows = static_cast<Eigen::Index>(data.samples()) * n;
   Eigen::MatrixXd Y(rows, p);
   Eigen::VectorXd tau(rows);
   DynamicsWorkspace workspace(model);
   Eigen::MatrixXd block(n, p);
   Eigen::VectorXd q(n), qd(n), qdd(n);  // a row of each, contiguous: no temporary per call
-  for (int i = 0; i < used; ++i) {
-    const int t = i * step;
+  for (int t = 0; t < data.samples(); ++t) {
     q = data.q.row(t).transpose();
     qd = data.qd.row(t).transpose();
     qdd = data.qdd.row(t).transpose();
     regressor(model, products, workspace, q, qd, qdd, block);
-    Y.middleRows(static_cast<Eigen::Index>(i) * n, n) = block;
-    tau.segment(static_cast<Eigen::Index>(i) * n, n) = data.tau.row(t).transpose();
+    Y.middleRows(static_cast<Eigen::Index>(t) * n, n) = block;
+    tau.segment(static_cast<Eigen::Index>(t) * n, n) = data.tau.row(t).transpose();
   }
   for (Eigen::Index k = 0; k < p; ++k) {
     const double norm = Y.col(k).norm();
@@ -116,159 +114,206 @@ double floor_of(const RobotModel& model, const ParameterProducts& products, cons
   Eigen::VectorXd residual = tau - Y * beta;
   beta += solve(Y.transpose() * residual);
   residual.noalias() = tau - Y * beta;
-  return residual.squaredNorm() / data.samples();
+  return residual.squaredNorm() / samples;
 }
 
-// O = S·T for the windows of a block of thin samples and the bands' taps, both packed so the
-// product streams through memory in order: S holds the folded windows of kTileRows samples at a
-// time, entry (k, r) of tile t at ((t·K) + k)·kTileRows + r; T the taps of kTileColumns filters
-// at a time, entry (k, c) of group g at ((g·K) + k)·kTileColumns + c; O is column-major with
-// leading dimension `ld`. One kTileRows × kTileColumns tile of O stays in registers while k
-// runs. Eigen's general product, built for larger and squarer matrices and compiled for SSE2,
-// did one multiply-add an instruction here (callgrind: 130 M of the default request's 658 M).
+// O = W·T for the windows of a block of thin samples and the bands' taps, both packed so the
+// product streams through memory in order. W holds, kTileRows samples at a time, each sample's
+// folded windows of three signals (fold 0: q[c+k] + q[c−k], and q[c] for k = 0; fold 1:
+// q[c+k] − q[c−k], and 0 for k = 0; fold 2: τ[c+k] + τ[c−k]): entry (k, fold, r) of tile t at
+// ((t·K + k)·3 + fold)·kTileRows + r. T holds each band's four filters, entry (k, c) of band g
+// at (g·K + k)·4 + c: c = 0 the low-pass and c = 1 the second derivative (on fold 0), c = 2 the
+// first derivative (on fold 1; 0 at k = 0), c = 3 the low-pass again (on fold 2). O is
+// column-major with leading dimension `ld`, column 4g + c. One kTileRows × 4 tile of O stays in
+// registers while k runs. Eigen's general product, built for larger and squarer matrices and
+// compiled for SSE2, did one multiply-add an instruction here (callgrind: 130 M of the default
+// request's 658 M). Each output is one sum over k in order, whatever tile its row falls in and
+// whichever bands share the call: a band's filtered values do not depend on the others.
 constexpr int kTileRows = 8;
-constexpr int kTileColumns = 4;
-MANIPID_VECTOR_CLONES void multiply_windows(const double* S, Eigen::Index tiles, Eigen::Index K, const double* T,
-                                            Eigen::Index groups, double* O, Eigen::Index ld) {
+constexpr int kFolds = 3;
+constexpr int kBandFilters = 4;
+MANIPID_VECTOR_CLONES void filter_windows(const double* W, Eigen::Index tiles, Eigen::Index K, const double* T,
+                                          Eigen::Index bands, double* O, Eigen::Index ld) {
   for (Eigen::Index t = 0; t < tiles; ++t) {
-    for (Eigen::Index g = 0; g < groups; ++g) {
-      const double* s = S + t * K * kTileRows;
-      const double* taps = T + g * K * kTileColumns;
-      double tile[kTileColumns][kTileRows] = {};
-      for (Eigen::Index k = 0; k < K; ++k, s += kTileRows, taps += kTileColumns) {
-        for (int c = 0; c < kTileColumns; ++c) {
-          for (int r = 0; r < kTileRows; ++r) tile[c][r] += taps[c] * s[r];
+    for (Eigen::Index g = 0; g < bands; ++g) {
+      const double* w = W + t * K * kFolds * kTileRows;
+      const double* taps = T + g * K * kBandFilters;
+      double tile[kBandFilters][kTileRows] = {};
+      for (Eigen::Index k = 0; k < K; ++k, w += kFolds * kTileRows, taps += kBandFilters) {
+        for (int r = 0; r < kTileRows; ++r) {
+          tile[0][r] += taps[0] * w[r];
+          tile[1][r] += taps[1] * w[r];
+          tile[2][r] += taps[2] * w[kTileRows + r];
+          tile[3][r] += taps[3] * w[2 * kTileRows + r];
         }
       }
-      for (int c = 0; c < kTileColumns; ++c) {
-        for (int r = 0; r < kTileRows; ++r) O[(g * kTileColumns + c) * ld + t * kTileRows + r] = tile[c][r];
+      for (int c = 0; c < kBandFilters; ++c) {
+        for (int r = 0; r < kTileRows; ++r) O[(g * kBandFilters + c) * ld + t * kTileRows + r] = tile[c][r];
       }
     }
   }
 }
 
-// A K-long vector per row or column, packed in tiles of `Width` for multiply_windows.
-template <int Width>
-struct Packed {
-  Packed(int count, int length) : tiles((count + Width - 1) / Width), K(length), values(static_cast<std::size_t>(tiles) * K * Width, 0.0) {}
-  double& operator()(int index, int k) {
-    return values[(static_cast<std::size_t>(index / Width) * K + k) * Width + index % Width];
+// The output samples a thin filtering at `stride` keeps: 0, stride, 2·stride, … of the
+// DifferentialFilter's outputs at half-length M.
+int thin_rows(int samples, int M, int stride) {
+  const int outputs = samples - 2 * M - 1;  // DifferentialFilter::output_length
+  return (outputs + stride - 1) / stride;
+}
+
+// q, q̇, q̈ and τ of `data` filtered with each band at half-length M (as filter_for_input_error
+// filters them), at every `stride`-th output sample only. The windows of the data are the same
+// for every band, so each joint's windows meet every band's taps in one product (filter_windows)
+// instead of four dot products per window and band, and are folded as the filters are
+// (filters.cpp): x[c+k] + x[c−k] meets the symmetric low-pass and second derivative,
+// x[c+k] − x[c−k] the antisymmetric first derivative, which halves the work. Windows are formed
+// a block of rows at a time, kWindowBytes of them, so a block stays in cache while every band's
+// taps pass over it.
+std::vector<FilteredData> filter_thin(const Trajectory& data, int M, const std::vector<double>& bands, int stride,
+                                      bool use_reference, const std::optional<PdController>& controller) {
+  constexpr double kWindowBytes = 384.0 * 1024;
+  const int n = data.joint_count();
+  const int rows = thin_rows(data.samples(), M, stride);
+  const int count = static_cast<int>(bands.size());
+  const int K = M + 1;
+  const int block_rows =
+      kTileRows * std::clamp(static_cast<int>(kWindowBytes / (kFolds * K * sizeof(double) * kTileRows)), 1, 32);
+  const int tiles = (std::min(rows, block_rows) + kTileRows - 1) / kTileRows;
+  // Rows past a short last block keep earlier values, and their products are dropped.
+  std::vector<double> windows(static_cast<std::size_t>(tiles) * K * kFolds * kTileRows, 0.0);
+  std::vector<double> taps(static_cast<std::size_t>(count) * K * kBandFilters, 0.0);
+  std::vector<FilteredData> thin(static_cast<std::size_t>(count));
+  for (int b = 0; b < count; ++b) {
+    const FilterSettings settings{M, bands[static_cast<std::size_t>(b)], data.dt()};
+    const auto filter = cached_filter(settings);
+    const Eigen::VectorXd& c0 = filter->coefficients(FilterOrder::lowpass);
+    const Eigen::VectorXd& c1 = filter->coefficients(FilterOrder::derivative1);
+    const Eigen::VectorXd& c2 = filter->coefficients(FilterOrder::derivative2);
+    for (int k = 0; k < K; ++k) {
+      double* tap = taps.data() + (static_cast<std::size_t>(b) * K + k) * kBandFilters;
+      tap[0] = tap[3] = c0[M + k];
+      tap[1] = c2[M + k];
+      tap[2] = k > 0 ? c1[M + k] : 0.0;  // antisymmetric: the centre tap meets the zero fold
+    }
+    FilteredData& candidate = thin[static_cast<std::size_t>(b)];
+    candidate.filter = settings;
+    candidate.q.resize(rows, n);
+    candidate.qd.resize(rows, n);
+    candidate.qdd.resize(rows, n);
+    candidate.tau.resize(rows, n);
   }
-  int tiles, K;
-  std::vector<double> values;
-};
+  Eigen::MatrixXd product(static_cast<Eigen::Index>(tiles) * kTileRows, static_cast<Eigen::Index>(count) * kBandFilters);
+  for (int j = 0; j < n; ++j) {
+    const double* q = data.q.col(j).data();
+    const double* torque = (use_reference ? data.ref.col(j) : data.tau.col(j)).data();
+    for (int top = 0; top < rows; top += block_rows) {
+      const int block = std::min(block_rows, rows - top);
+      for (int r = 0; r < block; ++r) {
+        const Eigen::Index centre = static_cast<Eigen::Index>(top + r) * stride + M;
+        double* w = windows.data() + static_cast<std::size_t>(r / kTileRows) * K * kFolds * kTileRows + r % kTileRows;
+        w[0] = q[centre];
+        w[kTileRows] = 0.0;
+        w[2 * kTileRows] = torque[centre];
+        for (int k = 1; k < K; ++k) {
+          w += kFolds * kTileRows;
+          w[0] = q[centre + k] + q[centre - k];
+          w[kTileRows] = q[centre + k] - q[centre - k];
+          w[2 * kTileRows] = torque[centre + k] + torque[centre - k];
+        }
+      }
+      filter_windows(windows.data(), (block + kTileRows - 1) / kTileRows, K, taps.data(), count, product.data(),
+                     product.rows());
+      for (int b = 0; b < count; ++b) {
+        FilteredData& candidate = thin[static_cast<std::size_t>(b)];
+        const auto filtered = [&](int c) { return product.col(b * kBandFilters + c).head(block); };
+        candidate.q.col(j).segment(top, block) = filtered(0);
+        candidate.qdd.col(j).segment(top, block) = filtered(1);
+        candidate.qd.col(j).segment(top, block) = filtered(2);
+        if (use_reference) {
+          candidate.tau.col(j).segment(top, block) =
+              controller->kp[j] * (filtered(3) - filtered(0)) - controller->kd[j] * filtered(2);
+        } else {
+          candidate.tau.col(j).segment(top, block) = filtered(3);
+        }
+      }
+    }
+  }
+  return thin;
+}
 
 // J*: the cost no parameter value can remove (the least-squares floor over all products β),
-// on every `stride`-th filtered sample. It measures how far the filtered data are from any
-// instance of the model: filter distortion of the nonlinear dynamics (a band too narrow for
-// the motion) plus noise (a band too wide for the derivatives of noisy q).
-// One value per band, all at half-length M: the windows of the data are the same for every band,
-// so each signal's windows meet every band's taps in one matrix product (blocked, vectorised)
-// instead of three dot products per window and band. The windows are folded as the filters are
-// (filters.cpp): x[c+k] + x[c−k] meets the symmetric low-pass and second derivative, x[c+k] −
-// x[c−k] the antisymmetric first derivative, which halves the work. Windows are formed
-// kWindowRows at a time, and the bands' filtered data are held for at most kThinBytes at once
-// (long datasets take the bands in groups), so memory stays near what one candidate's took.
-// A candidate whose floor cannot be below `lowest` (the lowest found so far, lowered here) is
-// left at +∞ without fitting all its rows: each first gets the lower bound of floor_of on every
-// kBoundStep-th sample, then the candidates are fitted in the order of their bounds until the
-// next bound exceeds the lowest floor by kBoundMargin (rounding, and the directions the Gram
-// solve leaves out, keep a bound from being exact). On the paper's clean run 4 of the 30 are fitted
-// in full (on its variant with the printed kinetic energy, whose floors lie close, 29).
-std::vector<double> floors_for_length(const RobotModel& model, const ParameterProducts& products, const Trajectory& data, int M,
-                                      const std::vector<double>& bands, bool use_reference,
-                                      const std::optional<PdController>& controller, int stride, double& lowest) {
+// on every `stride`-th filtered sample, for every candidate (lengths × bands, entry
+// l·bands + b). It measures how far the filtered data are from any instance of the model:
+// filter distortion of the nonlinear dynamics (a band too narrow for the motion) plus noise (a
+// band too wide for the derivatives of noisy q).
+// Only candidates whose floor can still be the lowest are fitted in full; the others are left
+// at +∞. Every candidate first gets a lower bound, floor_of on every kBoundStep-th of its thin
+// samples (filtered at those samples only, a kBoundStep-th of the work); then the candidates
+// are filtered at all thin samples and fitted in the order of their bounds until the next bound
+// exceeds the lowest floor by kBoundMargin (rounding, and the directions the Gram solve leaves
+// out, keep a bound from being exact). When a candidate is to be fitted, every other candidate
+// of its length that can still be fitted is filtered with it (the windows are shared; the set
+// only shrinks as the lowest floor falls, so none is filtered twice). The bands' thin data are
+// held for at most kThinBytes at once (long datasets take them in groups). On the paper's clean
+// run 4 of the 30 are fitted in full (on its variant with the printed kinetic energy, whose
+// floors lie close, 29).
+std::vector<double> lowest_floors(const RobotModel& model, const ParameterProducts& products, const Trajectory& data,
+                                  const std::vector<int>& lengths, const std::vector<double>& bands, bool use_reference,
+                                  const std::optional<PdController>& controller, int stride) {
   constexpr int kBoundStep = 4;
   constexpr double kBoundMargin = 1e-3;
-  constexpr int kWindowRows = 256;  // a multiple of kTileRows
   constexpr double kThinBytes = 64.0 * (1 << 20);
   const int n = data.joint_count();
-  const int outputs = data.samples() - 2 * M - 1;  // DifferentialFilter::output_length
-  const int rows = (outputs + stride - 1) / stride;
-  const double bytes_per_band = 4.0 * rows * n * sizeof(double);
-  const int group = static_cast<int>(std::clamp(kThinBytes / bytes_per_band, 1.0, static_cast<double>(bands.size())));
-  // Entry (r, k) of `sums`: x[c+k] + x[c−k] (x[c] for k = 0) for sample r of a block, of
-  // `differences`: x[c+k+1] − x[c−k−1]; c = (top + r)·stride + M, the centre of an output sample.
-  // Rows past a short last block keep earlier values, and their products are dropped.
-  const int window_rows = std::min(rows, kWindowRows);
-  Packed<kTileRows> sums(window_rows, M + 1), differences(window_rows, M);
-  std::vector<double> floors;
-  for (std::size_t first = 0; first < bands.size(); first += static_cast<std::size_t>(group)) {
-    const int count = static_cast<int>(std::min(bands.size() - first, static_cast<std::size_t>(group)));
-    // The taps from the centre out (c[M], …, c[2M]); symmetric: filter 2b band b's low-pass,
-    // 2b + 1 its second derivative; antisymmetric: band b's first derivative (c[M+1], …).
-    Packed<kTileColumns> symmetric(2 * count, M + 1), antisymmetric(count, M), lowpass(count, M + 1);
-    std::vector<FilteredData> thin(static_cast<std::size_t>(count));
-    for (int b = 0; b < count; ++b) {
-      const FilterSettings settings{M, bands[first + static_cast<std::size_t>(b)], data.dt()};
-      const auto filter = cached_filter(settings);
-      for (int k = 0; k <= M; ++k) {
-        symmetric(2 * b, k) = lowpass(b, k) = filter->coefficients(FilterOrder::lowpass)[M + k];
-        symmetric(2 * b + 1, k) = filter->coefficients(FilterOrder::derivative2)[M + k];
-        if (k < M) antisymmetric(b, k) = filter->coefficients(FilterOrder::derivative1)[M + 1 + k];
+  const std::size_t band_count = bands.size();
+  const auto group_size = [&](int M, int every) {
+    const double bytes_per_band = 4.0 * thin_rows(data.samples(), M, every) * n * sizeof(double);
+    return static_cast<std::size_t>(std::clamp(kThinBytes / bytes_per_band, 1.0, static_cast<double>(band_count)));
+  };
+  std::vector<double> bounds(lengths.size() * band_count, kInfinity);
+  for (std::size_t l = 0; l < lengths.size(); ++l) {
+    const int M = lengths[l];
+    const double samples = thin_rows(data.samples(), M, stride);
+    const std::size_t group = group_size(M, stride * kBoundStep);
+    for (std::size_t first = 0; first < band_count; first += group) {
+      const std::vector<double> some(bands.begin() + static_cast<std::ptrdiff_t>(first),
+                                     bands.begin() + static_cast<std::ptrdiff_t>(std::min(band_count, first + group)));
+      const std::vector<FilteredData> sparse = filter_thin(data, M, some, stride * kBoundStep, use_reference, controller);
+      for (std::size_t b = 0; b < some.size(); ++b) {
+        const double bound = floor_of(model, products, sparse[b], samples);
+        if (!std::isnan(bound)) bounds[l * band_count + first + b] = bound;  // NaN: sorted last, never fitted
       }
-      FilteredData& candidate = thin[static_cast<std::size_t>(b)];
-      candidate.filter = settings;
-      candidate.q.resize(rows, n);
-      candidate.qd.resize(rows, n);
-      candidate.qdd.resize(rows, n);
-      candidate.tau.resize(rows, n);
     }
-    const int tiled_rows = sums.tiles * kTileRows;
-    Eigen::MatrixXd even(tiled_rows, symmetric.tiles * kTileColumns), odd(tiled_rows, antisymmetric.tiles * kTileColumns),
-        lowpassed(tiled_rows, lowpass.tiles * kTileColumns);
-    const auto multiply = [&](const Packed<kTileRows>& windows, const Packed<kTileColumns>& taps, Eigen::MatrixXd& product) {
-      multiply_windows(windows.values.data(), windows.tiles, windows.K, taps.values.data(), taps.tiles, product.data(),
-                       product.rows());
-    };
-    for (int j = 0; j < n; ++j) {
-      for (int top = 0; top < rows; top += kWindowRows) {
-        const int block = std::min(kWindowRows, rows - top);
-        const auto fold = [&](const Eigen::Ref<const Eigen::VectorXd>& signal, bool with_differences) {
-          for (int r = 0; r < block; ++r) {
-            const double* centre = signal.data() + static_cast<Eigen::Index>(top + r) * stride + M;
-            sums(r, 0) = centre[0];
-            for (int k = 1; k <= M; ++k) sums(r, k) = centre[k] + centre[-k];
-            if (with_differences) {
-              for (int k = 1; k <= M; ++k) differences(r, k - 1) = centre[k] - centre[-k];
-            }
-          }
-        };
-        fold(data.q.col(j), true);
-        multiply(sums, symmetric, even);
-        multiply(differences, antisymmetric, odd);
-        fold(use_reference ? data.ref.col(j) : data.tau.col(j), false);
-        multiply(sums, lowpass, lowpassed);
-        for (int b = 0; b < count; ++b) {
-          FilteredData& candidate = thin[static_cast<std::size_t>(b)];
-          candidate.q.col(j).segment(top, block) = even.col(2 * b).head(block);
-          candidate.qd.col(j).segment(top, block) = odd.col(b).head(block);
-          candidate.qdd.col(j).segment(top, block) = even.col(2 * b + 1).head(block);
-          if (use_reference) {
-            candidate.tau.col(j).segment(top, block) =
-                controller->kp[j] * (lowpassed.col(b).head(block) - even.col(2 * b).head(block)) -
-                controller->kd[j] * odd.col(b).head(block);
-          } else {
-            candidate.tau.col(j).segment(top, block) = lowpassed.col(b).head(block);
-          }
+  }
+  std::vector<std::size_t> order(bounds.size());
+  for (std::size_t c = 0; c < order.size(); ++c) order[c] = c;
+  std::stable_sort(order.begin(), order.end(), [&](std::size_t a, std::size_t b) { return bounds[a] < bounds[b]; });
+  std::vector<double> floors(bounds.size(), kInfinity);
+  std::vector<bool> fitted(bounds.size(), false);
+  std::vector<std::optional<FilteredData>> filtered(bounds.size());
+  double lowest = kInfinity;
+  const auto may_be_lowest = [&](std::size_t c) { return bounds[c] <= lowest * (1.0 + kBoundMargin); };
+  for (const std::size_t c : order) {
+    if (!may_be_lowest(c) || !std::isfinite(bounds[c])) break;
+    const std::size_t l = c / band_count;
+    const int M = lengths[l];
+    if (!filtered[c]) {
+      // This candidate, and (once a floor is known) the others of its length still in the running.
+      std::vector<std::size_t> batch{c};
+      if (std::isfinite(lowest)) {
+        for (std::size_t b = 0; b < band_count && batch.size() < group_size(M, stride); ++b) {
+          const std::size_t other = l * band_count + b;
+          if (other != c && !fitted[other] && !filtered[other] && may_be_lowest(other)) batch.push_back(other);
         }
       }
+      std::vector<double> some;
+      for (const std::size_t member : batch) some.push_back(bands[member % band_count]);
+      std::vector<FilteredData> thin = filter_thin(data, M, some, stride, use_reference, controller);
+      for (std::size_t k = 0; k < batch.size(); ++k) filtered[batch[k]] = std::move(thin[k]);
     }
-    std::vector<double> bounds(thin.size());
-    std::vector<std::size_t> order(thin.size());
-    for (std::size_t b = 0; b < thin.size(); ++b) {
-      bounds[b] = floor_of(model, products, thin[b], kBoundStep);
-      if (std::isnan(bounds[b])) bounds[b] = kInfinity;  // sorted last, and never below `lowest`
-      order[b] = b;
-    }
-    std::stable_sort(order.begin(), order.end(), [&](std::size_t a, std::size_t b) { return bounds[a] < bounds[b]; });
-    const std::size_t offset = floors.size();
-    floors.resize(offset + thin.size(), kInfinity);
-    for (const std::size_t b : order) {
-      if (bounds[b] > lowest * (1.0 + kBoundMargin)) break;
-      floors[offset + b] = floor_of(model, products, thin[b]);
-      lowest = std::min(lowest, floors[offset + b]);
-    }
+    floors[c] = floor_of(model, products, *filtered[c], filtered[c]->samples());
+    fitted[c] = true;
+    filtered[c].reset();
+    lowest = std::min(lowest, floors[c]);
   }
   return floors;
 }
@@ -499,14 +544,13 @@ FilterChoice choose_filter(const RobotModel& model, const Trajectory& data, cons
   if (!std::isfinite(best)) {
     // Noise-free data (or too few samples for the yardstick): the lowest floor J*, which then
     // measures the filter's distortion alone.
-    double lowest = kInfinity;
-    for (int length : lengths) {
-      const std::vector<double> floors =
-          floors_for_length(model, products, data, length, bands, use_reference, options.controller, kChoiceStride, lowest);
+    const std::vector<double> floors =
+        lowest_floors(model, products, data, lengths, bands, use_reference, options.controller, kChoiceStride);
+    for (std::size_t l = 0; l < lengths.size(); ++l) {
       for (std::size_t b = 0; b < bands.size(); ++b) {
-        if (floors[b] < best) {
-          best = floors[b];
-          choice.settings = FilterSettings{length, bands[b], data.dt()};
+        if (floors[l * bands.size() + b] < best) {
+          best = floors[l * bands.size() + b];
+          choice.settings = FilterSettings{lengths[l], bands[b], data.dt()};
         }
       }
     }

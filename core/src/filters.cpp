@@ -5,9 +5,8 @@
 
 #include "manipid/core/model.h"  // InputError
 
+#include "fftw.h"
 #include "vector_clones.h"
-
-#include <unsupported/Eigen/FFT>
 
 #include <algorithm>
 #include <array>
@@ -189,10 +188,10 @@ MANIPID_VECTOR_CLONES void correlate_folded_all(const double* lowpass, const dou
 // 4(2M + 1), so a block yields B − 2M ≥ 3/4 B outputs) are transformed once, multiplied by
 // each filter's conjugate spectrum (a correlation, as the direct sum), and transformed back;
 // the first B − 2M outputs of a block are free of wrap-around. A direct output costs ~M
-// multiply-adds; an FFT output ~4(log₂ B)/(1 − 2M/B) operations whatever M is. Eigen's FFT
-// module (kissfft, header-only, in libeigen3-dev) is used; its real transforms are fast for
-// lengths that are multiples of 4. Rounding differs from the direct sum's, not its size: both
-// are a few ulps of Σ|c[n]|·max|x| (tests/core/filters_test.cpp compares the two).
+// multiply-adds; an FFT output ~4(log₂ B)/(1 − 2M/B) operations whatever M is. The transforms
+// are FFTW's (fftw.h), loaded on first use; without FFTW every filter takes the direct sum.
+// Rounding differs from the direct sum's, not its size: both are a few ulps of Σ|c[n]|·max|x|
+// (tests/core/filters_test.cpp compares the two).
 Index fft_block_length(int half_length) {
   Index length = 1024;
   while (length < 4 * (2 * static_cast<Index>(half_length) + 1)) length *= 2;
@@ -202,17 +201,7 @@ Index fft_block_length(int half_length) {
 // The FFT path pays when the filter is long and there is at least a block's worth of outputs.
 bool use_fft(int half_length, Index outputs) {
   return half_length >= DifferentialFilter::fft_min_half_length && half_length <= DifferentialFilter::fft_max_half_length &&
-         outputs >= fft_block_length(half_length) - 2 * static_cast<Index>(half_length);
-}
-
-// One transform object per thread: Eigen's FFT keeps its plans in itself and is not thread-safe.
-Eigen::FFT<double>& thread_fft() {
-  thread_local Eigen::FFT<double> fft = [] {
-    Eigen::FFT<double> made;
-    made.SetFlag(Eigen::FFT<double>::HalfSpectrum);
-    return made;
-  }();
-  return fft;
+         outputs >= fft_block_length(half_length) - 2 * static_cast<Index>(half_length) && detail::fftw() != nullptr;
 }
 
 bool overlaps(const double* a, Index a_size, const double* b, Index b_size) {
@@ -314,20 +303,27 @@ void check_output_size(Index expected, Index actual, const char* name) {
 
 struct DifferentialFilter::Spectra {
   Index block = 0;  // B
-  std::array<std::vector<std::complex<double>>, 3> of;  // by FilterOrder: conj(FFT of the taps padded to B)
+  // By FilterOrder: conj(FFT of the taps padded to B) / B, the 1/B of the inverse transform folded in.
+  std::array<std::vector<std::complex<double>>, 3> of;
 };
 
 const DifferentialFilter::Spectra& DifferentialFilter::spectra() const {
   std::call_once(spectra_once_, [this] {
     auto made = std::make_shared<Spectra>();
     made->block = fft_block_length(settings_.half_length);
-    std::vector<double> padded(static_cast<std::size_t>(made->block), 0.0);
+    const detail::RealTransforms& transforms = detail::RealTransforms::of_length(made->block);
+    const Index bins = made->block / 2 + 1;
+    detail::FftwArray<double> padded(made->block);
+    detail::FftwArray<fftw_complex> spectrum(bins);
+    const double scale = 1.0 / static_cast<double>(made->block);
     for (const FilterOrder order : {FilterOrder::lowpass, FilterOrder::derivative1, FilterOrder::derivative2}) {
       const Eigen::VectorXd& taps = coefficients(order);
-      std::copy(taps.data(), taps.data() + taps.size(), padded.begin());
-      auto& spectrum = made->of[static_cast<std::size_t>(order)];
-      thread_fft().fwd(spectrum, padded);
-      for (auto& value : spectrum) value = std::conj(value);
+      std::fill(padded.data(), padded.data() + made->block, 0.0);
+      std::copy(taps.data(), taps.data() + taps.size(), padded.data());
+      transforms.forward(padded.data(), spectrum.data());
+      auto& of = made->of[static_cast<std::size_t>(order)];
+      of.resize(static_cast<std::size_t>(bins));
+      for (Index i = 0; i < bins; ++i) of[static_cast<std::size_t>(i)] = std::complex<double>(spectrum.data()[i][0], -spectrum.data()[i][1]) * scale;
     }
     spectra_ = std::move(made);
   });
@@ -340,28 +336,41 @@ namespace {
 void correlate_by_fft(int half_length, const std::array<const std::vector<std::complex<double>>*, 3>& spectra,
                       Index block, const double* x, Index samples, const std::array<double*, 3>& outputs, Index count) {
   const Index step = block - 2 * static_cast<Index>(half_length);
-  Eigen::FFT<double>& fft = thread_fft();
-  thread_local std::vector<double> input, output;
-  thread_local std::vector<std::complex<double>> transform, product;
-  input.resize(static_cast<std::size_t>(block));
-  output.resize(static_cast<std::size_t>(block));
+  const Index bins = block / 2 + 1;
+  const detail::RealTransforms& transforms = detail::RealTransforms::of_length(block);
+  // Per thread, grown to the longest block seen: FFTW executes a plan on any arrays aligned as
+  // the planner's, which fftw_malloc's are.
+  thread_local detail::FftwArray<double> input, output;
+  thread_local detail::FftwArray<fftw_complex> transform, product;
+  input.resize(block);
+  output.resize(block);
+  transform.resize(bins);
+  product.resize(bins);
   for (Index first = 0; first < count; first += step) {
     const Index available = std::min(block, samples - first);
-    std::copy(x + first, x + first + available, input.begin());
-    std::fill(input.begin() + available, input.end(), 0.0);
-    fft.fwd(transform, input);
+    std::copy(x + first, x + first + available, input.data());
+    std::fill(input.data() + available, input.data() + block, 0.0);
+    transforms.forward(input.data(), transform.data());
     const Index kept = std::min(step, count - first);
     for (std::size_t k = 0; k < 3; ++k) {
       if (!outputs[k]) continue;
-      product.resize(transform.size());
-      for (std::size_t i = 0; i < transform.size(); ++i) product[i] = transform[i] * (*spectra[k])[i];
-      fft.inv(output.data(), product.data(), block);
-      std::copy(output.begin(), output.begin() + kept, outputs[k] + first);
+      const std::complex<double>* taps = spectra[k]->data();
+      for (Index i = 0; i < bins; ++i) {
+        const std::complex<double> value = std::complex<double>(transform.data()[i][0], transform.data()[i][1]) * taps[i];
+        product.data()[i][0] = value.real();
+        product.data()[i][1] = value.imag();
+      }
+      transforms.backward(product.data(), output.data());
+      std::copy(output.data(), output.data() + kept, outputs[k] + first);
     }
   }
 }
 
 }  // namespace
+
+bool DifferentialFilter::uses_fft(int input_samples) const {
+  return use_fft(settings_.half_length, output_length(input_samples));
+}
 
 void DifferentialFilter::apply(FilterOrder order, const Eigen::Ref<const Eigen::VectorXd>& x,
                                Eigen::Ref<Eigen::VectorXd> y) const {

@@ -433,6 +433,7 @@ TEST(Filters, LongFiltersThroughTheFftAgreeWithTheDirectSum) {
     // 9(2M + 1) + 7 outputs: more than a block's (B ≤ 8(2M + 1)), the last block partial; and
     // 2M outputs, fewer than a block, for the direct sum.
     for (const int outputs : {9 * (2 * m + 1) + 7, 2 * m}) {
+      EXPECT_EQ(filter.uses_fft(2 * m + 1 + outputs), outputs > 2 * m) << "M " << m << ": FFTW (libfftw3-double3) loads";
       const Eigen::VectorXd x = sampled(2 * m + 1 + outputs, 0.0, 1.0, [](double i) {
         return std::sin(0.01 * i) + 0.3 * std::cos(0.37 * i * i) + 1e-3 * i;
       });

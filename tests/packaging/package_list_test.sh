@@ -224,12 +224,16 @@ if [[ -n "$binary" ]]; then
 else
   echo "skip  ldd coverage (no binary given)"
 fi
-# Loaded with dlopen when PostgreSQL is first used, so ldd does not list it (server/store/postgres/libpq.h).
-if grep -qx libpq5 <<<"$runtime"; then
-  pass "[runtime] has libpq5 (libpq.so.5, loaded at run time)"
-else
-  fail "[runtime] has libpq5 (libpq.so.5, loaded at run time)"
-fi
+# Loaded with dlopen on first use, so ldd does not list them: libpq when PostgreSQL is first
+# used (server/store/postgres/libpq.h), FFTW when a long filter is (core/src/fftw.h).
+for loaded in "libpq5 libpq.so.5" "libfftw3-double3 libfftw3.so.3"; do
+  read -r package library <<<"$loaded"
+  if grep -qx "$package" <<<"$runtime"; then
+    pass "[runtime] has $package ($library, loaded at run time)"
+  else
+    fail "[runtime] has $package ($library, loaded at run time)"
+  fi
+done
 
 # Without a binary, a hint instead: the shared-library packages the [build] -dev packages pull
 # (libsqlite3-dev → libsqlite3-0) that [runtime] lacks. Not all are linked, so not a failure.

@@ -50,10 +50,10 @@ class DifferentialFilter {
 
   /// Filters x into y (y must have output_length(x.size()) entries). Throws InputError
   /// ("samples") when x is too short. Long filters (M ≥ fft_min_half_length) on enough data go
-  /// through the FFT (overlap-save): the same outputs up to rounding, at a cost that hardly
-  /// grows with M where the direct sum's grows as M. (A NaN or infinity in x then spoils its
-  /// whole block of outputs, not only the windows that hold it; trajectories are checked
-  /// finite before they are filtered.)
+  /// through the FFT (overlap-save, FFTW's transforms, see uses_fft): the same outputs up to
+  /// rounding, at a cost that hardly grows with M where the direct sum's grows as M. (A NaN or
+  /// infinity in x then spoils its whole block of outputs, not only the windows that hold it;
+  /// trajectories are checked finite before they are filtered.)
   void apply(FilterOrder order, const Eigen::Ref<const Eigen::VectorXd>& x,
              Eigen::Ref<Eigen::VectorXd> y) const;
   Eigen::VectorXd apply(FilterOrder order, const Eigen::Ref<const Eigen::VectorXd>& x) const;
@@ -64,8 +64,14 @@ class DifferentialFilter {
   /// H(Ω) = Σ_n c[n] e^{iΩn}, Ω in rad/sample (the response to e^{iΩt/Δ}, in physical units).
   std::complex<double> frequency_response(FilterOrder order, double omega) const;
 
-  /// Half-lengths from which apply() and apply_all() use the FFT (see filters.cpp).
-  static constexpr int fft_min_half_length = 192;
+  /// Whether apply() and apply_all() on `input_samples` samples go through the FFT: M at least
+  /// fft_min_half_length, at least a transform block's worth of outputs, and FFTW
+  /// (libfftw3.so.3) loadable — it is loaded on the first call; without it, the direct sum.
+  bool uses_fft(int input_samples) const;
+
+  /// Half-lengths from which apply() and apply_all() may use the FFT (see filters.cpp): from
+  /// here the FFT is the faster on all three orders (bench/filters_bench.cpp, M = 40 / 63 / 64).
+  static constexpr int fft_min_half_length = 64;
   static constexpr int fft_max_half_length = 16384;
 
  private:

@@ -1,0 +1,81 @@
+// fftw.h — FFTW's real transforms for the long filters, loaded when one is first needed.
+//
+// FFTW does a real transform of 4,096 points ~4× faster than Eigen's kissfft, which the long
+// filters (filters.cpp) used before; linked normally, though, its library costs every process
+// ~0.7 ms at start (an empty program with and without -lfftw3), paid by every CLI command that
+// never filters with a long window. Loaded with dlopen on first use instead, only the processes
+// that run a long filter pay, once. The declarations come from fftw3.h; every call goes
+// through fftw().
+#pragma once
+
+#include <fftw3.h>
+
+#include <Eigen/Core>
+
+#include <complex>
+
+namespace manipid::detail {
+
+// The functions used; the one list both the table and its loading are built from.
+#define MANIPID_FFTW_FUNCTIONS(X)                                                                        \
+  X(fftw_plan_dft_r2c_1d) X(fftw_plan_dft_c2r_1d) X(fftw_execute_dft_r2c) X(fftw_execute_dft_c2r) \
+  X(fftw_malloc) X(fftw_free)
+
+/// Pointers to FFTW's functions, named as FFTW names them.
+struct Fftw {
+#define MANIPID_FFTW_MEMBER(name) decltype(&::name) name = nullptr;
+  MANIPID_FFTW_FUNCTIONS(MANIPID_FFTW_MEMBER)
+#undef MANIPID_FFTW_MEMBER
+};
+
+/// FFTW (libfftw3.so.3, Debian package libfftw3-double3), loaded on the first call and kept for
+/// the process's life; null when it cannot be loaded (the long filters then take the direct
+/// sum: the same outputs, slower). Thread-safe.
+const Fftw* fftw();
+
+/// An array FFTW may work on: from fftw_malloc, so every one has the alignment the plans were
+/// made with (FFTW's condition for executing a plan on other arrays than its own).
+template <typename T>
+class FftwArray {
+ public:
+  FftwArray() = default;
+  explicit FftwArray(Eigen::Index size) { resize(size); }
+  FftwArray(const FftwArray&) = delete;
+  FftwArray& operator=(const FftwArray&) = delete;
+  ~FftwArray() {
+    if (data_) fftw()->fftw_free(data_);
+  }
+  /// Holds at least `size` elements afterwards; the contents are not kept.
+  void resize(Eigen::Index size) {
+    if (size <= capacity_) return;
+    if (data_) fftw()->fftw_free(data_);
+    data_ = static_cast<T*>(fftw()->fftw_malloc(sizeof(T) * static_cast<std::size_t>(size)));
+    if (!data_) throw std::bad_alloc();
+    capacity_ = size;
+  }
+  T* data() const { return data_; }
+
+ private:
+  T* data_ = nullptr;
+  Eigen::Index capacity_ = 0;
+};
+
+/// The real transforms of one length B (even): forward, B reals to the B/2 + 1 complex values
+/// of the half spectrum; backward, the half spectrum to B reals, B times the inverse transform
+/// (FFTW does not normalise). Made once per length under a lock (FFTW's planner is not
+/// thread-safe; executing a plan is) and kept for the process's life. Needs fftw() non-null.
+class RealTransforms {
+ public:
+  static const RealTransforms& of_length(Eigen::Index length);
+
+  /// `in` (B reals) to `out` (B/2 + 1); both FftwArrays.
+  void forward(double* in, fftw_complex* out) const;
+  /// `in` (B/2 + 1, overwritten) to `out` (B reals); both FftwArrays.
+  void backward(fftw_complex* in, double* out) const;
+
+ private:
+  RealTransforms() = default;
+  fftw_plan forward_ = nullptr, backward_ = nullptr;
+};
+
+}  // namespace manipid::detail
