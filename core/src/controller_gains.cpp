@@ -1,6 +1,8 @@
 // controller_gains.cpp — PD gains from the filtered control law by least squares (controller_gains.h).
 #include "manipid/core/controller_gains.h"
 
+#include "numbers.h"
+
 #include <Eigen/QR>
 
 #include <cmath>
@@ -9,10 +11,6 @@
 
 namespace manipid {
 namespace {
-
-double rms(const Eigen::Ref<const Eigen::VectorXd>& x) {
-  return x.size() ? std::sqrt(x.squaredNorm() / static_cast<double>(x.size())) : 0.0;
-}
 
 void check_shapes(const FilteredData& filtered, const Eigen::MatrixXd& reference) {
   if (reference.rows() != filtered.samples() || reference.cols() != filtered.q.cols() ||
@@ -23,8 +21,8 @@ void check_shapes(const FilteredData& filtered, const Eigen::MatrixXd& reference
 
 /// RMS of the law's residual over RMS of the torque; 0 when the torque is 0 and the law explains it.
 double relative(const Eigen::VectorXd& residual, const Eigen::Ref<const Eigen::VectorXd>& torque) {
-  const double scale = rms(torque);
-  const double error = rms(residual);
+  const double scale = detail::rms(torque);
+  const double error = detail::rms(residual);
   if (scale > 0) return error / scale;
   return error > 0 ? std::numeric_limits<double>::infinity() : 0.0;
 }

@@ -35,16 +35,19 @@ std::unique_ptr<Fftw> load() {
 }  // namespace
 
 const Fftw* fftw() {
-  // A static's initialisation runs once, under the compiler's lock.
-  static const std::unique_ptr<Fftw> loaded = load();
-  return loaded.get();
+  // A static's initialisation runs once, under the compiler's lock. Never freed: arrays and
+  // plans call through it until the process ends.
+  static const Fftw* const loaded = load().release();
+  return loaded;
 }
 
 const RealTransforms& RealTransforms::of_length(Eigen::Index length) {
   static std::mutex planning;
-  static std::map<Eigen::Index, std::unique_ptr<RealTransforms>> made;  // never freed: plans live as long as the process
+  // Never freed, nor are the plans: they serve until the process ends (and a map destroyed at
+  // exit would leave FFTW's plans unreachable, which LeakSanitizer reports).
+  static auto* const made = new std::map<Eigen::Index, std::unique_ptr<RealTransforms>>();
   const std::lock_guard<std::mutex> lock(planning);
-  std::unique_ptr<RealTransforms>& slot = made[length];
+  std::unique_ptr<RealTransforms>& slot = (*made)[length];
   if (!slot) {
     const Fftw& f = *fftw();
     // FFTW_ESTIMATE: plans in microseconds, without running trial transforms on the arrays

@@ -374,6 +374,16 @@ bool DifferentialFilter::uses_fft(int input_samples) const {
 
 void DifferentialFilter::apply(FilterOrder order, const Eigen::Ref<const Eigen::VectorXd>& x,
                                Eigen::Ref<Eigen::VectorXd> y) const {
+  apply(order, x, y, true);
+}
+
+void DifferentialFilter::apply_direct(FilterOrder order, const Eigen::Ref<const Eigen::VectorXd>& x,
+                                      Eigen::Ref<Eigen::VectorXd> y) const {
+  apply(order, x, y, false);
+}
+
+void DifferentialFilter::apply(FilterOrder order, const Eigen::Ref<const Eigen::VectorXd>& x,
+                               Eigen::Ref<Eigen::VectorXd> y, bool fft_allowed) const {
   const Index outputs = checked_output_length(*this, x.size());
   check_output_size(outputs, y.size(), "y");
   const Eigen::VectorXd& taps = coefficients(order);
@@ -384,7 +394,7 @@ void DifferentialFilter::apply(FilterOrder order, const Eigen::Ref<const Eigen::
   const double* input = x.data();
   if (overlaps(x.data(), x.size(), y.data(), y.size())) input = (copy = x).data();
 
-  if (use_fft(m, outputs)) {
+  if (fft_allowed && use_fft(m, outputs)) {
     const Spectra& transforms = spectra();
     std::array<const std::vector<std::complex<double>>*, 3> chosen{};
     std::array<double*, 3> out{};

@@ -2,6 +2,7 @@
 #include "manipid/core/identification.h"
 
 #include "filter_choice.h"
+#include "numbers.h"
 #include "manipid/core/dynamics.h"
 #include "manipid/core/input_error.h"
 #include "manipid/core/output_error.h"
@@ -348,11 +349,6 @@ constexpr double kBiasRatio = 10.0;
 using detail::kNoiseFreeAngle;   // the rule's limits (filter_choice.h)
 using detail::kNoiseFreeTorque;
 
-/// RMS over all entries; NaN for an empty matrix.
-double rms(const Eigen::Ref<const Eigen::MatrixXd>& x) {
-  return x.size() ? std::sqrt(x.squaredNorm() / static_cast<double>(x.size())) : std::numeric_limits<double>::quiet_NaN();
-}
-
 void judge_residual(double residual_rms, double noise_rms, bool data_noise_free, IdentificationResult& result) {
   result.residual_rms = residual_rms;
   result.noise_rms = noise_rms;
@@ -379,7 +375,7 @@ void judge_residual(double residual_rms, double noise_rms, bool data_noise_free,
 void assess_output_error_residual(const detail::NoiseLevels& noise, const Eigen::VectorXd& residual,
                                   IdentificationResult& result) {
   if (!residual.allFinite()) return;
-  judge_residual(rms(residual), std::sqrt(noise.q.squaredNorm() / static_cast<double>(noise.q.size())),
+  judge_residual(detail::rms(residual), std::sqrt(noise.q.squaredNorm() / static_cast<double>(noise.q.size())),
                  noise.noise_free(false), result);
 }
 
@@ -570,7 +566,7 @@ void assess_input_error_residual(const Problem& problem, const InputErrorStage& 
     noise_variance += tau_part * tau_part;
     for (int k = 0; k < n; ++k) noise_variance += mass_squared(j, k) * std::pow(q_noise[k] * acceleration_gain, 2);
   }
-  judge_residual(rms(fit.residual()), std::sqrt(noise_variance / n),
+  judge_residual(detail::rms(fit.residual()), std::sqrt(noise_variance / n),
                  problem.noise.noise_free(result.torque_source == TorqueSource::measured), result);
 }
 

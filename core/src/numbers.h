@@ -1,6 +1,9 @@
-// numbers.h — the constants and the number formatting core's messages share (internal to core).
+// numbers.h — the constants, the RMS and the number formatting core's files share (internal to core).
 #pragma once
 
+#include <Eigen/Core>
+
+#include <cmath>
 #include <limits>
 #include <sstream>
 #include <string>
@@ -23,6 +26,11 @@ inline std::string short_number(double value) {
   text.precision(3);
   text << value;
   return text.str();
+}
+
+/// Root mean square over all entries of `x`; NaN for an empty array.
+inline double rms(const Eigen::Ref<const Eigen::MatrixXd>& x) {
+  return x.size() ? std::sqrt(x.squaredNorm() / static_cast<double>(x.size())) : kNaN;
 }
 
 }  // namespace manipid::detail

@@ -244,8 +244,9 @@ SampledReference make_step_reference(const StepReferenceSpec& spec) {
       raw[i] = static_cast<double>(i) * spec.dt - spec.step_times[j] >= 0.0 ? spec.amplitudes[j] : 0.0;
     }
     // Output j is centred on raw sample M + j; re-indexing it to t = j·dt (the paper's tp1)
-    // moves the steps M·dt earlier.
-    filter->apply(FilterOrder::lowpass, raw, reference.values.col(j));
+    // moves the steps M·dt earlier. The direct sum keeps the reference exactly 0 before the
+    // step, so a run starts exactly at rest (the FFT would leave ~1e-18 rad of rounding there).
+    filter->apply_direct(FilterOrder::lowpass, raw, reference.values.col(j));
   }
   return reference;
 }

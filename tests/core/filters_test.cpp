@@ -457,6 +457,22 @@ TEST(Filters, LongFiltersThroughTheFftAgreeWithTheDirectSum) {
   }
 }
 
+// apply_direct takes the direct sum even where apply would take the FFT: a step's flat start
+// stays exactly zero (the simulated reference starts at rest), and the two agree to rounding.
+TEST(Filters, ApplyDirectKeepsAStepsFlatStartExactlyZero) {
+  const DifferentialFilter filter(make_settings(100, 0.2, 0.001));
+  Eigen::VectorXd step = Eigen::VectorXd::Zero(9'901);
+  step.tail(5'000).setConstant(0.5);
+  ASSERT_TRUE(filter.uses_fft(static_cast<int>(step.size())));
+  Eigen::VectorXd direct(filter.output_length(static_cast<int>(step.size())));
+  filter.apply_direct(FilterOrder::lowpass, step, direct);
+  const Eigen::VectorXd by_fft = filter.apply(FilterOrder::lowpass, step);
+  // Outputs 0 … 4,700 see only the zeros (window 2M + 1 = 201 samples starting at the output's index).
+  EXPECT_EQ(direct.head(4'700).cwiseAbs().maxCoeff(), 0.0);
+  EXPECT_NEAR(direct[direct.size() - 1], 0.5, 1e-3);  // the plateau, to the filter's DC gain
+  EXPECT_LE((direct - by_fft).cwiseAbs().maxCoeff(), 1e-14 * filter.coefficients(FilterOrder::lowpass).cwiseAbs().sum() * 0.5);
+}
+
 // The FFT path's transforms are made once per filter, whichever thread comes first.
 TEST(Filters, ThreadsShareALongFiltersTransforms) {
   const DifferentialFilter filter(make_settings(400, 0.2, 0.001));

@@ -57,6 +57,9 @@ class DifferentialFilter {
   void apply(FilterOrder order, const Eigen::Ref<const Eigen::VectorXd>& x,
              Eigen::Ref<Eigen::VectorXd> y) const;
   Eigen::VectorXd apply(FilterOrder order, const Eigen::Ref<const Eigen::VectorXd>& x) const;
+  /// The direct sum whatever M: where x is exactly zero over a whole window the output is
+  /// exactly zero, which the FFT's rounding does not keep (a step's flat start stays at rest).
+  void apply_direct(FilterOrder order, const Eigen::Ref<const Eigen::VectorXd>& x, Eigen::Ref<Eigen::VectorXd> y) const;
   /// All three orders in one pass over x (the identification's common case).
   void apply_all(const Eigen::Ref<const Eigen::VectorXd>& x, Eigen::Ref<Eigen::VectorXd> lowpass,
                  Eigen::Ref<Eigen::VectorXd> derivative1, Eigen::Ref<Eigen::VectorXd> derivative2) const;
@@ -77,6 +80,8 @@ class DifferentialFilter {
  private:
   struct Spectra;
   const Spectra& spectra() const;
+  void apply(FilterOrder order, const Eigen::Ref<const Eigen::VectorXd>& x, Eigen::Ref<Eigen::VectorXd> y,
+             bool fft_allowed) const;
 
   FilterSettings settings_;
   Eigen::VectorXd lowpass_, derivative1_, derivative2_;
