@@ -241,28 +241,50 @@ std::vector<FilteredData> filter_thin(const Trajectory& data, int M, const std::
   return thin;
 }
 
+// The floor rule's outcome: each candidate's floor, and which is the lowest.
+struct LowestFloor {
+  std::vector<double> floors;            // lengths × bands, entry l·bands + b; +∞ where not fitted in full
+  std::optional<std::size_t> chosen;     // the lowest finite floor (the first in grid order on a tie)
+  std::optional<FilteredData> filtered;  // the chosen candidate's data at every sample, when filtered so
+};
+
+// Every `stride`-th row of `full`: what filter_thin gives, by another path.
+FilteredData thin_out(const FilteredData& full, int stride) {
+  const auto rows = Eigen::seqN(0, (full.samples() + stride - 1) / stride, stride);
+  FilteredData thin;
+  thin.filter = full.filter;
+  thin.q = full.q(rows, Eigen::all);
+  thin.qd = full.qd(rows, Eigen::all);
+  thin.qdd = full.qdd(rows, Eigen::all);
+  thin.tau = full.tau(rows, Eigen::all);
+  return thin;
+}
+
 // J*: the cost no parameter value can remove (the least-squares floor over all products β),
-// on every `stride`-th filtered sample, for every candidate (lengths × bands, entry
-// l·bands + b). It measures how far the filtered data are from any instance of the model:
-// filter distortion of the nonlinear dynamics (a band too narrow for the motion) plus noise (a
-// band too wide for the derivatives of noisy q).
+// on every `stride`-th filtered sample, for every candidate (lengths × bands). It measures how
+// far the filtered data are from any instance of the model: filter distortion of the nonlinear
+// dynamics (a band too narrow for the motion) plus noise (a band too wide for the derivatives
+// of noisy q).
 // Only candidates whose floor can still be the lowest are fitted in full; the others are left
 // at +∞. Every candidate first gets a lower bound, floor_of on every kBoundStep-th of its thin
 // samples (filtered at those samples only, a kBoundStep-th of the work); then the candidates
-// are filtered at all thin samples and fitted in the order of their bounds until the next bound
-// exceeds the lowest floor by kBoundMargin (rounding, and the directions the Gram solve leaves
-// out, keep a bound from being exact). When a candidate is to be fitted, every other candidate
-// of its length that can still be fitted is filtered with it (the windows are shared; the set
-// only shrinks as the lowest floor falls, so none is filtered twice). The bands' thin data are
-// held for at most kThinBytes at once (long datasets take them in groups). On the paper's clean
-// run 4 of the 30 are fitted in full (on its variant with the printed kinetic energy, whose
-// floors lie close, 29).
-std::vector<double> lowest_floors(const RobotModel& model, const ParameterProducts& products, const Trajectory& data,
-                                  const std::vector<int>& lengths, const std::vector<double>& bands, bool use_reference,
-                                  const std::optional<PdController>& controller, int stride) {
+// are fitted in the order of their bounds until the next bound exceeds the lowest floor by
+// kBoundMargin (rounding, and the directions the Gram solve leaves out, keep a bound from being
+// exact). When a candidate is to be fitted, every other candidate of its length that can still
+// be fitted is filtered with it (the set only shrinks as the lowest floor falls, so none is
+// filtered twice). Up to kSeparately of them, with a half-length the FFT serves, are filtered
+// at every sample as the identification filters (filter_for_input_error), which costs less
+// than folding their windows, and the chosen candidate's data are then the identification's
+// own; more share their folded windows (filter_thin), the bands' thin data held for at most
+// kThinBytes at once. On the paper's clean run 4 of the 30 are fitted in full (on its variant
+// with the printed kinetic energy, whose floors lie close, 29).
+LowestFloor lowest_floor(const RobotModel& model, const ParameterProducts& products, const Trajectory& data,
+                         const std::vector<int>& lengths, const std::vector<double>& bands, bool use_reference,
+                         const std::optional<PdController>& controller, int stride) {
   constexpr int kBoundStep = 4;
   constexpr double kBoundMargin = 1e-3;
   constexpr double kThinBytes = 64.0 * (1 << 20);
+  constexpr std::size_t kSeparately = 2;
   const int n = data.joint_count();
   const std::size_t band_count = bands.size();
   const auto group_size = [&](int M, int every) {
@@ -287,35 +309,50 @@ std::vector<double> lowest_floors(const RobotModel& model, const ParameterProduc
   std::vector<std::size_t> order(bounds.size());
   for (std::size_t c = 0; c < order.size(); ++c) order[c] = c;
   std::stable_sort(order.begin(), order.end(), [&](std::size_t a, std::size_t b) { return bounds[a] < bounds[b]; });
-  std::vector<double> floors(bounds.size(), kInfinity);
+  LowestFloor result;
+  result.floors.assign(bounds.size(), kInfinity);
   std::vector<bool> fitted(bounds.size(), false);
-  std::vector<std::optional<FilteredData>> filtered(bounds.size());
+  std::vector<std::optional<FilteredData>> thin(bounds.size()), full(bounds.size());
   double lowest = kInfinity;
   const auto may_be_lowest = [&](std::size_t c) { return bounds[c] <= lowest * (1.0 + kBoundMargin); };
   for (const std::size_t c : order) {
     if (!may_be_lowest(c) || !std::isfinite(bounds[c])) break;
     const std::size_t l = c / band_count;
     const int M = lengths[l];
-    if (!filtered[c]) {
+    if (!thin[c]) {
       // This candidate, and (once a floor is known) the others of its length still in the running.
       std::vector<std::size_t> batch{c};
       if (std::isfinite(lowest)) {
         for (std::size_t b = 0; b < band_count && batch.size() < group_size(M, stride); ++b) {
           const std::size_t other = l * band_count + b;
-          if (other != c && !fitted[other] && !filtered[other] && may_be_lowest(other)) batch.push_back(other);
+          if (other != c && !fitted[other] && !thin[other] && may_be_lowest(other)) batch.push_back(other);
         }
       }
-      std::vector<double> some;
-      for (const std::size_t member : batch) some.push_back(bands[member % band_count]);
-      std::vector<FilteredData> thin = filter_thin(data, M, some, stride, use_reference, controller);
-      for (std::size_t k = 0; k < batch.size(); ++k) filtered[batch[k]] = std::move(thin[k]);
+      if (batch.size() <= kSeparately && cached_filter(FilterSettings{M, bands[c % band_count], data.dt()})->uses_fft(data.samples())) {
+        for (const std::size_t member : batch) {
+          full[member] = filter_for_input_error(data, FilterSettings{M, bands[member % band_count], data.dt()}, use_reference, controller);
+          thin[member] = thin_out(*full[member], stride);
+        }
+      } else {
+        std::vector<double> some;
+        for (const std::size_t member : batch) some.push_back(bands[member % band_count]);
+        std::vector<FilteredData> filtered = filter_thin(data, M, some, stride, use_reference, controller);
+        for (std::size_t k = 0; k < batch.size(); ++k) thin[batch[k]] = std::move(filtered[k]);
+      }
     }
-    floors[c] = floor_of(model, products, *filtered[c], filtered[c]->samples());
+    const double floor = floor_of(model, products, *thin[c], thin[c]->samples());
+    result.floors[c] = floor;
     fitted[c] = true;
-    filtered[c].reset();
-    lowest = std::min(lowest, floors[c]);
+    thin[c].reset();
+    // The lowest floor, the first in grid order on a tie; only its full data are kept.
+    if (floor < lowest || (floor == lowest && result.chosen && c < *result.chosen)) {
+      lowest = floor;
+      result.chosen = c;
+      result.filtered = std::move(full[c]);
+    }
+    full[c].reset();
   }
-  return floors;
+  return result;
 }
 
 /// Rows sampled at common instants: the regressor rows (n per instant) and the torque.
@@ -544,15 +581,12 @@ FilterChoice choose_filter(const RobotModel& model, const Trajectory& data, cons
   if (!std::isfinite(best)) {
     // Noise-free data (or too few samples for the yardstick): the lowest floor J*, which then
     // measures the filter's distortion alone.
-    const std::vector<double> floors =
-        lowest_floors(model, products, data, lengths, bands, use_reference, options.controller, kChoiceStride);
-    for (std::size_t l = 0; l < lengths.size(); ++l) {
-      for (std::size_t b = 0; b < bands.size(); ++b) {
-        if (floors[l * bands.size() + b] < best) {
-          best = floors[l * bands.size() + b];
-          choice.settings = FilterSettings{lengths[l], bands[b], data.dt()};
-        }
-      }
+    LowestFloor lowest =
+        lowest_floor(model, products, data, lengths, bands, use_reference, options.controller, kChoiceStride);
+    if (lowest.chosen) {
+      best = lowest.floors[*lowest.chosen];
+      choice.settings = FilterSettings{lengths[*lowest.chosen / bands.size()], bands[*lowest.chosen % bands.size()], data.dt()};
+      choice.filtered = std::move(lowest.filtered);
     }
   }
   if (!std::isfinite(best)) {

@@ -3,6 +3,9 @@
 #pragma once
 
 #include "manipid/core/identification.h"
+#include "manipid/core/input_error.h"
+
+#include <optional>
 
 #include <vector>
 
@@ -29,6 +32,9 @@ struct FilterChoice {
   FilterSettings settings;
   bool automatic = false;
   double q_noise = 0.0;  ///< estimated standard deviation of the noise on q, rad (largest joint)
+  /// The data filtered with `settings` as filter_for_input_error filters them, when the choice
+  /// already did (the floor rule filters long-window candidates at every sample); else empty.
+  std::optional<FilteredData> filtered;
 };
 
 /// Robust estimate of white measurement noise on one signal: the fourth difference of a

@@ -463,7 +463,12 @@ InputErrorStage run_input_error(const Problem& problem, IdentificationResult& re
   result.filter = stage.choice.settings;
   result.filter_chosen_automatically = stage.choice.automatic;
   result.torque_source = setup.use_reference ? TorqueSource::reference : TorqueSource::measured;
-  stage.filtered = filter_for_input_error(problem.data, stage.choice.settings, setup.use_reference, options.controller);
+  if (stage.choice.filtered) {
+    stage.filtered = std::move(*stage.choice.filtered);  // the choice filtered them already, alike
+    stage.choice.filtered.reset();
+  } else {
+    stage.filtered = filter_for_input_error(problem.data, stage.choice.settings, setup.use_reference, options.controller);
+  }
   if (!setup.use_reference && problem.data.has_reference() && !result.estimated_gains) {
     // τ, q and r at hand: the gains the data imply, from the signals just filtered.
     result.estimated_gains = fit_gains(problem.data, stage.filtered);
