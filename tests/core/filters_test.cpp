@@ -430,9 +430,9 @@ TEST(Filters, LongFiltersThroughTheFftAgreeWithTheDirectSum) {
                                          make_settings(400, 2.4, 0.001), make_settings(1000, 0.1, 0.002)}) {
     const DifferentialFilter filter(settings);
     const int m = settings.half_length;
-    // 9(2M + 1) + 7 outputs: more than a block's (B ≤ 8(2M + 1)), the last block partial; and
-    // 2M outputs, fewer than a block, for the direct sum.
-    for (const int outputs : {9 * (2 * m + 1) + 7, 2 * m}) {
+    // 16,391 outputs: more than a block's (B is 4,096 up to M = 511, 8,192 up to M = 1,023),
+    // the last block partial; and 2M outputs, fewer than a block, for the direct sum.
+    for (const int outputs : {2 * 8192 + 7, 2 * m}) {
       EXPECT_EQ(filter.uses_fft(2 * m + 1 + outputs), outputs > 2 * m) << "M " << m << ": FFTW (libfftw3-double3) loads";
       const Eigen::VectorXd x = sampled(2 * m + 1 + outputs, 0.0, 1.0, [](double i) {
         return std::sin(0.01 * i) + 0.3 * std::cos(0.37 * i * i) + 1e-3 * i;
@@ -460,15 +460,15 @@ TEST(Filters, LongFiltersThroughTheFftAgreeWithTheDirectSum) {
 // apply_direct takes the direct sum even where apply would take the FFT: a step's flat start
 // stays exactly zero (the simulated reference starts at rest), and the two agree to rounding.
 TEST(Filters, ApplyDirectKeepsAStepsFlatStartExactlyZero) {
-  const DifferentialFilter filter(make_settings(100, 0.2, 0.001));
+  const DifferentialFilter filter(make_settings(200, 0.2, 0.001));
   Eigen::VectorXd step = Eigen::VectorXd::Zero(9'901);
   step.tail(5'000).setConstant(0.5);
   ASSERT_TRUE(filter.uses_fft(static_cast<int>(step.size())));
   Eigen::VectorXd direct(filter.output_length(static_cast<int>(step.size())));
   filter.apply_direct(FilterOrder::lowpass, step, direct);
   const Eigen::VectorXd by_fft = filter.apply(FilterOrder::lowpass, step);
-  // Outputs 0 … 4,700 see only the zeros (window 2M + 1 = 201 samples starting at the output's index).
-  EXPECT_EQ(direct.head(4'700).cwiseAbs().maxCoeff(), 0.0);
+  // Outputs 0 … 4,500 see only the zeros (window 2M + 1 = 401 samples from the output's index).
+  EXPECT_EQ(direct.head(4'501).cwiseAbs().maxCoeff(), 0.0);
   EXPECT_NEAR(direct[direct.size() - 1], 0.5, 1e-3);  // the plateau, to the filter's DC gain
   EXPECT_LE((direct - by_fft).cwiseAbs().maxCoeff(), 1e-14 * filter.coefficients(FilterOrder::lowpass).cwiseAbs().sum() * 0.5);
 }
