@@ -545,7 +545,12 @@ void assess_input_error_residual(const Problem& problem, const InputErrorStage& 
   const Trajectory& data = problem.data;
   const int n = problem.setup.n;
   const Parameters estimate = Parameters::from_vector(result.estimate);
-  const TorqueFit fit = torque_fit(problem.model, estimate, data, stage.filtered);
+  // With unit joint weights the final cost is the residual's square summed over joints and
+  // averaged over samples (InputErrorCost's Gram form), so its RMS needs no second pass of the
+  // dynamics over every sample; weighted, the residual is formed sample by sample.
+  const double residual_rms = problem.options.weighting == JointWeighting::unit
+                                  ? std::sqrt(std::max(0.0, result.final_cost) / n)
+                                  : detail::rms(torque_fit(problem.model, estimate, data, stage.filtered).residual());
   const auto filter = cached_filter(stage.choice.settings);
   const double lowpass_gain = filter->coefficients(FilterOrder::lowpass).norm();
   const double acceleration_gain = filter->coefficients(FilterOrder::derivative2).norm();
@@ -571,7 +576,7 @@ void assess_input_error_residual(const Problem& problem, const InputErrorStage& 
     noise_variance += tau_part * tau_part;
     for (int k = 0; k < n; ++k) noise_variance += mass_squared(j, k) * std::pow(q_noise[k] * acceleration_gain, 2);
   }
-  judge_residual(detail::rms(fit.residual()), std::sqrt(noise_variance / n),
+  judge_residual(residual_rms, std::sqrt(noise_variance / n),
                  problem.noise.noise_free(result.torque_source == TorqueSource::measured), result);
 }
 
