@@ -12,6 +12,7 @@
 #include <limits>
 
 #include <string>
+#include <vector>
 
 namespace manipid {
 namespace {
@@ -29,31 +30,35 @@ namespace {
 }
 
 // One block of the QR below: [R z; B b] (R p × p upper triangular, B m × p new rows) made upper
-// triangular again by p Householder reflections, each touching row k of the triangle and the m
-// rows below it only (the triangle's rows under the diagonal are zero, so a reflection of the
-// whole column would change nothing there). The same reflections as Eigen's HouseholderQR of
-// the stacked matrix (beta = −sign(α)·‖column‖, v = [1; x/(α − beta)], tau = (beta − α)/beta), in
-// a loop over raw columns, compiled for SSE2 and AVX2: Eigen's unblocked kernel for matrices this
-// narrow cost ~1,500 instructions a row here. `work` is column-major with leading dimension `ld`:
-// rows 0..p−1 [R z], rows p..p+m−1 [B b]; B is overwritten. Returns |b|² after the reflections,
-// what of the torque no β reaches in this block.
-MANIPID_VECTOR_CLONES double triangularise_block(double* work, Eigen::Index ld, int p, Eigen::Index m) {
+// triangular again by p Householder reflections, each touching row k of the triangle and the
+// rows below it that can be non-zero in column k only: the triangle's rows under the diagonal
+// are zero, and of B the first extent[k] rows (the rows are grouped by joint and joint j's
+// torque does not involve the masses before j, see the constructor). Rows a reflection does not
+// touch stay as they were, so every column keeps that shape. The same reflections as Eigen's
+// HouseholderQR of the stacked matrix (beta = −sign(α)·‖column‖, v = [1; x/(α − beta)],
+// tau = (beta − α)/beta), in a loop over raw columns, compiled for SSE2 and AVX2: Eigen's
+// unblocked kernel for matrices this narrow cost ~1,500 instructions a row here. `work` is
+// column-major with leading dimension `ld`: rows 0..p−1 [R z], rows p..p+m−1 [B b]; B is
+// overwritten. Returns |b|² after the reflections, what of the torque no β reaches in this block.
+MANIPID_VECTOR_CLONES double triangularise_block(double* work, Eigen::Index ld, int p, Eigen::Index m,
+                                                 const Eigen::Index* extent) {
   for (int k = 0; k < p; ++k) {
     double* x = work + k * ld + p;
-    const double sigma = dot(x, x, m);
+    const Eigen::Index rows = extent[k];
+    const double sigma = dot(x, x, rows);
     const double alpha = work[k * ld + k];
     if (sigma <= std::numeric_limits<double>::min()) continue;  // already triangular (Eigen: tau = 0)
     const double norm = std::sqrt(alpha * alpha + sigma);
     const double beta = alpha >= 0.0 ? -norm : norm;
     const double scale = 1.0 / (alpha - beta);
-    for (Eigen::Index i = 0; i < m; ++i) x[i] *= scale;
+    for (Eigen::Index i = 0; i < rows; ++i) x[i] *= scale;
     const double tau = (beta - alpha) / beta;
     work[k * ld + k] = beta;
     for (int j = k + 1; j <= p; ++j) {  // j = p: the torque column z, b
       double* y = work + j * ld + p;
-      const double w = tau * (work[j * ld + k] + dot(x, y, m));
+      const double w = tau * (work[j * ld + k] + dot(x, y, rows));
       work[j * ld + k] -= w;
-      for (Eigen::Index i = 0; i < m; ++i) y[i] -= w * x[i];
+      for (Eigen::Index i = 0; i < rows; ++i) y[i] -= w * x[i];
     }
   }
   const double* b = work + p * ld + p;
@@ -138,6 +143,10 @@ InputErrorCost::InputErrorCost(const RobotModel& model, const FilteredData& data
   // factorisation of the whole tall matrix streams it from memory p times. Orthogonal steps
   // throughout, so R and z are those of the one-shot QR up to rounding (and row signs, which
   // leave |R β − z|² unchanged); what each block's reflectors leave of τ below R is J⊥'s share.
+  // A block's rows are grouped by joint (all its samples' joint-1 rows, then joint 2's, …): the
+  // torque of joint j involves the masses j, j+1, … only (the links it carries), so a column of
+  // mass c is zero below the rows of joints 1..c, and its reflection touches those rows alone
+  // (on the paper's arm a third of the work).
   constexpr int kBlockRows = 512;
   const int block_samples = std::max(1, kBlockRows / n);
   const double root_samples = std::sqrt(static_cast<double>(samples));
@@ -146,6 +155,7 @@ InputErrorCost::InputErrorCost(const RobotModel& model, const FilteredData& data
   Eigen::MatrixXd Y(n, p);
   Eigen::VectorXd q(n), qd(n), qdd(n);
   const Eigen::ArrayXd root_weights = weights_.array().sqrt() / root_samples;
+  std::vector<Eigen::Index> extent(static_cast<std::size_t>(p));
   for (int first = 0; first < samples; first += block_samples) {
     const int count = std::min(block_samples, samples - first);
     for (int k = 0; k < count; ++k) {
@@ -154,11 +164,20 @@ InputErrorCost::InputErrorCost(const RobotModel& model, const FilteredData& data
       qd = data.qd.row(t).transpose();
       qdd = data.qdd.row(t).transpose();
       regressor(model, products_, workspace, q, qd, qdd, Y);
-      const Eigen::Index row = p + static_cast<Eigen::Index>(k) * n;
-      work.block(row, 0, n, p) = root_weights.matrix().asDiagonal() * Y;
-      work.block(row, p, n, 1) = (root_weights * data.tau.row(t).transpose().array()).matrix();
+      for (int j = 0; j < n; ++j) {
+        const Eigen::Index row = p + static_cast<Eigen::Index>(j) * count + k;
+        work.block(row, 0, 1, p) = root_weights[j] * Y.row(j);
+        work(row, p) = root_weights[j] * data.tau(t, j);
+      }
     }
-    orthogonal_ += triangularise_block(work.data(), work.rows(), p, static_cast<Eigen::Index>(count) * n);
+    // Non-decreasing (a running maximum), so that a reflection never reaches below a later
+    // column's extent, whatever order the products come in.
+    Eigen::Index reach = 0;
+    for (int c = 0; c < p; ++c) {
+      reach = std::max(reach, static_cast<Eigen::Index>(products_.terms[static_cast<std::size_t>(c)].mass + 1) * count);
+      extent[static_cast<std::size_t>(c)] = reach;
+    }
+    orthogonal_ += triangularise_block(work.data(), work.rows(), p, static_cast<Eigen::Index>(count) * n, extent.data());
   }
   triangle_ = work.topLeftCorner(p, p);
   rotated_ = work.col(p).head(p);

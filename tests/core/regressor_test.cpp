@@ -32,6 +32,34 @@ TEST(Regressor, EqualsInverseDynamicsAtRandomStatesAndParameters) {
   }
 }
 
+// Joint j carries links j, j+1, …: its torque involves no mass before j, so its row of Y is zero
+// in every column of such a mass (the input-error QR skips those rows, input_error.cpp).
+TEST(Regressor, AJointsRowIsZeroInTheColumnsOfTheMassesBeforeIt) {
+  std::mt19937_64 engine(29);
+  for (KineticEnergy energy : {KineticEnergy::complete, KineticEnergy::paper}) {
+    for (const RobotModel& model : {cedro2009(energy).model, testing::irregular_model(energy)}) {
+      const ParameterProducts products = parameter_products(model);
+      const int n = model.joint_count();
+      int nonzero_elsewhere = 0;
+      for (int trial = 0; trial < 20; ++trial) {
+        const Eigen::VectorXd q = random_vector(engine, n, M_PI), qd = random_vector(engine, n, 3.0),
+                              qdd = random_vector(engine, n, 10.0);
+        const Eigen::MatrixXd Y = regressor(model, products, q, qd, qdd);
+        for (int j = 0; j < n; ++j) {
+          for (int column = 0; column < products.size(); ++column) {
+            if (products.terms[static_cast<std::size_t>(column)].mass < j) {
+              EXPECT_EQ(Y(j, column), 0.0) << to_string(energy) << ": joint " << j + 1 << ", " << products.name(column);
+            } else if (Y(j, column) != 0.0) {
+              ++nonzero_elsewhere;
+            }
+          }
+        }
+      }
+      EXPECT_GT(nonzero_elsewhere, 0);  // the rule is not met by an all-zero Y
+    }
+  }
+}
+
 TEST(Regressor, PaperRobotProducts) {
   const ParameterProducts products = parameter_products(cedro2009().model);
   std::vector<std::string> names;
