@@ -451,8 +451,9 @@ struct Problem {
 /// cost, polish with Gauss–Newton. Leaves the cost for the uncertainty and the second stage.
 struct InputErrorStage {
   detail::FilterChoice choice;
-  FilteredData filtered;
   std::optional<InputErrorCost> cost;
+  /// The filtered data the cost was formed from (the cost keeps them).
+  const FilteredData& filtered() const { return cost->data(); }
 };
 
 InputErrorStage run_input_error(const Problem& problem, IdentificationResult& result) {
@@ -463,26 +464,27 @@ InputErrorStage run_input_error(const Problem& problem, IdentificationResult& re
   result.filter = stage.choice.settings;
   result.filter_chosen_automatically = stage.choice.automatic;
   result.torque_source = setup.use_reference ? TorqueSource::reference : TorqueSource::measured;
+  FilteredData filtered;
   if (stage.choice.filtered) {
-    stage.filtered = std::move(*stage.choice.filtered);  // the choice filtered them already, alike
+    filtered = std::move(*stage.choice.filtered);  // the choice filtered them already, alike
     stage.choice.filtered.reset();
   } else {
-    stage.filtered = filter_for_input_error(problem.data, stage.choice.settings, setup.use_reference, options.controller);
+    filtered = filter_for_input_error(problem.data, stage.choice.settings, setup.use_reference, options.controller);
   }
   if (!setup.use_reference && problem.data.has_reference() && !result.estimated_gains) {
     // τ, q and r at hand: the gains the data imply, from the signals just filtered.
-    result.estimated_gains = fit_gains(problem.data, stage.filtered);
+    result.estimated_gains = fit_gains(problem.data, filtered);
   }
   Eigen::VectorXd weights;
   if (options.weighting == JointWeighting::inverse_variance) {
     weights.resize(setup.n);
     for (int j = 0; j < setup.n; ++j) {
-      const double mean = stage.filtered.tau.col(j).mean();
-      const double variance = (stage.filtered.tau.col(j).array() - mean).square().mean();
+      const double mean = filtered.tau.col(j).mean();
+      const double variance = (filtered.tau.col(j).array() - mean).square().mean();
       weights[j] = variance > 0 ? 1.0 / variance : 1.0;
     }
   }
-  stage.cost.emplace(problem.model, stage.filtered, weights);
+  stage.cost.emplace(problem.model, std::move(filtered), weights);
   const InputErrorCost& cost = *stage.cost;
   const detail::CostFunction function = [&cost](const Eigen::VectorXd& theta, Eigen::VectorXd* gradient) {
     return cost.evaluate(Parameters::from_vector(theta), gradient);
@@ -525,7 +527,7 @@ void assess_input_error(const Problem& problem, const InputErrorStage& stage, Id
   const Setup& setup = problem.setup;
   // σ² per residual, inflated by 1/Σc0² because low-passed residuals are correlated over
   // about π/Ωg samples (white noise through the filter keeps Σc0² of its variance).
-  const double residual_sum = result.final_cost * stage.filtered.samples();
+  const double residual_sum = result.final_cost * stage.filtered().samples();
   const double dof = std::max(1.0, static_cast<double>(stage.cost->residual_count() - count_free(setup.free)));
   const double correlation_factor = 1.0 / cached_filter(stage.choice.settings)->coefficients(FilterOrder::lowpass).squaredNorm();
   const detail::UncertaintyInput uncertainty{
@@ -550,7 +552,7 @@ void assess_input_error_residual(const Problem& problem, const InputErrorStage& 
   // dynamics over every sample; weighted, the residual is formed sample by sample.
   const double residual_rms = problem.options.weighting == JointWeighting::unit
                                   ? std::sqrt(std::max(0.0, result.final_cost) / n)
-                                  : detail::rms(torque_fit(problem.model, estimate, data, stage.filtered).residual());
+                                  : detail::rms(torque_fit(problem.model, estimate, data, stage.filtered()).residual());
   const auto filter = cached_filter(stage.choice.settings);
   const double lowpass_gain = filter->coefficients(FilterOrder::lowpass).norm();
   const double acceleration_gain = filter->coefficients(FilterOrder::derivative2).norm();
@@ -559,10 +561,10 @@ void assess_input_error_residual(const Problem& problem, const InputErrorStage& 
   Eigen::MatrixXd mass_squared = Eigen::MatrixXd::Zero(n, n);
   DynamicsWorkspace workspace(problem.model);
   Eigen::MatrixXd mass(n, n);
-  const int points = std::min(16, stage.filtered.samples());
+  const int points = std::min(16, stage.filtered().samples());
   for (int i = 0; i < points; ++i) {
-    const int row = static_cast<int>((static_cast<long>(i) * (stage.filtered.samples() - 1)) / std::max(1, points - 1));
-    mass_matrix(problem.model, estimate, workspace, stage.filtered.q.row(row).transpose(), mass);
+    const int row = static_cast<int>((static_cast<long>(i) * (stage.filtered().samples() - 1)) / std::max(1, points - 1));
+    mass_matrix(problem.model, estimate, workspace, stage.filtered().q.row(row).transpose(), mass);
     mass_squared += mass.cwiseAbs2() / points;
   }
   double noise_variance = 0.0;
@@ -626,7 +628,7 @@ void identify_two_stage(const Problem& problem, IdentificationResult& result) {
   }
   const Eigen::MatrixXd basis = identifiable_directions(problem, *stage.cost, result.estimate);
   const PdController gains =
-      settle_gains(options, setup.use_reference ? nullptr : &stage.filtered, problem.data, result);
+      settle_gains(options, setup.use_reference ? nullptr : &stage.filtered(), problem.data, result);
   const OutputErrorCost output_error(problem.model, problem.data, gains, options.simulation_relative_tolerance);
   const detail::FitBounds bounds{setup.n, setup.free, setup.lower, setup.upper};
   const detail::GaussNewtonOutcome outcome =

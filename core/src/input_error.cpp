@@ -128,8 +128,9 @@ TorqueFit torque_fit(const RobotModel& model, const Parameters& parameters, cons
   return fit;
 }
 
-InputErrorCost::InputErrorCost(const RobotModel& model, const FilteredData& data, Eigen::VectorXd joint_weights)
-    : model_(model), data_(data), weights_(std::move(joint_weights)), products_(parameter_products(model)) {
+InputErrorCost::InputErrorCost(const RobotModel& model, FilteredData filtered, Eigen::VectorXd joint_weights)
+    : model_(model), data_(std::move(filtered)), weights_(std::move(joint_weights)), products_(parameter_products(model)) {
+  const FilteredData& data = data_;
   const int n = model.joint_count();
   const int samples = data.samples();
   if (data.q.cols() != n) throw InputError("q", "the data has " + std::to_string(data.q.cols()) + " joints, the model " + std::to_string(n));

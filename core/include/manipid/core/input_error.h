@@ -50,8 +50,9 @@ TorqueFit torque_fit(const RobotModel& model, const Parameters& parameters, cons
 
 class InputErrorCost {
  public:
-  /// `joint_weights` has one entry per joint (w_j ≥ 0); empty means all 1.
-  InputErrorCost(const RobotModel& model, const FilteredData& data, Eigen::VectorXd joint_weights = {});
+  /// `joint_weights` has one entry per joint (w_j ≥ 0); empty means all 1. Keeps `data` (moved
+  /// in when the caller has no more use for it).
+  InputErrorCost(const RobotModel& model, FilteredData data, Eigen::VectorXd joint_weights = {});
 
   /// J(θ) in Gram form; with `gradient`, also ∂J/∂θ (2n entries, θ order).
   double evaluate(const Parameters& parameters, Eigen::VectorXd* gradient = nullptr) const;
