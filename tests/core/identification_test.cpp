@@ -33,6 +33,21 @@ const Trajectory& paper_run(KineticEnergy energy) {
   return found->second;
 }
 
+// The paper's noisy case (manipid simulate --noise-q 1e-4 --quantize-q 16 --noise-tau-relative
+// 0.01): the complete model's run with that noise, made once.
+const Trajectory& paper_noisy_run() {
+  static const Trajectory run = [] {
+    Trajectory noisy = paper_run(KineticEnergy::complete);
+    MeasurementNoise noise;
+    noise.q_sigma = 1e-4;
+    noise.quantize_bits = 16;
+    noise.tau_relative_sigma = 0.01;
+    apply_measurement_noise(noisy, noise);
+    return noisy;
+  }();
+  return run;
+}
+
 double largest_identifiable_error(const IdentificationResult& result, const Parameters& truth) {
   const Eigen::VectorXd true_theta = truth.vector();
   double largest = 0.0;
@@ -211,14 +226,8 @@ TEST(Identification, SaysWhenTheResidualIsBiasNotNoise) {
   EXPECT_TRUE(warns_of_bias(clean_automatic)) << clean_automatic.residual_rms << " vs " << clean_automatic.noise_rms;
   const IdentificationResult clean_paper = identify(preset.model, clean, paper_options(preset));
   EXPECT_TRUE(warns_of_bias(clean_paper)) << clean_paper.residual_rms << " vs " << clean_paper.noise_rms;
-  // The paper's noisy case (manipid simulate --noise-q 1e-4 --quantize-q 16 --noise-tau-relative 0.01):
-  // the residual is noise, no such warning.
-  Trajectory noisy = clean;
-  MeasurementNoise noise;
-  noise.q_sigma = 1e-4;
-  noise.quantize_bits = 16;
-  noise.tau_relative_sigma = 0.01;
-  apply_measurement_noise(noisy, noise);
+  // The paper's noisy case: the residual is noise, no such warning.
+  const Trajectory& noisy = paper_noisy_run();
   for (const IdentificationOptions& options : {automatic, paper_options(preset)}) {
     const IdentificationResult result = identify(preset.model, noisy, options);
     EXPECT_FALSE(warns_of_bias(result)) << result.residual_rms << " vs " << result.noise_rms;
@@ -232,13 +241,8 @@ TEST(Identification, SaysWhenTheResidualIsBiasNotNoise) {
 // itself (weighted): clean data, where the residual is ~1e-3 of the torque, and noisy.
 TEST(Identification, TheResidualRmsIsTheFitsSampleBySample) {
   const Preset preset = cedro2009();
-  Trajectory noisy = paper_run(KineticEnergy::complete);
-  MeasurementNoise noise;
-  noise.q_sigma = 1e-4;
-  noise.tau_relative_sigma = 0.01;
-  apply_measurement_noise(noisy, noise);
-  const Trajectory* const clean = &paper_run(KineticEnergy::complete);
-  for (const Trajectory* data : {clean, static_cast<const Trajectory*>(&noisy)}) {
+  const Trajectory* const noisy = &paper_noisy_run();
+  for (const Trajectory* data : {&paper_run(KineticEnergy::complete), noisy}) {
     for (const JointWeighting weighting : {JointWeighting::unit, JointWeighting::inverse_variance}) {
       IdentificationOptions options = paper_options(preset);
       options.weighting = weighting;
@@ -247,7 +251,7 @@ TEST(Identification, TheResidualRmsIsTheFitsSampleBySample) {
       const Eigen::MatrixXd residual =
           torque_fit(preset.model, Parameters::from_vector(result.estimate), *data, filtered).residual();
       const double expected = std::sqrt(residual.squaredNorm() / static_cast<double>(residual.size()));
-      EXPECT_NEAR(result.residual_rms, expected, 1e-6 * expected) << (data == &noisy ? "noisy" : "clean");
+      EXPECT_NEAR(result.residual_rms, expected, 1e-6 * expected) << (data == noisy ? "noisy" : "clean");
     }
   }
 }
@@ -269,12 +273,7 @@ TEST(Identification, GradientAlgorithmsReachTheSameMinimum) {
 // the paper's clean and noisy cases, with the paper's filter and with the one chosen from the data.
 TEST(Identification, LeastSquaresDefaultEqualsBobyqa) {
   const Preset preset = cedro2009();
-  Trajectory noisy = paper_run(KineticEnergy::complete);
-  MeasurementNoise noise;
-  noise.q_sigma = 1e-4;
-  noise.quantize_bits = 16;
-  noise.tau_relative_sigma = 0.01;
-  apply_measurement_noise(noisy, noise);
+  const Trajectory& noisy = paper_noisy_run();
   IdentificationOptions automatic;
   automatic.initial = preset.initial_parameters;
   const Trajectory* clean = &paper_run(KineticEnergy::complete);
