@@ -50,7 +50,7 @@ const RealTransforms& RealTransforms::of_length(Eigen::Index length) {
   std::unique_ptr<RealTransforms>& slot = (*made)[length];
   if (!slot) {
     const Fftw& f = *fftw();
-    // FFTW_ESTIMATE: plans in microseconds, without running trial transforms on the arrays
+    // FFTW_ESTIMATE: plans without running trial transforms on the arrays, ~0.7 ms a plan here
     // (FFTW_MEASURE would take tens of milliseconds per length to gain a little per call).
     const FftwArray<double> reals(length);
     const FftwArray<fftw_complex> spectrum(length / 2 + 1);

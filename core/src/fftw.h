@@ -12,7 +12,8 @@
 
 #include <Eigen/Core>
 
-#include <complex>
+#include <cstddef>
+#include <new>
 
 namespace manipid::detail {
 
