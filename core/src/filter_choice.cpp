@@ -276,8 +276,9 @@ FilteredData thin_out(const FilteredData& full, int stride) {
 // at every sample as the identification filters (filter_for_input_error), which costs less
 // than folding their windows, and the chosen candidate's data are then the identification's
 // own; more share their folded windows (filter_thin), the bands' thin data held for at most
-// kThinBytes at once. On the paper's clean run 4 of the 30 are fitted in full (on its variant
-// with the printed kinetic energy, whose floors lie close, 29).
+// kThinBytes at once. On the paper's clean run 4 of the 30 are fitted in full, on its variant
+// with the printed kinetic energy, whose floors lie close, 5 (29 while the order ran length by
+// length).
 LowestFloor lowest_floor(const RobotModel& model, const ParameterProducts& products, const Trajectory& data,
                          const std::vector<int>& lengths, const std::vector<double>& bands, bool use_reference,
                          const std::optional<PdController>& controller, int stride) {
