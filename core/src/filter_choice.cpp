@@ -154,11 +154,12 @@ MANIPID_VECTOR_CLONES void filter_windows(const double* W, Eigen::Index tiles, E
   }
 }
 
-// The output samples a thin filtering at `stride` keeps: 0, stride, 2·stride, … of the
-// DifferentialFilter's outputs at half-length M.
+// How many of `outputs` filtered samples a thin filtering at `stride` keeps: 0, stride, 2·stride, ….
+int every(int outputs, int stride) { return (outputs + stride - 1) / stride; }
+
+// The same for the outputs of a filter of half-length M on `samples` inputs.
 int thin_rows(int samples, int M, int stride) {
-  const int outputs = samples - 2 * M - 1;  // DifferentialFilter::output_length
-  return (outputs + stride - 1) / stride;
+  return every(DifferentialFilter::output_length(samples, M), stride);
 }
 
 // q, q̇, q̈ and τ of `data` filtered with each band at half-length M (as filter_for_input_error
@@ -250,7 +251,7 @@ struct LowestFloor {
 
 // Every `stride`-th row of `full`: what filter_thin gives, by another path.
 FilteredData thin_out(const FilteredData& full, int stride) {
-  const auto rows = Eigen::seqN(0, (full.samples() + stride - 1) / stride, stride);
+  const auto rows = Eigen::seqN(0, every(full.samples(), stride), stride);
   FilteredData thin;
   thin.filter = full.filter;
   thin.q = full.q(rows, Eigen::all);

@@ -305,6 +305,7 @@ void check_output_size(Index expected, Index actual, const char* name) {
 
 struct DifferentialFilter::Spectra {
   Index block = 0;  // B
+  const detail::RealTransforms* transforms = nullptr;  // FFTW's plans for B
   // By FilterOrder: conj(FFT of the taps padded to B) / B, the 1/B of the inverse transform folded in.
   std::array<std::vector<std::complex<double>>, 3> of;
 };
@@ -313,7 +314,8 @@ const DifferentialFilter::Spectra& DifferentialFilter::spectra() const {
   std::call_once(spectra_once_, [this] {
     auto made = std::make_shared<Spectra>();
     made->block = fft_block_length(settings_.half_length);
-    const detail::RealTransforms& transforms = detail::RealTransforms::of_length(made->block);
+    made->transforms = &detail::RealTransforms::of_length(made->block);
+    const detail::RealTransforms& transforms = *made->transforms;
     const Index bins = made->block / 2 + 1;
     detail::FftwArray<double> padded(made->block);
     detail::FftwArray<fftw_complex> spectrum(bins);
@@ -336,10 +338,10 @@ namespace {
 
 // y_k[j] = Σ_n c_k[n] x[j + M + n], j < outputs, for the orders asked (null outputs are skipped).
 void correlate_by_fft(int half_length, const std::array<const std::vector<std::complex<double>>*, 3>& spectra,
-                      Index block, const double* x, Index samples, const std::array<double*, 3>& outputs, Index count) {
+                      const detail::RealTransforms& transforms, Index block, const double* x, Index samples,
+                      const std::array<double*, 3>& outputs, Index count) {
   const Index step = block - 2 * static_cast<Index>(half_length);
   const Index bins = block / 2 + 1;
-  const detail::RealTransforms& transforms = detail::RealTransforms::of_length(block);
   // Per thread, grown to the longest block seen: FFTW executes a plan on any arrays aligned as
   // the planner's, which fftw_malloc's are.
   thread_local detail::FftwArray<double> input, output;
@@ -400,12 +402,12 @@ void DifferentialFilter::apply(FilterOrder order, const Eigen::Ref<const Eigen::
   if (overlaps(x.data(), x.size(), y.data(), y.size())) input = (copy = x).data();
 
   if (fft_allowed && use_fft(m, outputs)) {
-    const Spectra& transforms = spectra();
+    const Spectra& fft = spectra();
     std::array<const std::vector<std::complex<double>>*, 3> chosen{};
     std::array<double*, 3> out{};
-    chosen[static_cast<std::size_t>(order)] = &transforms.of[static_cast<std::size_t>(order)];
+    chosen[static_cast<std::size_t>(order)] = &fft.of[static_cast<std::size_t>(order)];
     out[static_cast<std::size_t>(order)] = y.data();
-    correlate_by_fft(m, chosen, transforms.block, input, x.size(), out, outputs);
+    correlate_by_fft(m, chosen, *fft.transforms, fft.block, input, x.size(), out, outputs);
     return;
   }
   const double* centre = input + m;
@@ -440,8 +442,8 @@ void DifferentialFilter::apply_all(const Eigen::Ref<const Eigen::VectorXd>& x, E
     input = (copy = x).data();
   }
   if (use_fft(m, outputs)) {
-    const Spectra& transforms = spectra();
-    correlate_by_fft(m, {&transforms.of[0], &transforms.of[1], &transforms.of[2]}, transforms.block, input, x.size(),
+    const Spectra& fft = spectra();
+    correlate_by_fft(m, {&fft.of[0], &fft.of[1], &fft.of[2]}, *fft.transforms, fft.block, input, x.size(),
                      {lowpass.data(), derivative1.data(), derivative2.data()}, outputs);
     return;
   }

@@ -156,7 +156,14 @@ InputErrorCost::InputErrorCost(const RobotModel& model, FilteredData filtered, E
   Eigen::MatrixXd Y(n, p);
   Eigen::VectorXd q(n), qd(n), qdd(n);
   const Eigen::ArrayXd root_weights = weights_.array().sqrt() / root_samples;
-  std::vector<Eigen::Index> extent(static_cast<std::size_t>(p));
+  // Joints whose rows column c can reach: its mass's index + 1, as a running maximum so that a
+  // reflection never reaches below a later column's extent, whatever order the products come in.
+  std::vector<Eigen::Index> joints_reached(static_cast<std::size_t>(p)), extent(static_cast<std::size_t>(p));
+  Eigen::Index reach = 0;
+  for (int c = 0; c < p; ++c) {
+    reach = std::max(reach, static_cast<Eigen::Index>(products_.terms[static_cast<std::size_t>(c)].mass + 1));
+    joints_reached[static_cast<std::size_t>(c)] = reach;
+  }
   for (int first = 0; first < samples; first += block_samples) {
     const int count = std::min(block_samples, samples - first);
     for (int k = 0; k < count; ++k) {
@@ -171,13 +178,7 @@ InputErrorCost::InputErrorCost(const RobotModel& model, FilteredData filtered, E
         work(row, p) = root_weights[j] * data.tau(t, j);
       }
     }
-    // Non-decreasing (a running maximum), so that a reflection never reaches below a later
-    // column's extent, whatever order the products come in.
-    Eigen::Index reach = 0;
-    for (int c = 0; c < p; ++c) {
-      reach = std::max(reach, static_cast<Eigen::Index>(products_.terms[static_cast<std::size_t>(c)].mass + 1) * count);
-      extent[static_cast<std::size_t>(c)] = reach;
-    }
+    for (int c = 0; c < p; ++c) extent[static_cast<std::size_t>(c)] = joints_reached[static_cast<std::size_t>(c)] * count;
     orthogonal_ += triangularise_block(work.data(), work.rows(), p, static_cast<Eigen::Index>(count) * n, extent.data());
   }
   triangle_ = work.topLeftCorner(p, p);

@@ -44,7 +44,9 @@ class DifferentialFilter {
   const Eigen::VectorXd& coefficients(FilterOrder order) const;
 
   /// Number of outputs for `input_samples` inputs: N − 2M − 1 (≤ 0 means too few samples).
-  int output_length(int input_samples) const { return input_samples - 2 * settings_.half_length - 1; }
+  int output_length(int input_samples) const { return output_length(input_samples, settings_.half_length); }
+  /// The same for any filter of half-length M.
+  static int output_length(int input_samples, int half_length) { return input_samples - 2 * half_length - 1; }
   /// Index of the input sample that output j is centred on (0-based): M + j.
   int first_output_index() const { return settings_.half_length; }
 
