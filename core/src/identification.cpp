@@ -416,6 +416,10 @@ int refine_input_error(const InputErrorCost& cost, Eigen::VectorXd& theta, doubl
         step -= v * (v.dot(g) / lambda);
       }
     }
+    // What the full step would gain by the quadratic model; below the cost's rounding nothing
+    // can be measured, and a line search there only spends evaluations on noise.
+    const double expected_gain = -g.dot(step);
+    if (!(expected_gain > 1e-13 * value)) break;
     bool improved = false;
     for (double fraction = 1.0; fraction > 1e-3 && !improved; fraction *= 0.5) {
       Eigen::VectorXd candidate = theta;

@@ -8,9 +8,7 @@
 #include "store/store.h"
 #include "jobs/worker_pool.h"
 
-#include "manipid/api/routes.h"
-
-#include "manipid/api/http_server.h"  // includes httplib.h: after the manipid headers (api/src/http/route_state.h)
+#include "manipid/api/http_endpoint.h"
 
 #include <pthread.h>
 #include <signal.h>
@@ -22,6 +20,7 @@
 #include <cmath>
 #include <cstdio>
 #include <ctime>
+#include <memory>
 #include <mutex>
 #include <thread>
 
@@ -67,6 +66,11 @@ int run_serve(const ServeOptions& options) {
                      " bytes), got '" + options.memory_budget + "'");
   }
   const jobs::WorkerPoolOptions pool_options = worker_pool_options(options.jobs);
+  try {
+    api::load_http_module();  // before the store is opened: a server that cannot serve touches nothing
+  } catch (const std::runtime_error& error) {
+    throw OutputError(error.what());
+  }
 
   // Signals go to one thread that waits for them (sigwait below).
   sigset_t signals = block_stop_signals();
@@ -75,26 +79,15 @@ int run_serve(const ServeOptions& options) {
   jobs::WorkerPool pool(*store, pool_options, log_line);
   jobs::JobService service(*store, pool, jobs::JobServiceOptions{options.queue_limit, log_line});
 
-  api::HttpServer server;
-  server.set_http_threads(static_cast<std::size_t>(std::max(options.http_threads, 1)));
-  // Without TCP_NODELAY, Nagle plus delayed ACKs hold each keep-alive answer (headers and
-  // body are two writes) for ~40 ms: 360 status requests/s instead of thousands.
-  server.set_tcp_nodelay(true);
-  server.set_keep_alive_max_count(1000);
-  server.set_keep_alive_timeout(2);
-  server.set_read_timeout(30);
-  server.set_write_timeout(30);
-  // A request's line and headers must arrive within 10 s of their first byte: a client
-  // trickling a byte a second holds a thread 10 s, not for ever (per-read timeouts never fire).
-  server.set_header_deadline(std::chrono::seconds(10));
-  server.set_listen_backlog(128);  // 0.11.4 listens with 5
-  api::RouteOptions routes;
-  routes.max_body = max_body;
-  routes.memory_budget = memory_budget;
-  routes.token = options.token;
-  routes.log = log_line;
-  routes.max_waiters = std::max(options.http_threads / 2, 1);
-  api::register_routes(server, service, routes);
+  api::HttpSettings http;
+  http.threads = static_cast<std::size_t>(std::max(options.http_threads, 1));
+  http.routes.max_body = max_body;
+  http.routes.memory_budget = memory_budget;
+  http.routes.token = options.token;
+  http.routes.log = log_line;
+  http.routes.max_waiters = std::max(options.http_threads / 2, 1);
+  const std::unique_ptr<api::HttpEndpoint> endpoint = api::open_http_endpoint(service, http);
+  api::HttpEndpoint& server = *endpoint;
 
   const int port = server.bind(options.host, options.port);
   if (port <= 0) {

@@ -181,44 +181,70 @@ while IFS= read -r package; do
 done < <(bash "$packages" build test runtime)
 if [[ ${#unknown[@]} -eq 0 ]]; then pass "every listed package is installed or known to apt"; else fail "every listed package is installed or known to apt" "unknown: ${unknown[*]}"; fi
 
-# ---- [runtime] covers what the binary links against ---------------------------------------
+# ---- [runtime] covers what the binary and its HTTP module link against ----------------------
+# The module manipid-http.so is built beside the binary; `manipid serve` loads it, and the image
+# must hold it where serve looks (../lib/manipid/ from the executable).
+check_line "the image holds manipid-http.so in /usr/local/lib/manipid/ (../lib/manipid from the binary)" \
+  '^COPY --from=build /src/build/release/server/manipid-http\.so /usr/local/lib/manipid/manipid-http\.so$'
+covered() {  # covered FILE: every library FILE links against is in [runtime] (or comes with a package there)
+  local file=$1 library real owner package entry closure
+  local -a uncovered=() still=()
+  missing_libs=$(ldd "$file" | grep 'not found' || true)
+  [[ -z "$missing_libs" ]] || fail "ldd resolves every library of $(basename "$file")" "$missing_libs"
+  # Libraries ldd resolves → their Debian packages (dpkg -S on the resolved path, /usr-merged).
+  while IFS= read -r library; do
+    [[ -n "$library" ]] || continue
+    real=$(readlink -f -- "$library")
+    owner=$(dpkg -S "$real" 2>/dev/null || dpkg -S "${real/#\/usr\/lib\//\/lib\/}" 2>/dev/null ||
+            dpkg -S "$library" 2>/dev/null || true)
+    package=${owner%%:*}
+    if [[ -z "$package" ]]; then
+      uncovered+=("$library(no package)")
+      continue
+    fi
+    # Sanitizer runtimes come with the debug build only.
+    [[ "$package" =~ ^lib(asan|ubsan|lsan|tsan)[0-9]+$ ]] && continue
+    grep -qx -- "$package" <<<"$runtime" || uncovered+=("$package($library)")
+  done < <(ldd "$file" | awk '$2 == "=>" && $3 ~ /^\// {print $3}')
+  # A library a [runtime] package depends on (libpq5 → Kerberos, LDAP, GnuTLS, …) comes with it.
+  if [[ ${#uncovered[@]} -gt 0 ]]; then
+    # shellcheck disable=SC2086  # one name per word
+    closure=$(apt-cache depends --recurse --no-recommends --no-suggests --no-conflicts --no-breaks --no-replaces \
+                --no-enhances $runtime 2>/dev/null | grep -v '^ ' | sed 's/:any$//' | sort -u || true)
+    for entry in "${uncovered[@]}"; do
+      grep -qx -- "${entry%%(*}" <<<"$closure" || still+=("$entry")
+    done
+    uncovered=("${still[@]}")
+  fi
+  if [[ ${#uncovered[@]} -eq 0 ]]; then
+    pass "[runtime] covers every library $(basename "$file") links against (or a [runtime] package depends on it)"
+  else
+    fail "[runtime] covers every library $(basename "$file") links against" "missing: ${uncovered[*]}"
+  fi
+}
 if [[ -n "$binary" ]]; then
+  module="$(dirname -- "$binary")/manipid-http.so"
   if [[ ! -x "$binary" ]]; then
     fail "binary $binary is executable"
+  elif [[ ! -f "$module" ]]; then
+    fail "the HTTP module is built beside the binary" "no $module"
   else
-    # Libraries ldd resolves → their Debian packages (dpkg -S on the resolved path, /usr-merged).
-    missing_libs=$(ldd "$binary" | grep 'not found' || true)
-    [[ -z "$missing_libs" ]] || fail "ldd resolves every library" "$missing_libs"
-    uncovered=()
-    while IFS= read -r library; do
-      [[ -n "$library" ]] || continue
-      real=$(readlink -f -- "$library")
-      owner=$(dpkg -S "$real" 2>/dev/null || dpkg -S "${real/#\/usr\/lib\//\/lib\/}" 2>/dev/null ||
-              dpkg -S "$library" 2>/dev/null || true)
-      package=${owner%%:*}
-      if [[ -z "$package" ]]; then
-        uncovered+=("$library(no package)")
-        continue
-      fi
-      # Sanitizer runtimes come with the debug build only.
-      [[ "$package" =~ ^lib(asan|ubsan|lsan|tsan)[0-9]+$ ]] && continue
-      grep -qx -- "$package" <<<"$runtime" || uncovered+=("$package($library)")
-    done < <(ldd "$binary" | awk '$2 == "=>" && $3 ~ /^\// {print $3}')
-    # A library a [runtime] package depends on (libpq5 → Kerberos, LDAP, GnuTLS, …) comes with it.
-    if [[ ${#uncovered[@]} -gt 0 ]]; then
-      # shellcheck disable=SC2086  # one name per word
-      closure=$(apt-cache depends --recurse --no-recommends --no-suggests --no-conflicts --no-breaks --no-replaces \
-                  --no-enhances $runtime 2>/dev/null | grep -v '^ ' | sed 's/:any$//' | sort -u || true)
-      still=()
-      for entry in "${uncovered[@]}"; do
-        grep -qx -- "${entry%%(*}" <<<"$closure" || still+=("$entry")
-      done
-      uncovered=("${still[@]}")
-    fi
-    if [[ ${#uncovered[@]} -eq 0 ]]; then
-      pass "[runtime] covers every library $(basename "$binary") links against (or a [runtime] package depends on it)"
+    covered "$binary"
+    covered "$module"
+    # What the module takes from the executable, the executable exports (else serve fails to load it).
+    needed=$(nm -D --undefined-only "$module" | awk '{print $2}' | grep -E '^_ZN?K?7manipid|^_ZT[VIS]N7manipid' | sort -u || true)
+    exported=$(nm -D --defined-only "$binary" | awk '{print $3}' | sort -u)
+    absent=$(comm -23 <(echo "$needed") <(echo "$exported") | head -5)
+    if [[ -n "$needed" && -z "$absent" ]]; then
+      pass "$(basename "$binary") exports the $(wc -l <<<"$needed") manipid symbols manipid-http.so takes from it"
     else
-      fail "[runtime] covers every library $(basename "$binary") links against" "missing: ${uncovered[*]}"
+      fail "$(basename "$binary") exports the manipid symbols manipid-http.so takes from it" "absent: ${absent:-none needed?}"
+    fi
+    # The one-shot commands do not load cpp-httplib: only the module links it.
+    if ldd "$binary" | grep -q 'libcpp-httplib'; then
+      fail "$(basename "$binary") does not link cpp-httplib (only manipid-http.so does)"
+    else
+      pass "$(basename "$binary") does not link cpp-httplib (only manipid-http.so does)"
     fi
   fi
 else

@@ -1,0 +1,58 @@
+// http_endpoint.cpp — the module's entry point (http_endpoint.h): an HttpServer configured as
+// `manipid serve` serves, with every route registered over the executable's Service.
+#include "manipid/api/http_endpoint.h"
+
+#include "manipid/api/routes.h"
+
+#include "manipid/api/http_server.h"  // includes httplib.h: after the manipid headers (http/route_state.h)
+
+#include <chrono>
+#include <memory>
+#include <string>
+
+namespace manipid::api {
+namespace {
+
+class ServedEndpoint final : public HttpEndpoint {
+ public:
+  ServedEndpoint(Service& service, const HttpSettings& settings) {
+    server_.set_http_threads(settings.threads);
+    // Without TCP_NODELAY, Nagle plus delayed ACKs hold each keep-alive answer (headers and
+    // body are two writes) for ~40 ms: 360 status requests/s instead of thousands.
+    server_.set_tcp_nodelay(true);
+    server_.set_keep_alive_max_count(1000);
+    server_.set_keep_alive_timeout(2);
+    server_.set_read_timeout(30);
+    server_.set_write_timeout(30);
+    // A request's line and headers must arrive within 10 s of their first byte: a client
+    // trickling a byte a second holds a thread 10 s, not for ever (per-read timeouts never fire).
+    server_.set_header_deadline(std::chrono::seconds(10));
+    server_.set_listen_backlog(128);  // 0.11.4 listens with 5
+    register_routes(server_, service, settings.routes);
+  }
+
+  int bind(const std::string& host, int port) override { return server_.bind(host, port); }
+  bool listen_after_bind() override { return server_.listen_after_bind(); }
+  bool is_running() const override { return server_.is_running(); }
+  void stop_and_disconnect() override { server_.stop_and_disconnect(); }
+
+ private:
+  HttpServer server_;
+};
+
+}  // namespace
+}  // namespace manipid::api
+
+/// What the executable looks up in the module (http_endpoint_loader.cpp): null when the
+/// executable was built with another interface. Exceptions stay on this side: a failure to
+/// make the server is reported in `failure`.
+extern "C" __attribute__((visibility("default"))) manipid::api::HttpEndpoint* manipid_open_http_endpoint(
+    int interface, manipid::api::Service* service, const manipid::api::HttpSettings* settings, std::string* failure) {
+  if (interface != manipid::api::http_module_interface) return nullptr;
+  try {
+    return new manipid::api::ServedEndpoint(*service, *settings);
+  } catch (const std::exception& error) {
+    *failure = error.what();
+    return nullptr;
+  }
+}
