@@ -122,6 +122,19 @@ ParameterProducts parameter_products(const RobotModel& model) {
     }
     if (model.joint_inertia_factor != 0.0) add(k, k, k);
   }
+  const int symbol_count = static_cast<int>(products.symbols.size());
+  products.pair_offsets.push_back(0);
+  for (const auto& s : products.symbols) {
+    for (int r = -1; r < symbol_count; ++r) {
+      const int first_mass = r < 0 ? s.link : std::max(s.link, products.symbols[r].link);
+      const int second = r < 0 ? -1 : products.symbols[r].length;
+      for (int k = first_mass; k < n; ++k) {
+        const int column = products.lookup[lookup_index(n, k, s.length, second)];
+        if (column >= 0) products.pair_columns.push_back(column);  // gravity's are absent without gravity
+      }
+      products.pair_offsets.push_back(static_cast<int>(products.pair_columns.size()));
+    }
+  }
   return products;
 }
 
@@ -178,59 +191,63 @@ void regressor(const RobotModel& model, const ParameterProducts& products, Dynam
   }
   if (Y.rows() != n || Y.cols() != products.size()) throw InputError("Y", "regressor has the wrong shape");
   thread_local std::vector<Symbol> symbols;
+  thread_local std::vector<double> row;  // Y's row j, contiguous while its sums are formed
   rotational_kinematics(model, w, q, qd, qdd);
   fill_symbols(model, products, w, symbols);
-  Y.setZero();
-  auto add = [&](int j, int k, int first, int second, double value) {
-    Y(j, products.lookup[lookup_index(n, k, first, second)]) += value;
-  };
-  // Adds `value` to the column of m_k·λ_s·λ_r for every mass k that both symbols move.
-  auto add_from = [&](int j, const Symbol& s, const Symbol& r, double value) {
-    for (int k = std::max(s.link, r.link); k < n; ++k) add(j, k, s.length, r.length, value);
+  row.resize(static_cast<std::size_t>(products.size()));
+  const int symbol_count = static_cast<int>(symbols.size());
+  const int* const columns = products.pair_columns.data();
+  const int* const offsets = products.pair_offsets.data();
+  // Adds `value` to the column of m_k·λ_s·λ_r for every mass k that both symbols move (r = −1:
+  // m_k·λ_s), the columns listed once per model by parameter_products.
+  auto add_pair = [&](int s, int r, double value) {
+    const int pair = s * (symbol_count + 1) + r + 1;
+    for (int c = offsets[pair]; c < offsets[pair + 1]; ++c) row[static_cast<std::size_t>(columns[c])] += value;
   };
   const bool complete = model.kinetic_energy == KineticEnergy::complete;
 
   for (int j = 0; j < n; ++j) {
+    std::fill(row.begin(), row.end(), 0.0);
     const Eigen::Vector3d axis = w.rotation[j].col(2);
     const Eigen::Vector3d axis_rate = w.angular_velocity[j].cross(axis);
     // Joint inertia J_j = c·m_j·l_j² sees q̈_j only.
-    if (model.joint_inertia_factor != 0.0) add(j, j, j, j, model.joint_inertia_factor * qdd[j]);
-    for (const Symbol& s : symbols) {
-      if (s.link < j) continue;
-      const Eigen::Vector3d arm = axis.cross(s.value);  // w_js = z_j × v_s
+    if (model.joint_inertia_factor != 0.0) row[static_cast<std::size_t>(products.lookup[lookup_index(n, j, j, j)])] += model.joint_inertia_factor * qdd[j];
+    for (int s = 0; s < symbol_count; ++s) {
+      if (symbols[s].link < j) continue;
+      const Eigen::Vector3d arm = axis.cross(symbols[s].value);  // w_js = z_j × v_s
       // Gravity: −m_k λ_s w_js·g for every mass k the symbol moves.
       const double gravity = -arm.dot(model.gravity);
-      if (gravity != 0.0) {
-        for (int k = s.link; k < n; ++k) add(j, k, s.length, -1, gravity);
-      }
-      for (const Symbol& r : symbols) {
+      if (gravity != 0.0) add_pair(s, -1, gravity);
+      for (int r = 0; r < symbol_count; ++r) {
         if (complete) {
           // Newton: m_k λ_s λ_r (z_j × v_s)·v̈_r.
-          add_from(j, s, r, arm.dot(r.acceleration));
-        } else if (r.link >= j) {
+          add_pair(s, r, arm.dot(symbols[r].acceleration));
+        } else if (symbols[r].link >= j) {
           // Paper: M_jj q̈_j + Ṁ_jj q̇_j, M_jj = Σ m_k |Σ_s λ_s w_js|².
-          const Eigen::Vector3d arm_r = axis.cross(r.value);
-          const Eigen::Vector3d arm_r_rate = axis_rate.cross(r.value) + axis.cross(r.rate);
-          add_from(j, s, r, arm.dot(arm_r) * qdd[j] + 2.0 * arm.dot(arm_r_rate) * qd[j]);
+          const Eigen::Vector3d arm_r = axis.cross(symbols[r].value);
+          const Eigen::Vector3d arm_r_rate = axis_rate.cross(symbols[r].value) + axis.cross(symbols[r].rate);
+          add_pair(s, r, arm.dot(arm_r) * qdd[j] + 2.0 * arm.dot(arm_r_rate) * qd[j]);
         }
       }
     }
-    if (complete) continue;
-    // Paper: −½ Σ_{i≤j} ∂M_ii/∂q_j q̇_i², ∂M_ii/∂q_j = 2 Σ_k m_k Σ λ_s λ_r w_is·(z_i × w_jr)
-    // with s among links i..k and r among links j..k.
-    for (const Symbol& r : symbols) {
-      if (r.link < j) continue;
-      const Eigen::Vector3d arm_r = axis.cross(r.value);
-      for (int i = 0; i <= j; ++i) {
-        if (qd[i] == 0.0) continue;
-        const Eigen::Vector3d axis_i = w.rotation[i].col(2);
-        const Eigen::Vector3d turned = axis_i.cross(arm_r);
-        for (const Symbol& s : symbols) {
-          if (s.link < i) continue;
-          add_from(j, s, r, -axis_i.cross(s.value).dot(turned) * qd[i] * qd[i]);
+    if (!complete) {
+      // Paper: −½ Σ_{i≤j} ∂M_ii/∂q_j q̇_i², ∂M_ii/∂q_j = 2 Σ_k m_k Σ λ_s λ_r w_is·(z_i × w_jr)
+      // with s among links i..k and r among links j..k.
+      for (int r = 0; r < symbol_count; ++r) {
+        if (symbols[r].link < j) continue;
+        const Eigen::Vector3d arm_r = axis.cross(symbols[r].value);
+        for (int i = 0; i <= j; ++i) {
+          if (qd[i] == 0.0) continue;
+          const Eigen::Vector3d axis_i = w.rotation[i].col(2);
+          const Eigen::Vector3d turned = axis_i.cross(arm_r);
+          for (int s = 0; s < symbol_count; ++s) {
+            if (symbols[s].link < i) continue;
+            add_pair(s, r, -axis_i.cross(symbols[s].value).dot(turned) * qd[i] * qd[i]);
+          }
         }
       }
     }
+    Y.row(j) = Eigen::Map<const Eigen::RowVectorXd>(row.data(), products.size());
   }
 }
 

@@ -42,6 +42,11 @@ struct ParameterProducts {
     int length = -1;
   };
   std::vector<LinkSymbol> symbols;
+  /// For link vectors s and r (r = −1: none, as gravity's terms m_k·λ_s), the columns of
+  /// m_k·λ_s·λ_r for every mass k both move (k from the later link on), ascending in k:
+  /// pair_columns[pair_offsets[p] … pair_offsets[p + 1]), p = s·(symbols + 1) + r + 1. Filled by
+  /// parameter_products(); what regressor() adds each product's value to.
+  std::vector<int> pair_columns, pair_offsets;
 
   int size() const { return static_cast<int>(terms.size()); }
   /// "m2*l2*l3", "m4*l3", "m1*l1^2", ... (1-based names, as users see them).
