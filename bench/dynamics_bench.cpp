@@ -69,5 +69,22 @@ void BM_Regressor(benchmark::State& state, KineticEnergy energy) {
 BENCHMARK_CAPTURE(BM_Regressor, complete, KineticEnergy::complete);
 BENCHMARK_CAPTURE(BM_Regressor, paper, KineticEnergy::paper);
 
+/// regressor_rows over 1,024 samples, four at a time (items = samples).
+void BM_RegressorRows(benchmark::State& state, KineticEnergy energy) {
+  const Preset preset = cedro2009(energy);
+  const ParameterProducts products = parameter_products(preset.model);
+  DynamicsWorkspace workspace(preset.model);
+  const States states(4, 1024);
+  const Eigen::MatrixXd q = states.q.transpose(), qd = states.qd.transpose(), qdd = states.qdd.transpose();
+  Eigen::MatrixXd Y(4 * 1024, products.size());
+  for (auto _ : state) {
+    regressor_rows(preset.model, products, workspace, q, qd, qdd, Y);
+    benchmark::DoNotOptimize(Y.data());
+  }
+  state.SetItemsProcessed(state.iterations() * 1024);
+}
+BENCHMARK_CAPTURE(BM_RegressorRows, complete, KineticEnergy::complete);
+BENCHMARK_CAPTURE(BM_RegressorRows, paper, KineticEnergy::paper);
+
 }  // namespace
 }  // namespace manipid

@@ -83,16 +83,8 @@ double floor_of(const RobotModel& model, const ParameterProducts& products, cons
   Eigen::MatrixXd Y(rows, p);
   Eigen::VectorXd tau(rows);
   DynamicsWorkspace workspace(model);
-  Eigen::MatrixXd block(n, p);
-  Eigen::VectorXd q(n), qd(n), qdd(n);  // a row of each, contiguous: no temporary per call
-  for (int t = 0; t < data.samples(); ++t) {
-    q = data.q.row(t).transpose();
-    qd = data.qd.row(t).transpose();
-    qdd = data.qdd.row(t).transpose();
-    regressor(model, products, workspace, q, qd, qdd, block);
-    Y.middleRows(static_cast<Eigen::Index>(t) * n, n) = block;
-    tau.segment(static_cast<Eigen::Index>(t) * n, n) = data.tau.row(t).transpose();
-  }
+  regressor_rows(model, products, workspace, data.q, data.qd, data.qdd, Y);
+  for (int t = 0; t < data.samples(); ++t) tau.segment(static_cast<Eigen::Index>(t) * n, n) = data.tau.row(t).transpose();
   for (Eigen::Index k = 0; k < p; ++k) {
     const double norm = Y.col(k).norm();
     if (norm > 0.0) Y.col(k) /= norm;
@@ -387,29 +379,25 @@ Rows candidate_rows(const RobotModel& model, const ParameterProducts& products, 
   Rows rows;
   rows.Y.resize(static_cast<Eigen::Index>(instants.size()) * n, p);
   rows.tau.resize(static_cast<Eigen::Index>(instants.size()) * n);
-  DynamicsWorkspace workspace(model);
-  Eigen::VectorXd q(n), qd(n), qdd(n);
-  Eigen::MatrixXd Y(n, p);
-  for (std::size_t i = 0; i < instants.size(); ++i) {
-    const int start = instants[i] - M;
+  const Eigen::Index count = static_cast<Eigen::Index>(instants.size());
+  Eigen::MatrixXd q(count, n), qd(count, n), qdd(count, n);
+  for (Eigen::Index i = 0; i < count; ++i) {
+    const int start = instants[static_cast<std::size_t>(i)] - M;
     for (int j = 0; j < n; ++j) {
       const auto window = data.q.col(j).segment(start, 2 * M + 1);
-      q[j] = c0.dot(window);
-      qd[j] = c1.dot(window);
-      qdd[j] = c2.dot(window);
-    }
-    regressor(model, products, workspace, q, qd, qdd, Y);
-    const Eigen::Index row = static_cast<Eigen::Index>(i) * n;
-    rows.Y.middleRows(row, n) = Y;
-    for (int j = 0; j < n; ++j) {
+      q(i, j) = c0.dot(window);
+      qd(i, j) = c1.dot(window);
+      qdd(i, j) = c2.dot(window);
       if (use_reference) {
         const double reference = c0.dot(data.ref.col(j).segment(start, 2 * M + 1));
-        rows.tau[row + j] = controller->kp[j] * (reference - q[j]) - controller->kd[j] * qd[j];
+        rows.tau[i * n + j] = controller->kp[j] * (reference - q(i, j)) - controller->kd[j] * qd(i, j);
       } else {
-        rows.tau[row + j] = c0.dot(data.tau.col(j).segment(start, 2 * M + 1));
+        rows.tau[i * n + j] = c0.dot(data.tau.col(j).segment(start, 2 * M + 1));
       }
     }
   }
+  DynamicsWorkspace workspace(model);
+  regressor_rows(model, products, workspace, q, qd, qdd, rows.Y);
   return rows;
 }
 
@@ -435,14 +423,20 @@ Rows yardstick_rows(const RobotModel& model, const ParameterProducts& products, 
   }
   Eigen::MatrixXd series(count, static_cast<Eigen::Index>(n) * (p + 1));  // column j·(p+1)+k: Y_jk; +p: τ_j
   DynamicsWorkspace workspace(model);
-  Eigen::MatrixXd Y(n, p);
-  for (int t = 0; t < count; ++t) {
-    regressor(model, products, workspace, q.row(t).transpose(), qd.row(t).transpose(), qdd.row(t).transpose(), Y);
-    for (int j = 0; j < n; ++j) {
-      series.block(t, static_cast<Eigen::Index>(j) * (p + 1), 1, p) = Y.row(j);
-      series(t, static_cast<Eigen::Index>(j) * (p + 1) + p) =
-          use_reference ? controller->kp[j] * (data.ref(first + t, j) - q(t, j)) - controller->kd[j] * qd(t, j)
-                        : data.tau(first + t, j);
+  constexpr int kChunk = 256;  // samples whose regressor is formed at once
+  Eigen::MatrixXd Y(static_cast<Eigen::Index>(kChunk) * n, p);
+  for (int start = 0; start < count; start += kChunk) {
+    const int size = std::min(kChunk, count - start);
+    auto chunk = Y.topRows(static_cast<Eigen::Index>(size) * n);
+    regressor_rows(model, products, workspace, q.middleRows(start, size), qd.middleRows(start, size),
+                   qdd.middleRows(start, size), chunk);
+    for (int t = start; t < start + size; ++t) {
+      for (int j = 0; j < n; ++j) {
+        series.block(t, static_cast<Eigen::Index>(j) * (p + 1), 1, p) = chunk.row(static_cast<Eigen::Index>(t - start) * n + j);
+        series(t, static_cast<Eigen::Index>(j) * (p + 1) + p) =
+            use_reference ? controller->kp[j] * (data.ref(first + t, j) - q(t, j)) - controller->kd[j] * qd(t, j)
+                          : data.tau(first + t, j);
+      }
     }
   }
   const Eigen::VectorXd& c0 = lowpass->coefficients(FilterOrder::lowpass);

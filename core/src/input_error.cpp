@@ -153,8 +153,7 @@ InputErrorCost::InputErrorCost(const RobotModel& model, FilteredData filtered, E
   const double root_samples = std::sqrt(static_cast<double>(samples));
   Eigen::MatrixXd work = Eigen::MatrixXd::Zero(p + static_cast<Eigen::Index>(block_samples) * n, p + 1);
   DynamicsWorkspace workspace(model);
-  Eigen::MatrixXd Y(n, p);
-  Eigen::VectorXd q(n), qd(n), qdd(n);
+  Eigen::MatrixXd Y(static_cast<Eigen::Index>(block_samples) * n, p);  // a block's regressor, sample by sample
   const Eigen::ArrayXd root_weights = weights_.array().sqrt() / root_samples;
   // Joints whose rows column c can reach: its mass's index + 1, as a running maximum so that a
   // reflection never reaches below a later column's extent, whatever order the products come in.
@@ -166,15 +165,14 @@ InputErrorCost::InputErrorCost(const RobotModel& model, FilteredData filtered, E
   }
   for (int first = 0; first < samples; first += block_samples) {
     const int count = std::min(block_samples, samples - first);
+    auto block = Y.topRows(static_cast<Eigen::Index>(count) * n);
+    regressor_rows(model, products_, workspace, data.q.middleRows(first, count), data.qd.middleRows(first, count),
+                   data.qdd.middleRows(first, count), block);
     for (int k = 0; k < count; ++k) {
       const int t = first + k;
-      q = data.q.row(t).transpose();
-      qd = data.qd.row(t).transpose();
-      qdd = data.qdd.row(t).transpose();
-      regressor(model, products_, workspace, q, qd, qdd, Y);
       for (int j = 0; j < n; ++j) {
         const Eigen::Index row = p + static_cast<Eigen::Index>(j) * count + k;
-        work.block(row, 0, 1, p) = root_weights[j] * Y.row(j);
+        work.block(row, 0, 1, p) = root_weights[j] * block.row(static_cast<Eigen::Index>(k) * n + j);
         work(row, p) = root_weights[j] * data.tau(t, j);
       }
     }

@@ -32,6 +32,48 @@ TEST(Regressor, EqualsInverseDynamicsAtRandomStatesAndParameters) {
   }
 }
 
+// regressor_rows computes four samples at once (vector lanes, AVX2 where the machine has it):
+// each sample's rows must be regressor()'s at that sample, to the last bit, whatever the count
+// (whole groups of four and a remainder), including samples at rest (the paper's kinetic
+// energy skips a joint whose q̇ is zero, which a group can hold in some lanes only).
+TEST(Regressor, RowsOfManySamplesAreEachSamplesRegressorExactly) {
+  std::mt19937_64 engine(31);
+  for (KineticEnergy energy : {KineticEnergy::complete, KineticEnergy::paper}) {
+    for (const RobotModel& model : {cedro2009(energy).model, testing::irregular_model(energy)}) {
+      const ParameterProducts products = parameter_products(model);
+      const int n = model.joint_count();
+      for (const int samples : {1, 4, 11}) {
+        Eigen::MatrixXd q(samples, n), qd(samples, n), qdd(samples, n);
+        for (int t = 0; t < samples; ++t) {
+          q.row(t) = random_vector(engine, n, M_PI).transpose();
+          qd.row(t) = random_vector(engine, n, 3.0).transpose();
+          qdd.row(t) = random_vector(engine, n, 10.0).transpose();
+        }
+        if (samples > 4) qd(5, 0) = 0.0;  // at rest in one lane of the second group
+        DynamicsWorkspace workspace(model);
+        Eigen::MatrixXd rows(static_cast<Eigen::Index>(samples) * n, products.size());
+        regressor_rows(model, products, workspace, q, qd, qdd, rows);
+        for (int t = 0; t < samples; ++t) {
+          const Eigen::MatrixXd single = regressor(model, products, q.row(t).transpose(), qd.row(t).transpose(),
+                                                   qdd.row(t).transpose());
+          for (int j = 0; j < n; ++j) {
+            for (int c = 0; c < products.size(); ++c) {
+              EXPECT_EQ(rows(static_cast<Eigen::Index>(t) * n + j, c), single(j, c))
+                  << to_string(energy) << ", " << samples << " samples: sample " << t << ", joint " << j + 1 << ", "
+                  << products.name(c);
+            }
+          }
+        }
+      }
+      DynamicsWorkspace workspace(model);
+      Eigen::MatrixXd wrong(3, products.size());
+      EXPECT_THROW(regressor_rows(model, products, workspace, Eigen::MatrixXd::Zero(2, n), Eigen::MatrixXd::Zero(2, n),
+                                  Eigen::MatrixXd::Zero(2, n), wrong),
+                   InputError);
+    }
+  }
+}
+
 // Joint j carries links j, j+1, …: its torque involves no mass before j, so its row of Y is zero
 // in every column of such a mass (the input-error QR skips those rows, input_error.cpp).
 TEST(Regressor, AJointsRowIsZeroInTheColumnsOfTheMassesBeforeIt) {
