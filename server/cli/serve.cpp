@@ -1,8 +1,9 @@
-// serve.cpp — `manipid serve`: the HTTP/JSON identification service. Owns the
-// process: opens the store (recovering jobs a dead process left behind), starts the worker
-// pool and the HTTP server, prints "listening on http://HOST:PORT" as its first line on
-// stdout (so scripts and tests can start it on --port 0), and on SIGINT/SIGTERM stops
-// accepting, lets running jobs reach a safe point (they are queued again) and exits 0.
+// serve.cpp — `manipid serve`: the HTTP/JSON identification service. Owns the process: loads
+// the HTTP module (manipid/api/http_endpoint.h), opens the store (recovering jobs a dead process
+// left behind), starts the worker pool and the HTTP server, prints "listening on
+// http://HOST:PORT" as its first line on stdout (so scripts and tests can start it on --port 0),
+// and on SIGINT/SIGTERM stops accepting, lets running jobs reach a safe point (they are queued
+// again) and exits 0.
 #include "cli/serve.h"
 #include "jobs/job_service.h"
 #include "store/store.h"

@@ -535,5 +535,30 @@ expect_error "serve: an unreachable PostgreSQL database exits 1" 1 "--db: cannot
 expect_error "worker: an unreachable PostgreSQL database exits 1" 1 "--db: cannot connect to PostgreSQL" \
   "$manipid" worker --db "postgresql:///db?host=/nonexistent-manipid-socket-dir"
 
+# ---- serve's HTTP side is a module beside the executable (manipid-http.so) ----
+# A copy of the binary without it: serve says where it looked and stops before opening the
+# database; the one-shot commands do not need it.
+mkdir -p alone/bin
+cp "$manipid" alone/bin/manipid
+expect_error "serve: without manipid-http.so it exits 1 naming the module" 1 "cannot load the HTTP module manipid-http.so" \
+  alone/bin/manipid serve --port 0 --db alone/jobs.db
+check "serve: without the module, no database is created" test ! -e alone/jobs.db
+alone/bin/manipid simulate --duration 0.05 --out alone/run.csv >/dev/null 2>&1
+check "simulate runs without the module" test -s alone/run.csv
+if [[ -f "$(dirname "$manipid")/manipid-http.so" ]]; then
+  # ../lib/manipid/ from the executable, as the Docker image installs it.
+  mkdir -p alone/lib/manipid
+  cp "$(dirname "$manipid")/manipid-http.so" alone/lib/manipid/
+  alone/bin/manipid serve --port 0 --db alone/jobs.db >alone/serve.out 2>alone/serve.err &
+  serve_pid=$!
+  for _ in $(seq 100); do grep -q "^listening on" alone/serve.out 2>/dev/null && break; sleep 0.05; done
+  check "serve finds the module in ../lib/manipid/" grep -q "^listening on http://127.0.0.1:" alone/serve.out
+  kill -TERM "$serve_pid" 2>/dev/null
+  wait "$serve_pid"
+  check "serve with the module in ../lib/manipid/ stops on SIGTERM with 0" test $? -eq 0
+else
+  fail "the module is built beside the binary" "no $(dirname "$manipid")/manipid-http.so"
+fi
+
 echo "$passed passed, $failed failed"
 [[ $failed -eq 0 ]]

@@ -2,9 +2,10 @@
 // raw bytes a client sends on one connection. The real HttpServer (http_server.h) with the real
 // route table (register_routes: pre-routing guards, error and exception hooks, every route)
 // runs in this process on 127.0.0.1, port 0, over the in-memory FakeService of tests/api, set
-// up as serve.cpp sets its server up (small --max-body, a bearer token). Per input: connect,
-// send the bytes, shut the sending side, read until the server closes. Requests are read by
-// cpp-httplib itself; this file only checks what comes back:
+// up as `manipid serve` sets its server up (api/src/http/http_endpoint.cpp), with a small
+// --max-body and a bearer token. Per input: connect, send the bytes, shut the sending side, read
+// until the server closes. Requests are read by cpp-httplib itself; this file only checks what
+// comes back:
 // - nothing, or answers that each start with an "HTTP/1.1 NNN " status line;
 // - no 5xx but 503 (the fake service throws nothing: a 500 is a handler or hook that threw),
 //   in the answers and in the server's log line for each request;
@@ -171,7 +172,7 @@ void check_log_line(const std::string& line) {
   if (status >= 500 && status != 503) fail("the server logged status " + std::to_string(status) + ": " + line, {});
 }
 
-/// The server, started once: HttpServer configured as serve.cpp configures it, but small.
+/// The server, started once: HttpServer configured as manipid serve configures it (api/src/http/http_endpoint.cpp), but small.
 struct Server {
   FreshService service;
   HttpServer http;
