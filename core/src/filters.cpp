@@ -191,7 +191,7 @@ MANIPID_VECTOR_CLONES void correlate_folded_all(const double* lowpass, const dou
 // multiply-adds; an FFT output ~4(log₂ B)/(1 − 2M/B) operations whatever M is. The transforms
 // are FFTW's (fftw.h), loaded on first use; without FFTW every filter takes the direct sum.
 // B is at least 4,096, one length for every M up to 511: FFTW plans each new length once per
-// process, ~0.7 ms a plan (FFTW_ESTIMATE, this machine), and for M = 100 a block of 4,096 costs
+// process (fftw.h: ~0.05 ms a length after its first plan), and for M = 100 a block of 4,096 costs
 // per output what one of 1,024 does. Rounding differs from the direct sum's, not its size:
 // both are a few ulps of Σ|c[n]|·max|x| (tests/core/filters_test.cpp compares the two).
 Index fft_block_length(int half_length) {

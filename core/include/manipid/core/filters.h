@@ -77,8 +77,9 @@ class DifferentialFilter {
   /// Half-lengths from which apply() and apply_all() may use the FFT (see filters.cpp). Per
   /// call the FFT is the faster from M ≈ 40 on all three orders (~0.3 ms for 4 × 9,701 samples
   /// whatever M, against 0.65 ms direct at M = 100), but a process pays once for loading FFTW
-  /// and planning (~2.5 ms): below M = 192 the direct sum saves a one-shot command (`manipid
-  /// identify` with the paper's M = 100) more than the FFT would, and costs a service little.
+  /// and its first plan (~1 ms): from M = 64, `manipid identify` with the paper's M = 100 took
+  /// as long as with the direct sum (medians of 40, 2026-11-27), so a one-shot command gains
+  /// nothing below M = 192, and a service loses little.
   static constexpr int fft_min_half_length = 192;
   static constexpr int fft_max_half_length = 16384;
 
