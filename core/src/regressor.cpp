@@ -9,7 +9,7 @@
 #include "manipid/core/regressor.h"
 
 #include "dynamics_kernels.h"  // sine_cosine
-#include "frame_update.h"
+#include "frame_update.h"  // next_axes
 #include "vector_clones.h"
 
 #include <algorithm>
@@ -108,8 +108,8 @@ MANIPID_INLINE void add_attached(const Vec3<T>& u, const S& scale, const Frame<T
   symbol.acceleration = symbol.acceleration + scale * (cross(frame.omega_rate, u) + cross(frame.omega, rate));
 }
 
-// Kinematics that do not depend on θ: rotations, angular velocities and accelerations
-// (R_k = R_{k−1} Rz(q) Rx(α), frame_update.h), then the link vectors.
+// Kinematics that do not depend on θ: rotations (frame_update.h), angular velocities and
+// accelerations, then the link vectors.
 template <typename T>
 MANIPID_INLINE void kinematics(const RobotModel& model, const ParameterProducts& products, const DynamicsWorkspace& w, const Cell<T>* q,
                 const Cell<T>* qd, const Cell<T>* qdd, std::vector<Frame<T>>& frames, std::vector<Symbol<T>>& symbols) {
@@ -122,11 +122,8 @@ MANIPID_INLINE void kinematics(const RobotModel& model, const ParameterProducts&
     Frame<T>& frame = frames[static_cast<std::size_t>(k)];
     T s, c;
     sine_cosine(q[k - 1].value, s, c);
-    const double cos_alpha = w.twist_cos[k - 1], sin_alpha = w.twist_sin[k - 1];
-    const Vec3<T> y = c * previous.y - s * previous.x;
-    frame.x = c * previous.x + s * previous.y;
-    frame.y = cos_alpha * y + sin_alpha * previous.z;
-    frame.z = cos_alpha * previous.z - sin_alpha * y;
+    detail::next_axes(previous.x, previous.y, previous.z, c, s, w.twist_cos[k - 1], w.twist_sin[k - 1], frame.x, frame.y,
+                      frame.z);
     frame.omega = previous.omega + qd[k - 1].value * previous.z;
     frame.omega_rate = previous.omega_rate + qdd[k - 1].value * previous.z + qd[k - 1].value * cross(previous.omega, previous.z);
   }
