@@ -49,10 +49,7 @@ OpenEndpoint load(std::string& failure) {
   return nullptr;
 }
 
-}  // namespace
-
-namespace {
-
+/// The module's entry point, loaded on the first call; the same failure, by name, on every call.
 OpenEndpoint entry_point() {
   static std::string failure;
   static const OpenEndpoint entry = load(failure);
