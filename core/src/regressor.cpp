@@ -225,14 +225,19 @@ MANIPID_INLINE void regressor_kernel(const RobotModel& model, const ParameterPro
   }
 }
 
-// Y's rows at four samples, `state` holding their q, q̇, q̈ (joint k's at k, n + k, 2n + k):
-// row j of every sample into out[j·dim β …]. Out of line, for SSE2 and for AVX2.
+// Y's rows at four samples, `state` holding their q, q̇, q̈ (joint k's at k, n + k, 2n + k), as
+// Y holds them: column c of the block (4n values: sample s's row j at s·n + j) at out[c·4n …].
+// Out of line, for SSE2 and for AVX2.
 MANIPID_VECTOR_CLONES void regressor_four(const RobotModel& model, const ParameterProducts& products,
-                                          const DynamicsWorkspace& w, const Cell<Lanes4>* state, Cell<Lanes4>* out) {
+                                          const DynamicsWorkspace& w, const Cell<Lanes4>* state, double* out) {
   const int n = model.joint_count();
-  const std::size_t p = static_cast<std::size_t>(products.size());
-  regressor_kernel<Lanes4>(model, products, w, state, state + n, state + 2 * n,
-                           [&](int j, const Cell<Lanes4>* row) { std::copy(row, row + p, out + static_cast<std::size_t>(j) * p); });
+  const int p = products.size();
+  regressor_kernel<Lanes4>(model, products, w, state, state + n, state + 2 * n, [&](int j, const Cell<Lanes4>* row) {
+    for (int c = 0; c < p; ++c) {
+      double* column = out + static_cast<std::ptrdiff_t>(c) * 4 * n + j;
+      for (int lane = 0; lane < 4; ++lane) column[lane * n] = row[c].value[lane];
+    }
+  });
 }
 
 }  // namespace
@@ -356,8 +361,8 @@ void regressor_rows(const RobotModel& model, const ParameterProducts& products, 
   const Eigen::Index p = products.size();
   thread_local std::vector<Cell<Lanes4>> state;  // q, q̇, q̈ of four samples: joint k's at k, n + k, 2n + k
   state.resize(3 * static_cast<std::size_t>(n));
-  thread_local std::vector<Cell<Lanes4>> rows;  // their n rows of Y, row j's columns at j·dim β …
-  rows.resize(static_cast<std::size_t>(n * p));
+  thread_local Eigen::MatrixXd block;  // their 4n rows of Y
+  block.resize(4 * n, p);
   Eigen::Index first = 0;
   for (; first + 4 <= samples; first += 4) {
     for (int k = 0; k < n; ++k) {
@@ -367,13 +372,8 @@ void regressor_rows(const RobotModel& model, const ParameterProducts& products, 
         state[static_cast<std::size_t>(2 * n + k)].value[lane] = qdd(first + lane, k);
       }
     }
-    regressor_four(model, products, w, state.data(), rows.data());
-    for (Eigen::Index c = 0; c < p; ++c) {  // column by column: the four samples' rows are adjacent in Y
-      double* column = &Y(first * n, c);
-      for (int lane = 0; lane < 4; ++lane) {
-        for (int j = 0; j < n; ++j) column[lane * n + j] = rows[static_cast<std::size_t>(j * p + c)].value[lane];
-      }
-    }
+    regressor_four(model, products, w, state.data(), block.data());
+    Y.middleRows(first * n, 4 * n) = block;  // the four samples' rows are adjacent in Y
   }
   for (; first < samples; ++first) {  // the last one to three, one at a time
     regressor(model, products, w, q.row(first).transpose(), qd.row(first).transpose(), qdd.row(first).transpose(),
