@@ -390,6 +390,8 @@ int refine_input_error(const InputErrorCost& cost, Eigen::VectorXd& theta, doubl
     if (setup.free[i]) free_index.push_back(i);
   }
   const int p = static_cast<int>(free_index.size());
+  // A relative change of the cost below this is its rounding: the polish stops there.
+  constexpr double kRoundingLevel = 1e-13;
   int steps = 0;
   for (int iteration = 0; iteration < 30 && p > 0; ++iteration) {
     if (options.cancel && options.cancel->load()) break;
@@ -419,7 +421,7 @@ int refine_input_error(const InputErrorCost& cost, Eigen::VectorXd& theta, doubl
     // What the full step would gain by the quadratic model; below the cost's rounding nothing
     // can be measured, and a line search there only spends evaluations on noise.
     const double expected_gain = -g.dot(step);
-    if (!(expected_gain > 1e-13 * value)) break;
+    if (!(expected_gain > kRoundingLevel * value)) break;
     bool improved = false;
     for (double fraction = 1.0; fraction > 1e-3 && !improved; fraction *= 0.5) {
       Eigen::VectorXd candidate = theta;
@@ -433,7 +435,7 @@ int refine_input_error(const InputErrorCost& cost, Eigen::VectorXd& theta, doubl
         value = candidate_value;
         improved = true;
         ++steps;
-        if (change < 1e-13) iteration = 30;
+        if (change < kRoundingLevel) iteration = 30;
       }
     }
     if (!improved) break;

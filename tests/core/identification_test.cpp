@@ -287,6 +287,12 @@ TEST(Identification, LeastSquaresDefaultEqualsBobyqa) {
       EXPECT_EQ(lm.stop_reason.rfind("converged: ", 0), 0u) << lm.stop_reason;
       EXPECT_LT(lm.evaluations, 100);
       EXPECT_LT(lm.evaluations * 10, bobyqa.evaluations);
+      // The polish after the optimiser stops where a step can gain nothing above the cost's
+      // rounding: no run of evaluations after the lowest (a line search on rounding spent ten).
+      ASSERT_FALSE(lm.history.empty());
+      const auto lowest = std::min_element(lm.history.begin(), lm.history.end(),
+                                           [](const HistoryRecord& a, const HistoryRecord& b) { return a.cost < b.cost; });
+      EXPECT_LE(lm.history.back().index - lowest->index, 2) << lm.evaluations << " evaluations";
       EXPECT_NEAR(lm.final_cost, bobyqa.final_cost, 1e-6 * bobyqa.final_cost);
       ASSERT_EQ(lm.identifiability.unidentifiable, (std::vector<std::string>{"m1", "l1"}));
       ASSERT_EQ(bobyqa.identifiability.unidentifiable, lm.identifiability.unidentifiable);
