@@ -38,7 +38,7 @@ std::vector<ParameterProducts::LinkSymbol> link_symbols(const RobotModel& model)
 // are internal to this file, compiled together, and never cross an ABI boundary. They are all
 // inlined (MANIPID_INLINE) into the one kernel of four samples, which is compiled for AVX2 too
 // (vector_clones.h): there a Lanes4 is one register.
-#pragma GCC diagnostic ignored "-Wpsabi"
+#pragma GCC diagnostic ignored "-Wpsabi"  // to the end: GCC warns where it emits the functions, there
 using Lanes4 = double __attribute__((vector_size(32)));
 // Where a T is stored. GCC aligns a 32-byte vector to 16 bytes without AVX but assumes 32 in the
 // AVX2 clone, and drops an alignment attribute on a template argument: every Lanes4 kept in
