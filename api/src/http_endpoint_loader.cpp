@@ -12,7 +12,7 @@
 namespace manipid::api {
 namespace {
 
-using OpenEndpoint = HttpEndpoint* (*)(int, Service*, const HttpSettings*, std::string*);
+using OpenEndpoint = HttpEndpoint* (*)(Service*, const HttpSettings*, std::string*);
 
 /// The directory of the running executable (/proc/self/exe), or empty.
 std::string executable_directory() {
@@ -43,8 +43,12 @@ OpenEndpoint load(std::string& failure) {
       failure += (failure.empty() ? "" : "; ") + std::string(why ? why : candidate + ": not loadable");
       continue;
     }
-    if (void* entry = dlsym(module, "manipid_open_http_endpoint")) return reinterpret_cast<OpenEndpoint>(entry);
-    failure += (failure.empty() ? "" : "; ") + candidate + ": no entry point manipid_open_http_endpoint";
+    const auto* interface = static_cast<const int*>(dlsym(module, "manipid_http_module_interface"));
+    void* entry = dlsym(module, "manipid_open_http_endpoint");
+    if (interface != nullptr && *interface == http_module_interface && entry != nullptr) {
+      return reinterpret_cast<OpenEndpoint>(entry);
+    }
+    failure += (failure.empty() ? "" : "; ") + candidate + ": built with another manipid (its interface differs)";
   }
   return nullptr;
 }
@@ -64,11 +68,8 @@ void load_http_module() { entry_point(); }
 std::unique_ptr<HttpEndpoint> open_http_endpoint(Service& service, const HttpSettings& settings) {
   const OpenEndpoint entry = entry_point();
   std::string error;
-  HttpEndpoint* endpoint = entry(http_module_interface, &service, &settings, &error);
-  if (endpoint == nullptr) {
-    throw std::runtime_error(error.empty() ? std::string(http_module_name) + " was built with another manipid (its interface differs)"
-                                           : "cannot start the HTTP server: " + error);
-  }
+  HttpEndpoint* endpoint = entry(&service, &settings, &error);
+  if (endpoint == nullptr) throw std::runtime_error("cannot start the HTTP server: " + error);
   return std::unique_ptr<HttpEndpoint>(endpoint);
 }
 

@@ -187,7 +187,7 @@ if [[ ${#unknown[@]} -eq 0 ]]; then pass "every listed package is installed or k
 check_line "the image holds manipid-http.so in /usr/local/lib/manipid/ (../lib/manipid from the binary)" \
   '^COPY --from=build /src/build/release/server/manipid-http\.so /usr/local/lib/manipid/manipid-http\.so$'
 covered() {  # covered FILE: every library FILE links against is in [runtime] (or comes with a package there)
-  local file=$1 library real owner package entry closure
+  local file=$1 library real owner package entry closure missing_libs
   local -a uncovered=() still=()
   missing_libs=$(ldd "$file" | grep 'not found' || true)
   [[ -z "$missing_libs" ]] || fail "ldd resolves every library of $(basename "$file")" "$missing_libs"

@@ -43,12 +43,14 @@ class ServedEndpoint final : public HttpEndpoint {
 }  // namespace
 }  // namespace manipid::api
 
-/// What the executable looks up in the module (http_endpoint_loader.cpp): null when the
-/// executable was built with another interface. Exceptions stay on this side: a failure to
-/// make the server is reported in `failure`.
+/// What the executable checks first (http_endpoint_loader.cpp): a module built with another
+/// interface is refused when it is loaded.
+extern "C" __attribute__((visibility("default"))) const int manipid_http_module_interface = manipid::api::http_module_interface;
+
+/// What the executable calls to make the server. Exceptions stay on this side: a failure to make
+/// it is reported in `failure`, with null.
 extern "C" __attribute__((visibility("default"))) manipid::api::HttpEndpoint* manipid_open_http_endpoint(
-    int interface, manipid::api::Service* service, const manipid::api::HttpSettings* settings, std::string* failure) {
-  if (interface != manipid::api::http_module_interface) return nullptr;
+    manipid::api::Service* service, const manipid::api::HttpSettings* settings, std::string* failure) {
   try {
     return new manipid::api::ServedEndpoint(*service, *settings);
   } catch (const std::exception& error) {

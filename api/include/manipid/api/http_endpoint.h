@@ -45,7 +45,7 @@ class HttpEndpoint {
 inline constexpr const char* http_module_name = "manipid-http.so";
 
 /// Raised by each change of the module's entry point or of the types it takes: the executable
-/// refuses a module built with another.
+/// refuses, when it loads it, a module built with another.
 inline constexpr int http_module_interface = 1;
 
 /// Loads the module, once per process: looked for beside the executable, then in ../lib/manipid/
