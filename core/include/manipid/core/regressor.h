@@ -75,7 +75,7 @@ Eigen::MatrixXd regressor(const RobotModel& model, const ParameterProducts& prod
 
 /// Y at many samples: sample t's state is row t of q, qd and qdd (samples × n), its n rows of
 /// Y are rows t·n … t·n + n − 1 of `Y` ((samples·n) × dim β). The numbers regressor() gives at
-/// each sample (but for the sign of a zero), computed four samples at a time: ~2× faster a sample.
+/// each sample (but for the sign of a zero), computed four samples at a time: ~1.7× faster a sample.
 void regressor_rows(const RobotModel& model, const ParameterProducts& products, DynamicsWorkspace& workspace,
                     const Eigen::Ref<const Eigen::MatrixXd>& q, const Eigen::Ref<const Eigen::MatrixXd>& qd,
                     const Eigen::Ref<const Eigen::MatrixXd>& qdd, Eigen::Ref<Eigen::MatrixXd> Y);
