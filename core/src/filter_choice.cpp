@@ -63,10 +63,20 @@ namespace {
 // Every kChoiceStride-th filtered sample is enough to compare candidates (and 16× cheaper).
 constexpr int kChoiceStride = 16;
 
+// The lower triangle of YᵀY (Y column-major, `rows` × p; G p × p column-major, its upper part
+// left as it was): a dot product of two contiguous columns per entry. Eigen's rank update
+// (`selfadjointView().rankUpdate`) runs its general product's packing and blocking for these
+// narrow matrices, ~6 instructions a multiply-add here against ~1.2.
+MANIPID_VECTOR_CLONES void gram_lower(const double* Y, Eigen::Index rows, Eigen::Index p, double* G) {
+  for (Eigen::Index b = 0; b < p; ++b) {
+    for (Eigen::Index a = b; a < p; ++a) G[b * p + a] = dot(Y + a * rows, Y + b * rows, rows);
+  }
+}
+
 // J* of one candidate's thin data: min_β |Y β − τ|² over its rows, divided by `samples` (what
 // InputErrorCost(model, data).floor() gives, with unit joint weights, when `samples` is the
 // rows' count), from the semi-normal equations with one step of refinement. The columns are
-// scaled to unit norm, their Gram matrix is one rank update (p²/2 multiplies a row, where
+// scaled to unit norm, their Gram matrix (gram_lower) takes p²/2 multiplies a row, where
 // Eigen's Householder QR of a matrix this narrow runs an unblocked kernel at ~1,500
 // instructions a row), the directions the data do not excite (eigenvalues of the scaled Gram
 // matrix below kGramRank of the largest) are left out as QR's rank-revealing solve leaves
@@ -89,8 +99,8 @@ double floor_of(const RobotModel& model, const ParameterProducts& products, cons
     const double norm = Y.col(k).norm();
     if (norm > 0.0) Y.col(k) /= norm;
   }
-  Eigen::MatrixXd gram = Eigen::MatrixXd::Zero(p, p);
-  gram.selfadjointView<Eigen::Lower>().rankUpdate(Y.transpose());
+  Eigen::MatrixXd gram(p, p);
+  gram_lower(Y.data(), rows, p, gram.data());
   // Nothing non-finite reaches the eigensolver (Eigen 3.4's reads out of bounds on NaN, see
   // uncertainty.cpp): data whose regressor overflows have no floor, and are never chosen.
   if (!gram.allFinite() || !tau.allFinite()) return kNaN;
@@ -109,84 +119,114 @@ double floor_of(const RobotModel& model, const ParameterProducts& products, cons
   return residual.squaredNorm() / samples;
 }
 
-// O = W·T for the windows of a block of thin samples and the bands' taps, both packed so the
-// product streams through memory in order. W holds, kTileRows samples at a time, each sample's
-// folded windows of three signals (fold 0: q[c+k] + q[c−k], and q[c] for k = 0; fold 1:
-// q[c+k] − q[c−k], and 0 for k = 0; fold 2: τ[c+k] + τ[c−k]): entry (k, fold, r) of tile t at
-// ((t·K + k)·3 + fold)·kTileRows + r. T holds each band's four filters, entry (k, c) of band g
-// at (g·K + k)·4 + c: c = 0 the low-pass and c = 1 the second derivative (on fold 0), c = 2 the
-// first derivative (on fold 1; 0 at k = 0), c = 3 the low-pass again (on fold 2). O is
-// column-major with leading dimension `ld`, column 4g + c. One kTileRows × 4 tile of O stays in
-// registers while k runs. Eigen's general product, built for larger and squarer matrices and
-// compiled for SSE2, did one multiply-add an instruction here (callgrind: 130 M of the default
-// request's 658 M). Each output is one sum over k in order, whatever tile its row falls in and
-// whichever bands share the call: a band's filtered values do not depend on the others.
-constexpr int kTileRows = 8;
-constexpr int kFolds = 3;
-constexpr int kBandFilters = 4;
-MANIPID_VECTOR_CLONES void filter_windows(const double* W, Eigen::Index tiles, Eigen::Index K, const double* T,
-                                          Eigen::Index bands, double* O, Eigen::Index ld) {
-  for (Eigen::Index t = 0; t < tiles; ++t) {
-    for (Eigen::Index g = 0; g < bands; ++g) {
-      const double* w = W + t * K * kFolds * kTileRows;
-      const double* taps = T + g * K * kBandFilters;
-      double tile[kBandFilters][kTileRows] = {};
-      for (Eigen::Index k = 0; k < K; ++k, w += kFolds * kTileRows, taps += kBandFilters) {
-        for (int r = 0; r < kTileRows; ++r) {
-          tile[0][r] += taps[0] * w[r];
-          tile[1][r] += taps[1] * w[r];
-          tile[2][r] += taps[2] * w[kTileRows + r];
-          tile[3][r] += taps[3] * w[2 * kTileRows + r];
-        }
-      }
-      for (int c = 0; c < kBandFilters; ++c) {
-        for (int r = 0; r < kTileRows; ++r) O[(g * kBandFilters + c) * ld + t * kTileRows + r] = tile[c][r];
-      }
+// Each band's four filters at each of `rows` thin samples of one joint: centre r·stride + M of
+// q and of the torque signal (the reference when the torque is formed from it). Each sample's
+// window is folded once, as the filters are (filters.cpp): f0[k] = q[c+k] + q[c−k] (q[c] at
+// k = 0) meets the symmetric low-pass and second derivative, f1[k] = q[c+k] − q[c−k] (0 at
+// k = 0) the antisymmetric first derivative, f2 the torque's like f0, which halves the work;
+// the folds are contiguous, so every band's four sums over k stream through them four k at a
+// time. `folds` holds 3·K doubles, K = M + 1 rounded up to a multiple of 4, zero past M (and
+// so are the taps: `taps` holds band g's low-pass, first and second derivative at k = 0..K−1
+// at g·3K, g·3K + K, g·3K + 2K). O is column-major with leading dimension `ld`, column 4g + c:
+// c = 0 q, 1 q̈, 2 q̇, 3 the torque, low-passed. Each output is the same sum in the same order
+// whichever bands share the call, so a band's values do not depend on the others.
+// Four doubles: one AVX2 register (two SSE2 ones); GCC's loop vectoriser makes a poor job of
+// both loops below (it vectorises the four sums across their lanes and reduces them at every
+// step), so they are written on Lanes. A LanesAt is four doubles in memory, read or written in
+// place whatever their alignment (may_alias: they are doubles).
+using Lanes = double __attribute__((vector_size(32)));
+using LanesAt = double __attribute__((vector_size(32), aligned(8), may_alias));
+using LaneIndices = long long __attribute__((vector_size(32)));
+[[gnu::always_inline]] inline LanesAt& lanes_at(double* at) { return *reinterpret_cast<LanesAt*>(at); }
+[[gnu::always_inline]] inline const LanesAt& lanes_at(const double* at) { return *reinterpret_cast<const LanesAt*>(at); }
+
+// The four sums of `B` bands (filter_samples) over one sample's folds, the bands' taps at
+// `taps`, band b's at b·3K. Two bands at once keep eight sums running: one band's four are a
+// chain of additions each, and wait on the adder's latency.
+template <int B>
+[[gnu::always_inline]] inline void band_sums(const double* taps, Eigen::Index K, const double* f0, const double* f1,
+                                             const double* f2, double* out, Eigen::Index ld) {
+  Lanes sums[B][4] = {};
+  for (Eigen::Index i = 0; i < K; i += 4) {
+    const Lanes even = lanes_at(f0 + i), odd = lanes_at(f1 + i), torque = lanes_at(f2 + i);
+    for (int b = 0; b < B; ++b) {
+      const double* c0 = taps + b * 3 * K;
+      const Lanes lowpass = lanes_at(c0 + i);
+      sums[b][0] += lowpass * even;
+      sums[b][1] += lanes_at(c0 + 2 * K + i) * even;
+      sums[b][2] += lanes_at(c0 + K + i) * odd;
+      sums[b][3] += lowpass * torque;
+    }
+  }
+  for (int b = 0; b < B; ++b) {
+    for (int c = 0; c < 4; ++c) {
+      const Lanes& sum = sums[b][c];
+      out[(4 * b + c) * ld] = (sum[0] + sum[1]) + (sum[2] + sum[3]);
     }
   }
 }
 
-// How many of `outputs` filtered samples a thin filtering at `stride` keeps: 0, stride, 2·stride, ….
-int every(int outputs, int stride) { return (outputs + stride - 1) / stride; }
+MANIPID_VECTOR_CLONES void filter_samples(const double* q, const double* torque, Eigen::Index rows, Eigen::Index stride,
+                                          Eigen::Index M, const double* taps, Eigen::Index bands, Eigen::Index K,
+                                          double* folds, double* O, Eigen::Index ld) {
+  const LaneIndices reversed = {3, 2, 1, 0};
+  double* f0 = folds;
+  double* f1 = folds + K;
+  double* f2 = folds + 2 * K;
+  for (Eigen::Index r = 0; r < rows; ++r) {
+    const double* x = q + r * stride + M;  // the centre
+    const double* y = torque + r * stride + M;
+    f0[0] = x[0];
+    f1[0] = 0.0;
+    f2[0] = y[0];
+    Eigen::Index k = 1;
+    for (; k + 3 <= M; k += 4) {  // x[k..k+3] and x[−k..−k−3]
+      const Lanes ahead = lanes_at(x + k), behind = __builtin_shuffle(Lanes(lanes_at(x - k - 3)), reversed);
+      lanes_at(f0 + k) = ahead + behind;
+      lanes_at(f1 + k) = ahead - behind;
+      lanes_at(f2 + k) = lanes_at(y + k) + __builtin_shuffle(Lanes(lanes_at(y - k - 3)), reversed);
+    }
+    for (; k <= M; ++k) {
+      f0[k] = x[k] + x[-k];
+      f1[k] = x[k] - x[-k];
+      f2[k] = y[k] + y[-k];
+    }
+    Eigen::Index g = 0;
+    for (; g + 2 <= bands; g += 2) band_sums<2>(taps + g * 3 * K, K, f0, f1, f2, O + 4 * g * ld + r, ld);
+    if (g < bands) band_sums<1>(taps + g * 3 * K, K, f0, f1, f2, O + 4 * g * ld + r, ld);
+  }
+}
+
+// How many of `outputs` filtered samples a thin filtering at `stride` from `offset` keeps:
+// offset, offset + stride, offset + 2·stride, ….
+int every(int outputs, int stride, int offset = 0) { return (std::max(outputs - offset, 0) + stride - 1) / stride; }
 
 // The same for the outputs of a filter of half-length M on `samples` inputs.
-int thin_rows(int samples, int M, int stride) {
-  return every(DifferentialFilter::output_length(samples, M), stride);
+int thin_rows(int samples, int M, int stride, int offset = 0) {
+  return every(DifferentialFilter::output_length(samples, M), stride, offset);
 }
 
 // q, q̇, q̈ and τ of `data` filtered with each band at half-length M (as filter_for_input_error
-// filters them), at every `stride`-th output sample only. The windows of the data are the same
-// for every band, so each joint's windows meet every band's taps in one product (filter_windows)
-// instead of four dot products per window and band, and are folded as the filters are
-// (filters.cpp): x[c+k] + x[c−k] meets the symmetric low-pass and second derivative,
-// x[c+k] − x[c−k] the antisymmetric first derivative, which halves the work. Windows are formed
-// a block of rows at a time, kWindowBytes of them, so a block stays in cache while every band's
-// taps pass over it.
+// filters them), at every `stride`-th output sample from `offset` only (filter_samples).
 std::vector<FilteredData> filter_thin(const Trajectory& data, int M, const std::vector<double>& bands, int stride,
-                                      bool use_reference, const std::optional<PdController>& controller) {
-  constexpr double kWindowBytes = 384.0 * 1024;
+                                      int offset, bool use_reference, const std::optional<PdController>& controller) {
   const int n = data.joint_count();
-  const int rows = thin_rows(data.samples(), M, stride);
+  const int rows = thin_rows(data.samples(), M, stride, offset);
   const int count = static_cast<int>(bands.size());
-  const int K = M + 1;
-  const int block_rows =
-      kTileRows * std::clamp(static_cast<int>(kWindowBytes / (kFolds * K * sizeof(double) * kTileRows)), 1, 32);
-  const int tiles = (std::min(rows, block_rows) + kTileRows - 1) / kTileRows;
-  // Rows past a short last block keep earlier values, and their products are dropped.
-  std::vector<double> windows(static_cast<std::size_t>(tiles) * K * kFolds * kTileRows, 0.0);
-  std::vector<double> taps(static_cast<std::size_t>(count) * K * kBandFilters, 0.0);
+  const Eigen::Index K = (M + 1 + 3) / 4 * 4;
+  std::vector<double> taps(static_cast<std::size_t>(count * 3 * K), 0.0);
+  std::vector<double> folds(static_cast<std::size_t>(3 * K), 0.0);
   std::vector<FilteredData> thin(static_cast<std::size_t>(count));
   for (int b = 0; b < count; ++b) {
     const FilterSettings settings{M, bands[static_cast<std::size_t>(b)], data.dt()};
     const auto filter = cached_filter(settings);
-    const Eigen::VectorXd& c0 = filter->coefficients(FilterOrder::lowpass);
-    const Eigen::VectorXd& c1 = filter->coefficients(FilterOrder::derivative1);
-    const Eigen::VectorXd& c2 = filter->coefficients(FilterOrder::derivative2);
-    for (int k = 0; k < K; ++k) {
-      double* tap = taps.data() + (static_cast<std::size_t>(b) * K + k) * kBandFilters;
-      tap[0] = tap[3] = c0[M + k];
-      tap[1] = c2[M + k];
-      tap[2] = k > 0 ? c1[M + k] : 0.0;  // antisymmetric: the centre tap meets the zero fold
+    double* tap = taps.data() + static_cast<std::size_t>(b) * 3 * K;
+    for (FilterOrder order : {FilterOrder::lowpass, FilterOrder::derivative1, FilterOrder::derivative2}) {
+      // The taps at k = 0..M of the (2M + 1)-long filter, centre M; the first derivative's centre
+      // tap is 0 and meets the zero fold.
+      const Eigen::VectorXd& c = filter->coefficients(order);
+      for (int k = 0; k <= M; ++k) tap[k] = c[M + k];
+      tap += K;
     }
     FilteredData& candidate = thin[static_cast<std::size_t>(b)];
     candidate.filter = settings;
@@ -195,39 +235,21 @@ std::vector<FilteredData> filter_thin(const Trajectory& data, int M, const std::
     candidate.qdd.resize(rows, n);
     candidate.tau.resize(rows, n);
   }
-  Eigen::MatrixXd product(static_cast<Eigen::Index>(tiles) * kTileRows, static_cast<Eigen::Index>(count) * kBandFilters);
+  Eigen::MatrixXd product(rows, static_cast<Eigen::Index>(count) * 4);
   for (int j = 0; j < n; ++j) {
-    const double* q = data.q.col(j).data();
     const double* torque = (use_reference ? data.ref.col(j) : data.tau.col(j)).data();
-    for (int top = 0; top < rows; top += block_rows) {
-      const int block = std::min(block_rows, rows - top);
-      for (int r = 0; r < block; ++r) {
-        const Eigen::Index centre = static_cast<Eigen::Index>(top + r) * stride + M;
-        double* w = windows.data() + static_cast<std::size_t>(r / kTileRows) * K * kFolds * kTileRows + r % kTileRows;
-        w[0] = q[centre];
-        w[kTileRows] = 0.0;
-        w[2 * kTileRows] = torque[centre];
-        for (int k = 1; k < K; ++k) {
-          w += kFolds * kTileRows;
-          w[0] = q[centre + k] + q[centre - k];
-          w[kTileRows] = q[centre + k] - q[centre - k];
-          w[2 * kTileRows] = torque[centre + k] + torque[centre - k];
-        }
-      }
-      filter_windows(windows.data(), (block + kTileRows - 1) / kTileRows, K, taps.data(), count, product.data(),
-                     product.rows());
-      for (int b = 0; b < count; ++b) {
-        FilteredData& candidate = thin[static_cast<std::size_t>(b)];
-        const auto filtered = [&](int c) { return product.col(b * kBandFilters + c).head(block); };
-        candidate.q.col(j).segment(top, block) = filtered(0);
-        candidate.qdd.col(j).segment(top, block) = filtered(1);
-        candidate.qd.col(j).segment(top, block) = filtered(2);
-        if (use_reference) {
-          candidate.tau.col(j).segment(top, block) =
-              controller->kp[j] * (filtered(3) - filtered(0)) - controller->kd[j] * filtered(2);
-        } else {
-          candidate.tau.col(j).segment(top, block) = filtered(3);
-        }
+    filter_samples(data.q.col(j).data() + offset, torque + offset, rows, stride, M, taps.data(), count, K, folds.data(),
+                   product.data(), product.rows());
+    for (int b = 0; b < count; ++b) {
+      FilteredData& candidate = thin[static_cast<std::size_t>(b)];
+      const auto filtered = [&](int c) { return product.col(b * 4 + c); };
+      candidate.q.col(j) = filtered(0);
+      candidate.qdd.col(j) = filtered(1);
+      candidate.qd.col(j) = filtered(2);
+      if (use_reference) {
+        candidate.tau.col(j) = controller->kp[j] * (filtered(3) - filtered(0)) - controller->kd[j] * filtered(2);
+      } else {
+        candidate.tau.col(j) = filtered(3);
       }
     }
   }
@@ -253,49 +275,73 @@ FilteredData thin_out(const FilteredData& full, int stride) {
   return thin;
 }
 
+// The rows of `parts` one after the other (the floor does not depend on their order).
+FilteredData stack(const std::vector<FilteredData>& parts) {
+  Eigen::Index rows = 0;
+  for (const FilteredData& part : parts) rows += part.samples();
+  const Eigen::Index n = parts.front().q.cols();
+  FilteredData all;
+  all.filter = parts.front().filter;
+  all.q.resize(rows, n);
+  all.qd.resize(rows, n);
+  all.qdd.resize(rows, n);
+  all.tau.resize(rows, n);
+  Eigen::Index top = 0;
+  for (const FilteredData& part : parts) {
+    all.q.middleRows(top, part.samples()) = part.q;
+    all.qd.middleRows(top, part.samples()) = part.qd;
+    all.qdd.middleRows(top, part.samples()) = part.qdd;
+    all.tau.middleRows(top, part.samples()) = part.tau;
+    top += part.samples();
+  }
+  return all;
+}
+
 // J*: the cost no parameter value can remove (the least-squares floor over all products β),
 // on every `stride`-th filtered sample, for every candidate (lengths × bands). It measures how
 // far the filtered data are from any instance of the model: filter distortion of the nonlinear
 // dynamics (a band too narrow for the motion) plus noise (a band too wide for the derivatives
 // of noisy q).
 // Only candidates whose floor can still be the lowest are fitted in full; the others are left
-// at +∞. Every candidate first gets a lower bound, floor_of on every kBoundStep-th of its thin
-// samples (filtered at those samples only, a kBoundStep-th of the work); then the candidates
-// are fitted in the order of their bounds until the next bound exceeds the lowest floor by
-// kBoundMargin (rounding, and the directions the Gram solve leaves out, keep a bound from being
-// exact). When a candidate is to be fitted, every other candidate of its length that can still
-// be fitted is filtered with it (the set only shrinks as the lowest floor falls, so none is
-// filtered twice). Up to kSeparately of them, with a half-length the FFT serves, are filtered
-// at every sample as the identification filters (filter_for_input_error), which costs less
-// than folding their windows, and the chosen candidate's data are then the identification's
-// own; more share their folded windows (filter_thin), the bands' thin data held for at most
-// kThinBytes at once. On the paper's clean run 4 of the 30 are fitted in full, on its variant
-// with the printed kinetic energy, whose floors lie close, 5 (29 while the order ran length by
-// length).
+// at +∞. The rows of a candidate are kBoundStep interleaved parts: part o holds every
+// (kBoundStep·stride)-th sample from o·stride. Fitted on part o alone, floor_of (divided by
+// the count of all rows) gives that part's share of the floor at its best β, and the sum of
+// the parts' shares fitted each alone is a lower bound of the floor (the rows are the same, the
+// freedom in β larger). Every candidate first gets the bound of part 0 (filtered at those
+// samples only, all bands of a length at once, the bands' thin data held for at most
+// kThinBytes); then the candidates are taken in the order of their bounds until the next bound
+// exceeds the lowest floor by kBoundMargin (rounding, and the directions the Gram solve leaves
+// out, keep a bound from being exact). The first is fitted in full at once: it is the likeliest
+// choice, so when the FFT serves its half-length it is filtered at every sample as the
+// identification filters (filter_for_input_error), whose data the identification then reuses.
+// Each later one adds its parts 1, 2, … to its bound and is let go as soon as the bound
+// exceeds the lowest floor; one that keeps up is fitted on all its parts together. On the
+// paper's clean run 1 of the 30 is fitted in full and 5 let go after 1 to 6 parts; on its
+// variant with the printed kinetic energy, whose floors lie close, 1 and 10 (after 1 to 6).
+// kBoundStep = 8 was measured against 4 and 16: the whole CLI run on the paper's clean data took
+// 16.1 ms against 17.7 and 16.7, on the variant 18.9 against 19.5 and 21.0 (a first bound of an
+// eighth of the rows still orders the candidates; a sixteenth lets too many through to parts).
 LowestFloor lowest_floor(const RobotModel& model, const ParameterProducts& products, const Trajectory& data,
                          const std::vector<int>& lengths, const std::vector<double>& bands, bool use_reference,
                          const std::optional<PdController>& controller, int stride) {
-  constexpr int kBoundStep = 4;
+  constexpr int kBoundStep = 8;
   constexpr double kBoundMargin = 1e-3;
   constexpr double kThinBytes = 64.0 * (1 << 20);
-  constexpr std::size_t kSeparately = 2;
   const int n = data.joint_count();
+  const int sparse = stride * kBoundStep;  // a part's stride
   const std::size_t band_count = bands.size();
-  const auto group_size = [&](int M, int every) {
-    const double bytes_per_band = 4.0 * thin_rows(data.samples(), M, every) * n * sizeof(double);
-    return static_cast<std::size_t>(std::clamp(kThinBytes / bytes_per_band, 1.0, static_cast<double>(band_count)));
-  };
   std::vector<double> bounds(lengths.size() * band_count, kInfinity);
   for (std::size_t l = 0; l < lengths.size(); ++l) {
     const int M = lengths[l];
     const double samples = thin_rows(data.samples(), M, stride);
-    const std::size_t group = group_size(M, stride * kBoundStep);
+    const double bytes_per_band = 4.0 * thin_rows(data.samples(), M, sparse) * n * sizeof(double);
+    const auto group = static_cast<std::size_t>(std::clamp(kThinBytes / bytes_per_band, 1.0, static_cast<double>(band_count)));
     for (std::size_t first = 0; first < band_count; first += group) {
       const std::vector<double> some(bands.begin() + static_cast<std::ptrdiff_t>(first),
                                      bands.begin() + static_cast<std::ptrdiff_t>(std::min(band_count, first + group)));
-      const std::vector<FilteredData> sparse = filter_thin(data, M, some, stride * kBoundStep, use_reference, controller);
+      const std::vector<FilteredData> part = filter_thin(data, M, some, sparse, 0, use_reference, controller);
       for (std::size_t b = 0; b < some.size(); ++b) {
-        const double bound = floor_of(model, products, sparse[b], samples);
+        const double bound = floor_of(model, products, part[b], samples);
         if (!std::isnan(bound)) bounds[l * band_count + first + b] = bound;  // NaN: sorted last, never fitted
       }
     }
@@ -305,46 +351,42 @@ LowestFloor lowest_floor(const RobotModel& model, const ParameterProducts& produ
   std::stable_sort(order.begin(), order.end(), [&](std::size_t a, std::size_t b) { return bounds[a] < bounds[b]; });
   LowestFloor result;
   result.floors.assign(bounds.size(), kInfinity);
-  std::vector<bool> fitted(bounds.size(), false);
-  std::vector<std::optional<FilteredData>> thin(bounds.size()), full(bounds.size());
   double lowest = kInfinity;
-  const auto may_be_lowest = [&](std::size_t c) { return bounds[c] <= lowest * (1.0 + kBoundMargin); };
+  const auto may_be_lowest = [&](double bound) { return bound <= lowest * (1.0 + kBoundMargin); };
   for (const std::size_t c : order) {
-    if (!may_be_lowest(c) || !std::isfinite(bounds[c])) break;
-    const std::size_t l = c / band_count;
-    const int M = lengths[l];
-    if (!thin[c]) {
-      // This candidate, and (once a floor is known) the others of its length still in the running.
-      std::vector<std::size_t> batch{c};
-      if (std::isfinite(lowest)) {
-        for (std::size_t b = 0; b < band_count && batch.size() < group_size(M, stride); ++b) {
-          const std::size_t other = l * band_count + b;
-          if (other != c && !fitted[other] && !thin[other] && may_be_lowest(other)) batch.push_back(other);
-        }
-      }
-      if (batch.size() <= kSeparately && cached_filter(FilterSettings{M, bands[c % band_count], data.dt()})->uses_fft(data.samples())) {
-        for (const std::size_t member : batch) {
-          full[member] = filter_for_input_error(data, FilterSettings{M, bands[member % band_count], data.dt()}, use_reference, controller);
-          thin[member] = thin_out(*full[member], stride);
-        }
+    if (!std::isfinite(bounds[c]) || !may_be_lowest(bounds[c])) break;
+    const int M = lengths[c / band_count];
+    const std::vector<double> band{bands[c % band_count]};
+    const FilterSettings settings{M, band.front(), data.dt()};
+    std::optional<FilteredData> full;
+    FilteredData rows;
+    if (!std::isfinite(lowest)) {
+      if (cached_filter(settings)->uses_fft(data.samples())) {
+        full = filter_for_input_error(data, settings, use_reference, controller);
+        rows = thin_out(*full, stride);
       } else {
-        std::vector<double> some;
-        for (const std::size_t member : batch) some.push_back(bands[member % band_count]);
-        std::vector<FilteredData> filtered = filter_thin(data, M, some, stride, use_reference, controller);
-        for (std::size_t k = 0; k < batch.size(); ++k) thin[batch[k]] = std::move(filtered[k]);
+        rows = std::move(filter_thin(data, M, band, stride, 0, use_reference, controller).front());
       }
+    } else {
+      const double samples = thin_rows(data.samples(), M, stride);
+      std::vector<FilteredData> parts;
+      double bound = bounds[c];
+      for (int o = 1; o < kBoundStep && may_be_lowest(bound); ++o) {
+        parts.push_back(std::move(filter_thin(data, M, band, sparse, o * stride, use_reference, controller).front()));
+        bound += floor_of(model, products, parts.back(), samples);  // NaN: let go
+      }
+      if (!may_be_lowest(bound)) continue;
+      parts.push_back(std::move(filter_thin(data, M, band, sparse, 0, use_reference, controller).front()));
+      rows = stack(parts);
     }
-    const double floor = floor_of(model, products, *thin[c], thin[c]->samples());
+    const double floor = floor_of(model, products, rows, rows.samples());
     result.floors[c] = floor;
-    fitted[c] = true;
-    thin[c].reset();
     // The lowest floor, the first in grid order on a tie; only its full data are kept.
     if (floor < lowest || (floor == lowest && result.chosen && c < *result.chosen)) {
       lowest = floor;
       result.chosen = c;
-      result.filtered = std::move(full[c]);
+      result.filtered = std::move(full);
     }
-    full[c].reset();
   }
   return result;
 }

@@ -17,17 +17,7 @@
 namespace manipid {
 namespace {
 
-// Σ x[i]·y[i] in four interleaved partial sums, which the compiler vectorises (one sum would be
-// a chain it may not reorder).
-[[gnu::always_inline]] inline double dot(const double* x, const double* y, Eigen::Index m) {
-  double lanes[4] = {0.0, 0.0, 0.0, 0.0};
-  Eigen::Index i = 0;
-  for (; i + 4 <= m; i += 4) {
-    for (int lane = 0; lane < 4; ++lane) lanes[lane] += x[i + lane] * y[i + lane];
-  }
-  for (; i < m; ++i) lanes[0] += x[i] * y[i];
-  return (lanes[0] + lanes[1]) + (lanes[2] + lanes[3]);
-}
+using detail::dot;
 
 // One block of the QR below: [R z; B b] (R p × p upper triangular, B m × p new rows) made upper
 // triangular again by p Householder reflections, each touching row k of the triangle and the
