@@ -2,14 +2,15 @@
 // line-numbered errors, shortest round-trip formatting, and the trajectory column layout.
 //
 // Parsing works on string_views into the caller's text and converts with std::from_chars,
-// so no field allocates; values go into one row-major buffer (the text's layout) that is
-// transposed into the column-major table once at the end. Each row first takes a fast path
+// so no field allocates; each row's values go straight into the column-major table, sized
+// for the lines left after the header. Each row first takes a fast path
 // that only accepts plain finite numbers; anything else is re-read field by field by the
 // careful path, which either accepts it (a '+' sign, a value that underflows) or throws the
 // error that names the line and column.
 #include "manipid/api/csv.h"
 
 #include <algorithm>
+#include <cassert>
 #include <charconv>
 #include <cmath>
 #include <cstdlib>
@@ -50,6 +51,9 @@ std::string_view trim(std::string_view text) {
 class LineReader {
  public:
   explicit LineReader(std::string_view text) : text_(text) {}
+
+  /// The text not read yet.
+  std::string_view rest() const { return text_.substr(position_); }
 
   /// The next line that has something other than blanks on it, or false at the end.
   bool next_nonblank(std::string_view& line, std::size_t& line_number) {
@@ -226,21 +230,24 @@ CsvTable parse_csv(std::string_view text, const CsvLimits& limits) {
   table.columns = parse_header(line, line_number, limits);
   const std::size_t column_count = table.columns.size();
 
-  // Row-major, as the text is laid out. Reserved for the rows the text's first 64 KiB suggest,
-  // their lines extrapolated to the whole and an eighth more (growing copes with a worse guess):
-  // counting every newline of the text first took a fifth of the parse. Every field takes at
-  // least two bytes ("0,"), which bounds the guess when lines are blank: a wide header over many
-  // empty lines must not reserve gigabytes.
-  std::vector<double> values;
-  const std::string_view sample = text.substr(0, std::size_t{1} << 16);
-  const double sample_lines = static_cast<double>(std::count(sample.begin(), sample.end(), '\n') + 1);
-  const auto line_estimate = static_cast<std::size_t>(
-      1.125 * sample_lines * static_cast<double>(text.size()) / static_cast<double>(std::max<std::size_t>(sample.size(), 1)) + 1.0);
-  const std::size_t field_estimate = text.size() / 2 + 1;
-  values.reserve(std::min({line_estimate * column_count, limits.max_rows * column_count, limits.max_values, field_estimate}));
-
-  // Rows beyond max_rows, or beyond max_values numbers in all for this width, are refused.
+  // Column-major, as the table holds it, with room for as many rows as the text can hold: one
+  // for every line left (blank ones included; memchr counts them in a thirtieth of the parse),
+  // and no more than its bytes allow (a row of c numbers takes at least 2c − 1 of them and a
+  // newline), so a wide header over many empty lines does not reserve gigabytes. The pages of
+  // rows never written are never touched. Rows beyond max_rows, or beyond max_values numbers
+  // in all for this width, are refused before they are stored. (Parsing row-major and
+  // transposing at the end took a second copy of every number, a megabyte of fresh memory for
+  // 10,000 rows of 13.)
   const std::size_t max_rows = std::min(limits.max_rows, limits.max_values / std::max<std::size_t>(column_count, 1));
+  const std::string_view rest = reader.rest();
+  std::size_t lines_left = !rest.empty() && rest.back() != '\n' ? 1 : 0;
+  for (const char* at = rest.data(); (at = static_cast<const char*>(std::memchr(at, '\n', static_cast<std::size_t>(rest.data() + rest.size() - at))));
+       ++at) {
+    ++lines_left;
+  }
+  const std::size_t room = std::min({lines_left, max_rows, (rest.size() + 1) / (2 * std::max<std::size_t>(column_count, 1))});
+  table.data.resize(static_cast<Eigen::Index>(room), static_cast<Eigen::Index>(column_count));
+  std::vector<double> row(column_count);
   std::size_t row_count = 0;
   while (reader.next_nonblank(line, line_number)) {
     if (row_count == max_rows) {
@@ -248,17 +255,17 @@ CsvTable parse_csv(std::string_view text, const CsvLimits& limits) {
                        line_prefix(line_number) + ": more than " + std::to_string(max_rows) + " data rows (the limit" +
                            (max_rows < limits.max_rows ? " for " + std::to_string(column_count) + " columns" : "") + ")");
     }
-    const std::size_t row_start = values.size();
-    values.resize(row_start + column_count);
-    if (!parse_row_fast(line, values.data() + row_start, column_count)) {
-      parse_row_careful(line, line_number, table.columns, values.data() + row_start);
+    if (!parse_row_fast(line, row.data(), column_count)) parse_row_careful(line, line_number, table.columns, row.data());
+    assert(row_count < room);  // a row of c numbers is a line of at least 2c − 1 bytes
+    for (std::size_t column = 0; column < column_count; ++column) {
+      table.data(static_cast<Eigen::Index>(row_count), static_cast<Eigen::Index>(column)) = row[column];
     }
     ++row_count;
   }
-
-  using RowMajor = Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor>;
-  table.data = Eigen::Map<const RowMajor>(values.data(), static_cast<Eigen::Index>(row_count),
-                                          static_cast<Eigen::Index>(column_count));
+  // Fewer rows than lines (blank lines): the rows written, in a table of their own size.
+  if (static_cast<Eigen::Index>(row_count) < table.data.rows()) {
+    table.data = Eigen::MatrixXd(table.data.topRows(static_cast<Eigen::Index>(row_count)));
+  }
   return table;
 }
 

@@ -653,7 +653,8 @@ void identify_two_stage(const Problem& problem, IdentificationResult& result) {
 IdentificationResult identify(const RobotModel& model, const Trajectory& measured, const IdentificationOptions& options) {
   const auto started = Clock::now();
   IdentificationResult result;
-  const Trajectory data = prepare_data(measured, options.preparation, &result.warnings);
+  std::optional<Trajectory> prepared;  // only when trimming or resampling changes the data
+  const Trajectory& data = prepare_data(measured, options.preparation, prepared, &result.warnings);
   const Setup setup = validate(model, data, options);
   result.method = options.method;
   result.algorithm = setup.algorithm;

@@ -97,10 +97,12 @@ std::string TimingReport::warning() const {
   return text.str();
 }
 
-Trajectory make_uniform(const Trajectory& data, const UniformOptions& options, TimingReport* report) {
+namespace {
+
+// Validates `data` and `options` as make_uniform does; true when make_uniform returns the data
+// unchanged: already uniform, on the period asked for (or any, dt = 0).
+bool uniform_as_is(const Trajectory& data, const UniformOptions& options) {
   data.validate();
-  TimingReport found;
-  found.samples_in = data.samples();
   if (!(options.dt == 0.0 || (options.dt >= kShortestSamplePeriod && options.dt <= kLongestSamplePeriod))) {
     std::ostringstream text;
     text << "dt must be 0 (the median step) or a period from " << kShortestSamplePeriod << " to " << kLongestSamplePeriod
@@ -108,9 +110,17 @@ Trajectory make_uniform(const Trajectory& data, const UniformOptions& options, T
     throw InputError("dt", text.str());
   }
   if (!(options.max_gap_steps >= 1.0)) throw InputError("max_gap_steps", "max_gap_steps must be at least 1");
-
   const double first_step = data.t[1] - data.t[0];
-  if (data.is_uniform() && (options.dt == 0.0 || std::abs(options.dt - first_step) <= 1e-6 * first_step)) {
+  return data.is_uniform() && (options.dt == 0.0 || std::abs(options.dt - first_step) <= 1e-6 * first_step);
+}
+
+}  // namespace
+
+Trajectory make_uniform(const Trajectory& data, const UniformOptions& options, TimingReport* report) {
+  TimingReport found;
+  found.samples_in = data.samples();
+  if (uniform_as_is(data, options)) {
+    const double first_step = data.t[1] - data.t[0];
     found.min_step = found.median_step = found.max_step = found.dt = first_step;
     found.samples_out = data.samples();
     if (report) *report = found;
@@ -227,6 +237,14 @@ Trajectory prepare_data(const Trajectory& data, const DataPreparation& options, 
   Trajectory uniform = make_uniform(trimmed, options.uniform, &report);
   if (warnings && report.resampled) warnings->push_back(report.warning());
   return uniform;
+}
+
+const Trajectory& prepare_data(const Trajectory& data, const DataPreparation& options, std::optional<Trajectory>& storage,
+                               std::vector<std::string>* warnings) {
+  const bool trimming = options.trim_start > 0.0 || options.trim_end > 0.0;
+  if (!trimming && uniform_as_is(data, options.uniform)) return data;
+  storage = prepare_data(data, options, warnings);
+  return *storage;
 }
 
 }  // namespace manipid

@@ -205,7 +205,8 @@ IdentificationResult identify(const Model& model, const Trajectory& measured, co
   }
   if (!measured.has_torque()) throw InputError("tau", "the data has no tau columns: identification needs measured torques");
 
-  const Trajectory data = prepare_data(measured, options.preparation, &result.warnings);
+  std::optional<Trajectory> prepared;  // only when trimming or resampling changes the data
+  const Trajectory& data = prepare_data(measured, options.preparation, prepared, &result.warnings);
   result.base = base_parameters(model, layout, options.base);
   const BaseParameters& base = result.base;
   for (int index : base.absent) result.unidentifiable.push_back(result.standard_names[static_cast<std::size_t>(index)]);

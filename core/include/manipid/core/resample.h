@@ -21,6 +21,7 @@
 
 #include "manipid/core/trajectory.h"
 
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -73,5 +74,11 @@ struct DataPreparation {
 /// trim() then make_uniform(); the resampling's warning (if any) is appended to `warnings`.
 Trajectory prepare_data(const Trajectory& data, const DataPreparation& options,
                         std::vector<std::string>* warnings = nullptr);
+
+/// The same without copying data that need nothing done (no trimming, already uniform on the
+/// period asked for): returns `data` itself then, else the prepared copy, kept in `storage`.
+/// The same checks, errors and warning as the copying form.
+const Trajectory& prepare_data(const Trajectory& data, const DataPreparation& options, std::optional<Trajectory>& storage,
+                               std::vector<std::string>* warnings = nullptr);
 
 }  // namespace manipid
