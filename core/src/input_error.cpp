@@ -158,13 +158,13 @@ InputErrorCost::InputErrorCost(const RobotModel& model, FilteredData filtered, E
     auto block = Y.topRows(static_cast<Eigen::Index>(count) * n);
     regressor_rows(model, products_, workspace, data.q.middleRows(first, count), data.qd.middleRows(first, count),
                    data.qdd.middleRows(first, count), block);
-    for (int k = 0; k < count; ++k) {
-      const int t = first + k;
-      for (int j = 0; j < n; ++j) {
-        const Eigen::Index row = p + static_cast<Eigen::Index>(j) * count + k;
-        work.block(row, 0, 1, p) = root_weights[j] * block.row(static_cast<Eigen::Index>(k) * n + j);
-        work(row, p) = root_weights[j] * data.tau(t, j);
+    // Column by column, so that the writes are contiguous (a row of `work` spans p cache lines).
+    for (int j = 0; j < n; ++j) {
+      const Eigen::Index top = p + static_cast<Eigen::Index>(j) * count;
+      for (int c = 0; c < p; ++c) {
+        work.col(c).segment(top, count) = root_weights[j] * block.col(c)(Eigen::seqN(j, count, n));
       }
+      work.col(p).segment(top, count) = root_weights[j] * data.tau.col(j).segment(first, count);
     }
     for (int c = 0; c < p; ++c) extent[static_cast<std::size_t>(c)] = joints_reached[static_cast<std::size_t>(c)] * count;
     orthogonal_ += triangularise_block(work.data(), work.rows(), p, static_cast<Eigen::Index>(count) * n, extent.data());
