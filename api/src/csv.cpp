@@ -241,8 +241,8 @@ CsvTable parse_csv(std::string_view text, const CsvLimits& limits) {
   const std::size_t max_rows = std::min(limits.max_rows, limits.max_values / std::max<std::size_t>(column_count, 1));
   const std::string_view rest = reader.rest();
   std::size_t lines_left = !rest.empty() && rest.back() != '\n' ? 1 : 0;
-  for (const char* at = rest.data(); (at = static_cast<const char*>(std::memchr(at, '\n', static_cast<std::size_t>(rest.data() + rest.size() - at))));
-       ++at) {
+  const char* const end = rest.data() + rest.size();
+  for (const char* at = rest.data(); (at = static_cast<const char*>(std::memchr(at, '\n', static_cast<std::size_t>(end - at)))); ++at) {
     ++lines_left;
   }
   const std::size_t room = std::min({lines_left, max_rows, (rest.size() + 1) / (2 * std::max<std::size_t>(column_count, 1))});

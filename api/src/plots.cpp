@@ -89,7 +89,8 @@ nlohmann::ordered_json torque_fit_to_json(const std::string& request_json, const
                                           const Trajectory& stored, long max_points) {
   const IdentificationSpec spec = identification_from_json(nlohmann::json::parse(request_json));
   // The samples the identification saw: trimmed and on its uniform grid.
-  const Trajectory data = prepare_data(stored, spec.options.preparation);
+  std::optional<Trajectory> prepared;
+  const Trajectory& data = prepare_data(stored, spec.options.preparation, prepared);
   const nlohmann::json result = nlohmann::json::parse(result_json);
   const RobotModel& model = spec.preset.model;
   if (data.joint_count() != model.joint_count()) {
@@ -198,7 +199,8 @@ nlohmann::ordered_json robot_fit_to_json(const robot::Model& model, const std::s
   // The samples the identification saw: trimmed, and on its grid.
   DataPreparation preparation = spec.options.preparation;
   preparation.uniform.dt = filters.differentiation.dt;
-  const Trajectory data = prepare_data(stored, preparation);
+  std::optional<Trajectory> prepared;
+  const Trajectory& data = prepare_data(stored, preparation, prepared);
   const robot::TorquePrediction fit = robot::predict_torque(model, layout, point, data, filters);
   const std::vector<long> indices = plot_indices(fit.t.size(), max_points);
   Json joints = Json::array();

@@ -119,21 +119,10 @@ double floor_of(const RobotModel& model, const ParameterProducts& products, cons
   return residual.squaredNorm() / samples;
 }
 
-// Each band's four filters at each of `rows` thin samples of one joint: centre r·stride + M of
-// q and of the torque signal (the reference when the torque is formed from it). Each sample's
-// window is folded once, as the filters are (filters.cpp): f0[k] = q[c+k] + q[c−k] (q[c] at
-// k = 0) meets the symmetric low-pass and second derivative, f1[k] = q[c+k] − q[c−k] (0 at
-// k = 0) the antisymmetric first derivative, f2 the torque's like f0, which halves the work;
-// the folds are contiguous, so every band's four sums over k stream through them four k at a
-// time. `folds` holds 3·K doubles, K = M + 1 rounded up to a multiple of 4, zero past M (and
-// so are the taps: `taps` holds band g's low-pass, first and second derivative at k = 0..K−1
-// at g·3K, g·3K + K, g·3K + 2K). O is column-major with leading dimension `ld`, column 4g + c:
-// c = 0 q, 1 q̈, 2 q̇, 3 the torque, low-passed. Each output is the same sum in the same order
-// whichever bands share the call, so a band's values do not depend on the others.
-// Four doubles: one AVX2 register (two SSE2 ones); GCC's loop vectoriser makes a poor job of
-// both loops below (it vectorises the four sums across their lanes and reduces them at every
-// step), so they are written on Lanes. A LanesAt is four doubles in memory, read or written in
-// place whatever their alignment (may_alias: they are doubles).
+// Four doubles: one AVX2 register (two SSE2 ones). GCC's loop vectoriser makes a poor job of
+// filter_samples' loops (it vectorises the four sums across their lanes and reduces them at
+// every step), so they are written on Lanes. A LanesAt is four doubles in memory, read or
+// written in place whatever their alignment (may_alias: they are doubles).
 using Lanes = double __attribute__((vector_size(32)));
 using LanesAt = double __attribute__((vector_size(32), aligned(8), may_alias));
 using LaneIndices = long long __attribute__((vector_size(32)));
@@ -166,6 +155,17 @@ template <int B>
   }
 }
 
+// Each band's four filters at each of `rows` thin samples of one joint: centre r·stride + M of
+// q and of the torque signal (the reference when the torque is formed from it). Each sample's
+// window is folded once, as the filters are (filters.cpp): f0[k] = q[c+k] + q[c−k] (q[c] at
+// k = 0) meets the symmetric low-pass and second derivative, f1[k] = q[c+k] − q[c−k] (0 at
+// k = 0) the antisymmetric first derivative, f2 the torque's like f0, which halves the work;
+// the folds are contiguous, so every band's four sums over k stream through them four k at a
+// time. `folds` holds 3·K doubles, K = M + 1 rounded up to a multiple of 4, zero past M (and
+// so are the taps: `taps` holds band g's low-pass, first and second derivative at k = 0..K−1
+// at g·3K, g·3K + K, g·3K + 2K). O is column-major with leading dimension `ld`, column 4g + c:
+// c = 0 q, 1 q̈, 2 q̇, 3 the torque, low-passed. Each output is the same sum in the same order
+// whichever bands share the call, so a band's values do not depend on the others.
 MANIPID_VECTOR_CLONES void filter_samples(const double* q, const double* torque, Eigen::Index rows, Eigen::Index stride,
                                           Eigen::Index M, const double* taps, Eigen::Index bands, Eigen::Index K,
                                           double* folds, double* O, Eigen::Index ld) {

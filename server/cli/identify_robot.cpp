@@ -148,7 +148,8 @@ int run_identify_robot(const IdentifyOptions& options) {
   } catch (const InputError& error) {
     rethrow_with_source(error, input_name(options.input));
   }
-  const Trajectory prepared = prepare_data(data, identification.preparation);
+  std::optional<Trajectory> storage;
+  const Trajectory& prepared = prepare_data(data, identification.preparation, storage);
   const robot::TorquePrediction fit = robot::predict_torque(model, identification.layout, result.point, prepared, result.filters);
   std::optional<robot::ValidationReport> validation;
   if (!options.validate.empty()) {

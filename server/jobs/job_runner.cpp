@@ -273,7 +273,8 @@ JobOutcome run_robot_identification_job(const api::JobInfo& job, store::Store& s
     outcome.result = nlohmann::ordered_json{{"cancelled", true}, {"dataset_id", spec.dataset_id}}.dump();
     return outcome;
   }
-  const Trajectory prepared = prepare_data(*data, spec.options.preparation);
+  std::optional<Trajectory> storage;
+  const Trajectory& prepared = prepare_data(*data, spec.options.preparation, storage);
   const robot::TorquePrediction fit = robot::predict_torque(parsed.model, spec.options.layout, result.point, prepared, result.filters);
   std::optional<robot::ValidationReport> validation;
   if (second) validation = robot::validate(parsed.model, spec.options.layout, result, *second, spec.options.preparation);

@@ -326,7 +326,8 @@ ValidationReport validate(const Model& model, const ParameterLayout& layout, con
   ValidationReport report;
   DataPreparation same_grid = preparation;
   same_grid.uniform.dt = result.filters.differentiation.dt;  // the filters are built for this period
-  const Trajectory uniform = prepare_data(data, same_grid, &report.warnings);
+  std::optional<Trajectory> prepared;
+  const Trajectory& uniform = prepare_data(data, same_grid, prepared, &report.warnings);
   report.estimate = predict_torque(model, layout, result.point, uniform, result.filters);
   report.prior = predict_torque(model, layout, result.prior, uniform, result.filters);
   return report;
