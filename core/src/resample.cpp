@@ -230,20 +230,25 @@ Trajectory trim(const Trajectory& data, double start, double end) {
 }
 
 Trajectory prepare_data(const Trajectory& data, const DataPreparation& options, std::vector<std::string>* warnings) {
-  data.validate();
-  const bool trimming = options.trim_start > 0.0 || options.trim_end > 0.0;
-  const Trajectory trimmed = trimming ? trim(data, options.trim_start, options.trim_end) : data;
-  TimingReport report;
-  Trajectory uniform = make_uniform(trimmed, options.uniform, &report);
-  if (warnings && report.resampled) warnings->push_back(report.warning());
-  return uniform;
+  std::optional<Trajectory> storage;
+  const Trajectory& prepared = prepare_data(data, options, storage, warnings);
+  if (storage) return std::move(*storage);
+  return prepared;
 }
 
 const Trajectory& prepare_data(const Trajectory& data, const DataPreparation& options, std::optional<Trajectory>& storage,
                                std::vector<std::string>* warnings) {
   const bool trimming = options.trim_start > 0.0 || options.trim_end > 0.0;
   if (!trimming && uniform_as_is(data, options.uniform)) return data;
-  storage = prepare_data(data, options, warnings);
+  if (trimming) {
+    data.validate();
+    storage = trim(data, options.trim_start, options.trim_end);
+    if (uniform_as_is(*storage, options.uniform)) return *storage;
+  }
+  TimingReport report;
+  Trajectory uniform = make_uniform(storage ? *storage : data, options.uniform, &report);
+  if (warnings && report.resampled) warnings->push_back(report.warning());
+  storage = std::move(uniform);
   return *storage;
 }
 
