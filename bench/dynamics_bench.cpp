@@ -1,7 +1,7 @@
 // dynamics_bench.cpp — cost per sample of the equations of motion for the paper's robot.
-#include "manipid/core/dynamics.h"
-#include "manipid/core/presets.h"
-#include "manipid/core/regressor.h"
+#include "manipid/core/paper/dynamics.h"
+#include "manipid/core/paper/presets.h"
+#include "manipid/core/paper/regressor.h"
 
 #include <benchmark/benchmark.h>
 

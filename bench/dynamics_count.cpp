@@ -6,8 +6,8 @@
 //
 // and divide the collected instructions by 1,000. Arguments: inverse|forward complete|paper.
 // Prints a checksum of the results, so before/after builds can be compared as well.
-#include "manipid/core/dynamics.h"
-#include "manipid/core/presets.h"
+#include "manipid/core/paper/dynamics.h"
+#include "manipid/core/paper/presets.h"
 
 #include <cstdio>
 #include <random>

@@ -7,9 +7,9 @@
 //
 //   build/release/bench/filter_choice_study            # the table (about a minute, release)
 //   build/release/bench/filter_choice_study --grid     # every candidate of the grid too
-#include "manipid/core/identification.h"
-#include "manipid/core/input_error.h"
-#include "manipid/core/presets.h"
+#include "manipid/core/paper/identification.h"
+#include "manipid/core/paper/input_error.h"
+#include "manipid/core/paper/presets.h"
 
 #include <algorithm>
 #include <cmath>

@@ -1,7 +1,7 @@
 // filters_bench.cpp — cost of the paper's differential filters (filters.h) at the paper's
 // scale: 4 joints × 9,701 samples (10 s at 1 kHz minus the 0.3 s the paper trims), M = 100,
 // and longer filters (the FFT path). Target: apply_all over the four joints ≤ 5 ms on one core.
-#include "manipid/core/filters.h"
+#include "manipid/core/signal/filters.h"
 
 #include <benchmark/benchmark.h>
 

@@ -1,8 +1,8 @@
 // identification_bench.cpp — the paper's case end to end, one cost evaluation in Gram and
 // direct form, and output-error / two-stage from the same start (the paper's speed claim).
-#include "manipid/core/identification.h"
-#include "manipid/core/input_error.h"
-#include "manipid/core/presets.h"
+#include "manipid/core/paper/identification.h"
+#include "manipid/core/paper/input_error.h"
+#include "manipid/core/paper/presets.h"
 
 #include <benchmark/benchmark.h>
 

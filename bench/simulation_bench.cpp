@@ -2,8 +2,8 @@
 // Dormand–Prince 5(4) with dense output) and of its parts: the pre-filtered reference and its
 // interpolation. Counters report accepted steps and right-hand-side (forward dynamics) calls;
 // the tolerance sweep also reports the error against a tight-tolerance solution.
-#include "manipid/core/presets.h"
-#include "manipid/core/simulation.h"
+#include "manipid/core/paper/presets.h"
+#include "manipid/core/paper/simulation.h"
 
 #include <benchmark/benchmark.h>
 

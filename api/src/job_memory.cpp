@@ -3,7 +3,7 @@
 
 #include "manipid/api/requests.h"
 #include "manipid/api/robot_requests.h"
-#include "manipid/core/model.h"
+#include "manipid/core/errors.h"
 
 #include "json_fields.h"
 

@@ -2,7 +2,7 @@
 // what is allowed and why.
 #include "manipid/api/limits.h"
 
-#include "manipid/core/model.h"
+#include "manipid/core/errors.h"
 
 namespace manipid::api::limits {
 

@@ -7,8 +7,8 @@
 #include "manipid/api/robot_requests.h"
 #include "manipid/core/robot/filtered_regressor.h"
 #include "manipid/core/robot/parameters.h"
-#include "manipid/core/input_error.h"
-#include "manipid/core/resample.h"
+#include "manipid/core/paper/input_error.h"
+#include "manipid/core/signal/resample.h"
 
 #include <cmath>
 

@@ -14,7 +14,7 @@ namespace {
 constexpr std::size_t max_dataset_id_length = 64;
 constexpr long long max_half_length = 1'000'000;  // the differential filter's limit (filters.cpp)
 constexpr double max_seconds_limit = 86'400.0;    // one day
-// Samples the filters need (core/src/filter_choice.cpp and identification.cpp): with M = "auto"
+// Samples the filters need (core/src/paper/filter_choice.cpp and identification.cpp): with M = "auto"
 // the grid {100, 200, 400} is searched only when the data has 4(2M+1) samples; shorter data
 // falls back to M = max(2, (samples - 2) / 8), so "auto" needs no more than 2·2+1 samples.
 // Output-error always builds its identifiability structure with M = 100.

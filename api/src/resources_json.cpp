@@ -3,7 +3,7 @@
 #include "json_numbers.h"
 
 #include "manipid/api/csv.h"
-#include "manipid/core/model.h"
+#include "manipid/core/paper/model.h"
 
 #include <cmath>
 

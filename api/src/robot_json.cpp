@@ -2,7 +2,7 @@
 #include "manipid/api/robot_json.h"
 #include "json_numbers.h"
 
-#include "manipid/core/model.h"
+#include "manipid/core/errors.h"
 #include "manipid/core/robot/base_parameters.h"
 #include "manipid/core/robot/excitation.h"
 

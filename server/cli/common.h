@@ -7,8 +7,8 @@
 #pragma once
 
 #include "manipid/api/csv.h"
-#include "manipid/core/model.h"
-#include "manipid/core/presets.h"
+#include "manipid/core/paper/model.h"
+#include "manipid/core/paper/presets.h"
 #include "manipid/core/robot/model.h"
 #include "manipid/core/robot/urdf.h"
 #include "manipid/core/robot/parameters.h"

@@ -4,7 +4,7 @@
 #include "cli/filter.h"
 
 #include "manipid/api/csv.h"
-#include "manipid/core/filters.h"
+#include "manipid/core/signal/filters.h"
 
 #include <cmath>
 #include <cstdio>

@@ -5,7 +5,7 @@
 
 #include "manipid/api/csv.h"
 #include "manipid/api/result_json.h"
-#include "manipid/core/identification.h"
+#include "manipid/core/paper/identification.h"
 
 #include <cmath>
 #include <cstdio>

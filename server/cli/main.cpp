@@ -10,7 +10,7 @@
 #include "cli/torque.h"
 #include "cli/worker.h"
 
-#include "manipid/core/identification.h"
+#include "manipid/core/paper/identification.h"
 
 #include <malloc.h>
 

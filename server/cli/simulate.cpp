@@ -3,7 +3,7 @@
 #include "cli/simulate.h"
 
 #include "manipid/api/csv.h"
-#include "manipid/core/simulation.h"
+#include "manipid/core/paper/simulation.h"
 
 #include <chrono>
 #include <cstdio>

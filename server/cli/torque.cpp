@@ -5,12 +5,12 @@
 
 #include "manipid/api/csv.h"
 #include "manipid/api/robot_json.h"
-#include "manipid/core/dynamics.h"
+#include "manipid/core/paper/dynamics.h"
 #include "manipid/core/robot/consistency.h"
 #include "manipid/core/robot/data.h"
 #include "manipid/core/robot/identification.h"
 #include "manipid/core/robot/rnea.h"
-#include "manipid/core/simulation.h"
+#include "manipid/core/paper/simulation.h"
 
 #include <nlohmann/json.hpp>
 

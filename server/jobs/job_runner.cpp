@@ -8,8 +8,8 @@
 #include "manipid/api/robot_requests.h"
 #include "manipid/core/robot/excitation.h"
 #include "manipid/core/robot/identification.h"
-#include "manipid/core/identification.h"
-#include "manipid/core/simulation.h"
+#include "manipid/core/paper/identification.h"
+#include "manipid/core/paper/simulation.h"
 
 #include <nlohmann/json.hpp>
 

@@ -4,7 +4,7 @@
 #pragma once
 
 #include "manipid/api/records.h"
-#include "manipid/core/trajectory.h"
+#include "manipid/core/signal/trajectory.h"
 
 #include <cstddef>
 #include <cstdint>

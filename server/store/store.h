@@ -17,7 +17,7 @@
 #pragma once
 
 #include "manipid/api/records.h"
-#include "manipid/core/trajectory.h"
+#include "manipid/core/signal/trajectory.h"
 
 #include <chrono>
 #include <cstddef>

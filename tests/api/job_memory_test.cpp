@@ -3,7 +3,7 @@
 // each; a budget it exceeds is refused naming that field.
 #include "manipid/api/job_memory.h"
 
-#include "manipid/core/model.h"
+#include "manipid/core/errors.h"
 
 #include <gtest/gtest.h>
 

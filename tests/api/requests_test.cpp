@@ -6,7 +6,7 @@
 #include "manipid/api/csv.h"
 #include "manipid/api/problem.h"
 
-#include "manipid/core/resample.h"
+#include "manipid/core/signal/resample.h"
 #include "text_assertions.h"
 
 #include <gtest/gtest.h>

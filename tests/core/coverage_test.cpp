@@ -5,8 +5,8 @@
 // pairs, and its estimates must be within 0.1 %. Plain input-error is measured too; its
 // intervals ignore the noise q's filtered derivatives carry into the regressor, and its
 // result must say so and name the two-stage method.
-#include "manipid/core/identification.h"
-#include "manipid/core/presets.h"
+#include "manipid/core/paper/identification.h"
+#include "manipid/core/paper/presets.h"
 
 #include <gtest/gtest.h>
 

@@ -1,7 +1,7 @@
 // dynamics_test.cpp — equations of motion against closed forms, Lagrange's equations by
 // finite differences, and invariants (symmetry, positive definiteness, energy).
-#include "manipid/core/dynamics.h"
-#include "manipid/core/presets.h"
+#include "manipid/core/paper/dynamics.h"
+#include "manipid/core/paper/presets.h"
 #include "test_models.h"
 
 #include <gtest/gtest.h>

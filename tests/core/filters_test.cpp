@@ -1,9 +1,9 @@
 // filters_test.cpp — the paper's differential filters (filters.h): coefficients against the
 // paper's formulas, exactness on polynomials, accuracy on sinusoids, output alignment,
 // measured frequency response, input validation, the cache, and apply_all.
-#include "manipid/core/filters.h"
+#include "manipid/core/signal/filters.h"
 
-#include "manipid/core/model.h"
+#include "manipid/core/errors.h"
 
 #include <gtest/gtest.h>
 

@@ -1,9 +1,9 @@
 // identification_test.cpp — the input-error cost against its direct evaluation, the
 // optimiser plumbing (gradient, cancellation, history), identifiability, validation, and the
 // paper's experiment reproduced end to end.
-#include "manipid/core/identification.h"
-#include "manipid/core/input_error.h"
-#include "manipid/core/presets.h"
+#include "manipid/core/paper/identification.h"
+#include "manipid/core/paper/input_error.h"
+#include "manipid/core/paper/presets.h"
 #include "test_models.h"
 #include "input_error_expectations.h"
 

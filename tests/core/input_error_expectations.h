@@ -1,7 +1,7 @@
 // input_error_expectations.h — test helpers that run a call and look at the InputError it throws.
 #pragma once
 
-#include "manipid/core/model.h"
+#include "manipid/core/errors.h"
 
 #include <gtest/gtest.h>
 

@@ -1,7 +1,7 @@
 // model_test.cpp — parameter names and validation, presets, and the paper's kinematics
 // (its printed T1..T4 multiplied out by hand).
-#include "manipid/core/dynamics.h"
-#include "manipid/core/presets.h"
+#include "manipid/core/paper/dynamics.h"
+#include "manipid/core/paper/presets.h"
 
 #include <gtest/gtest.h>
 

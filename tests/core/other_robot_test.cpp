@@ -1,9 +1,9 @@
 // other_robot_test.cpp — identification of a robot the paper does not describe (the paper's
 // structure with other masses, lengths and PD gains): the gains read from the data, the
 // warnings given gains the data contradict call for, and output-error refused without ref.
-#include "manipid/core/controller_gains.h"
-#include "manipid/core/identification.h"
-#include "manipid/core/presets.h"
+#include "manipid/core/paper/controller_gains.h"
+#include "manipid/core/paper/identification.h"
+#include "manipid/core/paper/presets.h"
 
 #include <gtest/gtest.h>
 

@@ -1,6 +1,6 @@
 // regressor_test.cpp — the linear-in-products form τ = Y β(θ) against inverse dynamics,
 // the products' structure for the paper's robot, and ∂β/∂θ against finite differences.
-#include "manipid/core/regressor.h"
+#include "manipid/core/paper/regressor.h"
 #include "test_models.h"
 
 #include <gtest/gtest.h>

@@ -1,8 +1,8 @@
 // resample_test.cpp — logged data made uniform: stale repeats, jittery steps, gaps and trimming
 // (resample.h), against signals whose values at any time are known.
-#include "manipid/core/resample.h"
+#include "manipid/core/signal/resample.h"
 
-#include "manipid/core/model.h"
+#include "manipid/core/errors.h"
 
 #include <gtest/gtest.h>
 

@@ -1,12 +1,12 @@
 // simulation_test.cpp — the paper's pre-filtered step reference, its interpolation, the
 // closed-loop simulation (against a closed form and against the model's static balance),
 // measurement noise, and the validation of trajectories and settings.
-#include "manipid/core/resample.h"
-#include "manipid/core/simulation.h"
+#include "manipid/core/signal/resample.h"
+#include "manipid/core/paper/simulation.h"
 
-#include "manipid/core/dynamics.h"
-#include "manipid/core/presets.h"
-#include "manipid/core/trajectory.h"
+#include "manipid/core/paper/dynamics.h"
+#include "manipid/core/paper/presets.h"
+#include "manipid/core/signal/trajectory.h"
 #include "input_error_expectations.h"
 
 #include <gtest/gtest.h>

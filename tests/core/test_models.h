@@ -3,8 +3,8 @@
 // every branch of the kinematics.
 #pragma once
 
-#include "manipid/core/model.h"
-#include "manipid/core/presets.h"
+#include "manipid/core/paper/model.h"
+#include "manipid/core/paper/presets.h"
 
 #include <Eigen/Core>
 

@@ -6,7 +6,7 @@
 #include "manipid/api/csv.h"
 #include "manipid/api/problem.h"
 #include "manipid/api/requests.h"
-#include "manipid/core/model.h"
+#include "manipid/core/errors.h"
 
 #include <algorithm>
 #include <cstddef>

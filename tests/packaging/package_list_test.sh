@@ -251,7 +251,7 @@ else
   echo "skip  ldd coverage (no binary given)"
 fi
 # Loaded with dlopen on first use, so ldd does not list them: libpq when PostgreSQL is first
-# used (server/store/postgres/libpq.h), FFTW when a long filter is (core/src/fftw.h).
+# used (server/store/postgres/libpq.h), FFTW when a long filter is (core/src/signal/fftw.h).
 for loaded in "libpq5 libpq.so.5" "libfftw3-double3 libfftw3.so.3"; do
   read -r package library <<<"$loaded"
   if grep -qx "$package" <<<"$runtime"; then

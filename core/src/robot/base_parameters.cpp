@@ -1,7 +1,7 @@
 // base_parameters.cpp — structural base parameters from random states (robot/base_parameters.h).
 #include "manipid/core/robot/base_parameters.h"
 
-#include "manipid/core/model.h"
+#include "manipid/core/errors.h"
 #include "manipid/core/robot/data.h"
 #include "manipid/core/robot/regressor.h"
 

@@ -1,9 +1,9 @@
 // consistency.cpp — consistency checks of standard parameters and the projection onto the consistent set.
 #include "manipid/core/robot/consistency.h"
 
-#include "inertia_internal.h"
-#include "manipid/core/model.h"
-#include "../numbers.h"
+#include "robot/inertia_internal.h"
+#include "manipid/core/errors.h"
+#include "numbers.h"
 
 #include <Eigen/Eigenvalues>
 

@@ -17,10 +17,10 @@
 // O(p²·10 + p³/3) and never touches the samples.
 #include "manipid/core/robot/consistent_fit.h"
 
-#include "inertia_internal.h"
-#include "manipid/core/model.h"
+#include "robot/inertia_internal.h"
+#include "manipid/core/errors.h"
 #include "manipid/core/robot/log_cholesky.h"
-#include "../numbers.h"
+#include "numbers.h"
 
 #include <Eigen/Cholesky>
 #include <Eigen/Eigenvalues>

@@ -28,12 +28,12 @@
 // n (2L − 1) coordinates, restarted from its best point while budget remains. See design_excitation().
 #include "manipid/core/robot/excitation.h"
 
-#include "manipid/core/model.h"
+#include "manipid/core/errors.h"
 #include "manipid/core/robot/base_parameters.h"
 #include "manipid/core/robot/data.h"
 #include "manipid/core/robot/regressor.h"
-#include "manipid/core/trajectory.h"
-#include "../numbers.h"
+#include "manipid/core/signal/trajectory.h"
+#include "numbers.h"
 
 #include <Eigen/Eigenvalues>
 #include <Eigen/QR>

@@ -2,7 +2,7 @@
 // the torque, decimated to the band (robot/filtered_regressor.h).
 #include "manipid/core/robot/filtered_regressor.h"
 
-#include "manipid/core/model.h"
+#include "manipid/core/errors.h"
 #include "manipid/core/robot/data.h"
 #include "manipid/core/robot/regressor.h"
 #include "manipid/core/robot/rnea.h"

@@ -1,7 +1,7 @@
 // forward_pass.h — the outward kinematic sweep shared by the RNEA and the regressor (not installed).
 #pragma once
 
-#include "manipid/core/model.h"
+#include "manipid/core/errors.h"
 #include "manipid/core/robot/data.h"
 #include "manipid/core/robot/model.h"
 

@@ -2,7 +2,7 @@
 // (robot/identification.h).
 #include "manipid/core/robot/identification.h"
 
-#include "manipid/core/model.h"
+#include "manipid/core/errors.h"
 
 #include <Eigen/QR>
 #include <unsupported/Eigen/FFT>

@@ -1,9 +1,9 @@
 // log_cholesky.cpp — Rucker & Wensing's log-Cholesky map θ ↔ π and its exact Jacobian.
 #include "manipid/core/robot/log_cholesky.h"
 
-#include "inertia_internal.h"
-#include "manipid/core/model.h"
-#include "../numbers.h"
+#include "robot/inertia_internal.h"
+#include "manipid/core/errors.h"
+#include "numbers.h"
 
 #include <cmath>
 #include <sstream>

@@ -2,7 +2,7 @@
 #include "manipid/core/robot/data.h"
 #include "manipid/core/robot/model.h"
 
-#include "skew.h"
+#include "robot/skew.h"
 
 #include <cmath>
 

@@ -1,9 +1,9 @@
 // regressor.cpp — Y(q, q̇, q̈) with τ = Y π, for one sample and stacked over many (robot/regressor.h).
 #include "manipid/core/robot/regressor.h"
 
-#include "forward_pass.h"
+#include "robot/forward_pass.h"
 #include "manipid/core/robot/rnea.h"
-#include "skew.h"
+#include "robot/skew.h"
 
 namespace manipid::robot {
 namespace {

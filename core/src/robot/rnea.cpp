@@ -1,7 +1,7 @@
 // rnea.cpp — recursive Newton–Euler inverse dynamics in the standard parameters (robot/rnea.h).
 #include "manipid/core/robot/rnea.h"
 
-#include "forward_pass.h"
+#include "robot/forward_pass.h"
 
 namespace manipid::robot {
 namespace {

@@ -1,7 +1,7 @@
 // urdf.cpp — URDF text → robot::Model: urdfdom parses; chain, merging and checks here (robot/urdf.h).
 #include "manipid/core/robot/urdf.h"
 
-#include "manipid/core/model.h"
+#include "manipid/core/errors.h"
 
 #include <console_bridge/console.h>
 #include <urdf_parser/urdf_parser.h>

@@ -1,7 +1,7 @@
 // urdf_writer.cpp — identified parameters written into the URDF document with TinyXML (robot/urdf_writer.h).
 #include "manipid/core/robot/urdf_writer.h"
 
-#include "manipid/core/model.h"
+#include "manipid/core/errors.h"
 
 #include <Eigen/Eigenvalues>
 #include <tinyxml.h>

@@ -1,7 +1,7 @@
 // consistency_test.cpp — the consistency report on textbook solids and each classic violation; the projection.
 #include "manipid/core/robot/consistency.h"
 
-#include "manipid/core/model.h"
+#include "manipid/core/errors.h"
 #include "rigid_bodies.h"
 #include "../input_error_expectations.h"
 

@@ -1,7 +1,7 @@
 // consistent_fit_test.cpp — the constrained fit: exact recovery, repair, the null space, bounds, cancel, bad input.
 #include "manipid/core/robot/consistent_fit.h"
 
-#include "manipid/core/model.h"
+#include "manipid/core/errors.h"
 #include "manipid/core/robot/log_cholesky.h"
 #include "rigid_bodies.h"
 #include "../input_error_expectations.h"

@@ -1,7 +1,7 @@
 // excitation_test.cpp — Fourier excitation trajectories: the series and its derivatives, rest at both ends,
 // periodicity, the limits after design, the criterion against an independent computation, improvement over
 // the start and over a naive sinusoid, determinism, cancellation and budgets, and the option checks.
-#include "manipid/core/model.h"
+#include "manipid/core/errors.h"
 #include "manipid/core/robot/base_parameters.h"
 #include "manipid/core/robot/excitation.h"
 #include "manipid/core/robot/regressor.h"

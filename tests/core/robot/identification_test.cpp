@@ -3,7 +3,7 @@
 // flange and 7 joints, friction kept apart, honest standard errors, validation, and refusals.
 #include "manipid/core/robot/identification.h"
 
-#include "manipid/core/model.h"
+#include "manipid/core/errors.h"
 #include "manipid/core/robot/base_parameters.h"
 #include "manipid/core/robot/excitation.h"
 #include "manipid/core/robot/regressor.h"

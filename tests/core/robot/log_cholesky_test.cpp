@@ -1,7 +1,7 @@
 // log_cholesky_test.cpp — θ ↔ π round trips, every θ consistent, the header's formulas, the Jacobian.
 #include "manipid/core/robot/log_cholesky.h"
 
-#include "manipid/core/model.h"
+#include "manipid/core/errors.h"
 #include "rigid_bodies.h"
 
 #include <gtest/gtest.h>

@@ -1,5 +1,5 @@
 // regressor_test.cpp — τ = Y π against the RNEA, the stacked layout, π's order and names, the URDF's own π.
-#include "manipid/core/model.h"
+#include "manipid/core/errors.h"
 #include "manipid/core/robot/regressor.h"
 #include "manipid/core/robot/rnea.h"
 #include "manipid/core/robot/urdf.h"

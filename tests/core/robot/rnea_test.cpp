@@ -1,5 +1,5 @@
 // rnea_test.cpp — the robot RNEA against closed forms, friction terms and sign(0) = 0, M's symmetry, sizes.
-#include "manipid/core/model.h"
+#include "manipid/core/errors.h"
 #include "manipid/core/robot/rnea.h"
 #include "manipid/core/robot/urdf.h"
 #include "robot_test_support.h"

@@ -1,5 +1,5 @@
 // urdf_test.cpp — URDF → robot::Model: conventions, merging, chain selection, every refusal and warning.
-#include "manipid/core/model.h"
+#include "manipid/core/errors.h"
 #include "manipid/core/robot/parameters.h"
 #include "manipid/core/robot/rnea.h"
 #include "manipid/core/robot/urdf.h"

@@ -2,7 +2,7 @@
 // everything else in the document kept, and what a URDF cannot hold refused.
 #include "manipid/core/robot/urdf_writer.h"
 
-#include "manipid/core/model.h"
+#include "manipid/core/errors.h"
 #include "manipid/core/robot/rnea.h"
 #include "robot_test_support.h"
 

@@ -9,8 +9,8 @@
 #pragma once
 
 #include "manipid/api/limits.h"
-#include "manipid/core/model.h"
-#include "manipid/core/trajectory.h"
+#include "manipid/core/errors.h"
+#include "manipid/core/signal/trajectory.h"
 
 #include <Eigen/Core>
 

@@ -7,7 +7,7 @@
 #pragma once
 
 #include "manipid/core/robot/model.h"
-#include "manipid/core/trajectory.h"
+#include "manipid/core/signal/trajectory.h"
 
 #include <nlohmann/json.hpp>
 

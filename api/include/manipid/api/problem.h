@@ -6,7 +6,7 @@
 // offending input ("q3", "initial.m2", "half_length", "body") whenever there is one.
 #pragma once
 
-#include "manipid/core/model.h"
+#include "manipid/core/errors.h"
 
 #include <nlohmann/json.hpp>
 

@@ -9,10 +9,10 @@
 // The exact shapes are documented in api/openapi.yaml.
 #pragma once
 
-#include "manipid/core/identification.h"
-#include "manipid/core/presets.h"
-#include "manipid/core/simulation.h"
-#include "manipid/core/trajectory.h"
+#include "manipid/core/paper/identification.h"
+#include "manipid/core/paper/presets.h"
+#include "manipid/core/paper/simulation.h"
+#include "manipid/core/signal/trajectory.h"
 
 #include <nlohmann/json.hpp>
 

@@ -3,7 +3,7 @@
 #pragma once
 
 #include "manipid/api/records.h"
-#include "manipid/core/presets.h"
+#include "manipid/core/paper/presets.h"
 
 #include <nlohmann/json.hpp>
 

@@ -29,7 +29,7 @@
 // nothing of the robot it came from, so no preset's values are shown beside its estimates.
 #pragma once
 
-#include "manipid/core/identification.h"
+#include "manipid/core/paper/identification.h"
 
 #include <nlohmann/json.hpp>
 

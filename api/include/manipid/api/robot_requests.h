@@ -2,7 +2,7 @@
 // front with fields named as in the body (as requests.h does for the paper's preset).
 #pragma once
 
-#include "manipid/core/resample.h"
+#include "manipid/core/signal/resample.h"
 #include "manipid/core/robot/excitation.h"
 #include "manipid/core/robot/identification.h"
 #include "manipid/core/robot/model.h"

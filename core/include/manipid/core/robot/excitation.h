@@ -41,7 +41,7 @@
 
 #include "manipid/core/robot/model.h"
 #include "manipid/core/robot/parameters.h"
-#include "manipid/core/trajectory.h"
+#include "manipid/core/signal/trajectory.h"
 
 #include <Eigen/Core>
 

@@ -24,10 +24,10 @@
 // samples.
 #pragma once
 
-#include "manipid/core/filters.h"
+#include "manipid/core/signal/filters.h"
 #include "manipid/core/robot/model.h"
 #include "manipid/core/robot/parameters.h"
-#include "manipid/core/trajectory.h"
+#include "manipid/core/signal/trajectory.h"
 
 #include <Eigen/Core>
 

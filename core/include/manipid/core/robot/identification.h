@@ -28,15 +28,15 @@
 //      least-squares point) replaces `point` and the base estimates, and reports the cost it adds.
 #pragma once
 
-#include "manipid/core/filters.h"
-#include "manipid/core/resample.h"
+#include "manipid/core/signal/filters.h"
+#include "manipid/core/signal/resample.h"
 #include "manipid/core/robot/base_parameters.h"
 #include "manipid/core/robot/consistency.h"
 #include "manipid/core/robot/consistent_fit.h"
 #include "manipid/core/robot/filtered_regressor.h"
 #include "manipid/core/robot/model.h"
 #include "manipid/core/robot/parameters.h"
-#include "manipid/core/trajectory.h"
+#include "manipid/core/signal/trajectory.h"
 
 #include <Eigen/Core>
 

@@ -1,6 +1,6 @@
 // model.h — a rigid-body serial robot as a constant model: joints, bodies, standard inertial parameters.
 //
-// The `robot` family sits beside the paper's point-mass chain (manipid/core/model.h): any serial arm
+// The `robot` family sits beside the paper's point-mass chain (manipid/core/paper/model.h): any serial arm
 // described by a URDF (robot/urdf.h), with recursive Newton–Euler inverse dynamics (robot/rnea.h) and a
 // regressor linear in the standard parameters (robot/regressor.h).
 //

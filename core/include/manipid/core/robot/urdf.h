@@ -19,7 +19,7 @@
 // about 2·z" has no other sensible meaning; KDL does the same) and a warning says so when its norm is off
 // by more than 1e-6; a zero axis is an error.
 //
-// Errors: InputError (manipid/core/model.h), one line, whose field() names the element at fault —
+// Errors: InputError (manipid/core/errors.h), one line, whose field() names the element at fault —
 // "joint panda_joint3", "link link4" — or the option ("base", "tip", "gravity"); "urdf" when urdfdom
 // names no element. urdfdom reports through console_bridge; while parsing, its messages are captured
 // (under a process-wide lock) instead of printed, and any error it logs refuses the document, even one it
