@@ -54,8 +54,9 @@ JobShape robot_identification_shape(const nlohmann::json& request, const Dataset
   JobShape shape;
   shape.field = "dataset_id";
   const double dt = spec.options.preparation.uniform.dt;
-  for (const std::string& id : {spec.dataset_id, spec.validation_dataset_id}) {
-    if (id.empty()) continue;
+  std::vector<std::string> ids = spec.dataset_ids;
+  ids.insert(ids.end(), spec.validation_dataset_ids.begin(), spec.validation_dataset_ids.end());
+  for (const std::string& id : ids) {
     const auto dataset = datasets(id);
     if (!dataset) continue;
     shape.joints = std::max(shape.joints, dataset->joints);

@@ -5,11 +5,13 @@
 #include "manipid/api/records.h"
 #include "manipid/api/requests.h"
 #include "manipid/api/robot_requests.h"
-#include "manipid/core/robot/filtered_regressor.h"
+#include "manipid/api/robot_json.h"
+#include "manipid/core/robot/prediction.h"
 #include "manipid/core/robot/parameters.h"
 #include "manipid/core/paper/input_error.h"
 #include "manipid/core/signal/resample.h"
 
+#include <algorithm>
 #include <cmath>
 
 namespace manipid::api {
@@ -165,16 +167,42 @@ nlohmann::ordered_json torque_fit_to_json(const std::string& request_json, const
 
 namespace {
 
-FilterSettings stored_filter(const nlohmann::json& filters, const char* which) {
-  if (!filters.contains(which) || !filters[which].is_object()) {
-    throw InputError("result", std::string("the job's result has no ") + which + " filter");
+/// What the plots need of a stored robot identification result: its layout, point, prior, judge, joints and
+/// period. Throws InputError("result") when the result lacks one of them.
+struct StoredRobotResult {
+  robot::ParameterLayout layout;
+  Eigen::VectorXd point, prior;
+  JudgeOptions judge;
+  std::vector<int> joints;
+  double dt = 0.0;
+};
+
+StoredRobotResult decode_robot_result(const robot::Model& model, const nlohmann::json& result) {
+  for (const char* key : {"parameters", "point", "judge", "filters", "torque_joints"}) {
+    if (!result.contains(key)) throw InputError("result", std::string("the job's result has no ") + key);
   }
-  const std::string where = std::string("filters.") + which + ".";
-  FilterSettings filter;
-  filter.half_length = static_cast<int>(stored_number(filters[which], "half_length", where));
-  filter.band = stored_number(filters[which], "band", where);
-  filter.dt = stored_number(filters[which], "dt", where);
-  return filter;
+  StoredRobotResult stored;
+  std::vector<std::string> terms = result["parameters"].at("friction").get<std::vector<std::string>>();
+  if (terms.empty()) terms.emplace_back("none");
+  parse_friction(terms, stored.layout, "result");
+  stored.layout.armature = result["parameters"].at("armature").get<bool>();
+  const std::vector<std::string> names = robot::standard_parameter_names(model, stored.layout);
+  stored.point.resize(static_cast<Eigen::Index>(names.size()));
+  stored.prior = Eigen::VectorXd::Zero(stored.point.size());
+  for (std::size_t i = 0; i < names.size(); ++i) {
+    stored.point[static_cast<Eigen::Index>(i)] = stored_number(result["point"], names[i].c_str(), "point.");
+    if (result.contains("prior")) stored.prior[static_cast<Eigen::Index>(i)] = stored_number(result["prior"], names[i].c_str(), "prior.");
+  }
+  stored.judge.cutoff_hz = stored_number(result["judge"], "cutoff_hz", "judge.");
+  stored.judge.trim_seconds = stored_number(result["judge"], "trim_seconds", "judge.");
+  stored.dt = stored_number(result["filters"].at("differentiation"), "dt", "filters.differentiation.");
+  for (const auto& name : result["torque_joints"]) {
+    const auto found = std::find_if(model.joints.begin(), model.joints.end(),
+                                    [&](const robot::Joint& joint) { return joint.name == name.get<std::string>(); });
+    if (found == model.joints.end()) throw InputError("result", "the job's result names a joint the robot does not have");
+    stored.joints.push_back(static_cast<int>(found - model.joints.begin()));
+  }
+  return stored;
 }
 
 }  // namespace
@@ -183,31 +211,20 @@ nlohmann::ordered_json robot_fit_to_json(const robot::Model& model, const std::s
                                          const std::string& result_json, const Trajectory& stored, long max_points,
                                          bool prior) {
   const RobotIdentificationSpec spec = robot_identification_from_json(nlohmann::json::parse(request_json));
-  const nlohmann::json result = nlohmann::json::parse(result_json);
-  if (!result.contains("filters") || !result["filters"].is_object() || !result.contains("point")) {
-    throw InputError("result", "the job's result has no filters or point");
-  }
-  const robot::FilterPair filters{stored_filter(result["filters"], "differentiation"),
-                                  stored_filter(result["filters"], "comparison")};
-  const robot::ParameterLayout& layout = spec.options.layout;
-  const std::vector<std::string> names = robot::standard_parameter_names(model, layout);
-  Eigen::VectorXd point(static_cast<Eigen::Index>(names.size())), urdf(point.size());
-  for (std::size_t i = 0; i < names.size(); ++i) {
-    point[static_cast<Eigen::Index>(i)] = stored_number(result["point"], names[i].c_str(), "point.");
-    urdf[static_cast<Eigen::Index>(i)] = result.contains("prior") ? stored_number(result["prior"], names[i].c_str(), "prior.") : 0.0;
-  }
+  const StoredRobotResult result = decode_robot_result(model, nlohmann::json::parse(result_json));
   // The samples the identification saw: trimmed, and on its grid.
   DataPreparation preparation = spec.options.preparation;
-  preparation.uniform.dt = filters.differentiation.dt;
+  preparation.uniform.dt = result.dt;
   std::optional<Trajectory> prepared;
   const Trajectory& data = prepare_data(stored, preparation, prepared);
-  const robot::TorquePrediction fit = robot::predict_torque(model, layout, point, data, filters);
+  const robot::TorquePrediction fit = robot::predict_torque(model, result.layout, result.point, data, result.judge, result.joints);
   const std::vector<long> indices = plot_indices(fit.t.size(), max_points);
   Json joints = Json::array();
   for (Eigen::Index j = 0; j < fit.model.cols(); ++j) {
+    const int k = fit.joints[static_cast<std::size_t>(j)];
     const Eigen::VectorXd residual = fit.model.col(j) - fit.measured.col(j);
-    joints.push_back({{"joint", j + 1},
-                      {"name", model.joints[static_cast<std::size_t>(j)].name},
+    joints.push_back({{"joint", k + 1},
+                      {"name", model.joints[static_cast<std::size_t>(k)].name},
                       {"measured", pick(fit.measured.col(j), indices)},
                       {"model", pick(fit.model.col(j), indices)},
                       {"residual", pick(residual, indices)},
@@ -215,16 +232,17 @@ nlohmann::ordered_json robot_fit_to_json(const robot::Model& model, const std::s
                       {"rms_residual", number(rms(residual))},
                       {"relative_error", number(fit.relative_error[j])}});
   }
-  const auto filter_json = [](const FilterSettings& filter) {
-    return Json{{"half_length", filter.half_length}, {"band", filter.band}, {"dt", filter.dt}};
-  };
-  Json json = {{"filters", {{"differentiation", filter_json(filters.differentiation)}, {"comparison", filter_json(filters.comparison)}}},
+  Json json = {{"judge",
+                {{"lowpass", "zero-phase Butterworth, order 4"},
+                 {"cutoff_hz", number(result.judge.cutoff_hz)},
+                 {"trim_seconds", number(result.judge.trim_seconds)}}},
                {"samples", fit.t.size()},
                {"t", pick(fit.t, indices)},
                {"joints", joints},
                {"overall_relative_error", number(fit.overall_relative_error)}};
   if (prior) {
-    const robot::TorquePrediction by_urdf = robot::predict_torque(model, layout, urdf, data, filters);
+    const robot::TorquePrediction by_urdf =
+        robot::predict_torque(model, result.layout, result.prior, data, result.judge, result.joints);
     Json errors = Json::array();
     for (Eigen::Index j = 0; j < by_urdf.relative_error.size(); ++j) errors.push_back(number(by_urdf.relative_error[j]));
     json["prior"] = {{"relative_error", errors}, {"overall_relative_error", number(by_urdf.overall_relative_error)}};

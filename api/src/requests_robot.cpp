@@ -94,6 +94,36 @@ ParsedRobot parse_robot(const RobotUpload& upload) {
 
 bool names_a_robot(const nlohmann::json& body) { return body.is_object() && body.contains("robot_id"); }
 
+namespace {
+
+/// "auto" → `automatic`, else a positive number (in `unit`) up to `largest`.
+double number_or_auto(const fields::Json& value, const std::string& field, double automatic, double largest,
+                      const char* unit) {
+  if (value.is_string() && value.get_ref<const std::string&>() == "auto") return automatic;
+  if (value.is_number()) return fields::read_positive(value, field, largest, unit);
+  throw InputError(field, field + " must be \"auto\" or a positive number" + unit + ", got " + fields::describe(value));
+}
+
+/// One id or an array of ids (at most `most`), from `single` or `plural` (not both).
+std::vector<std::string> read_ids(const fields::ObjectFields& object, const std::string& single, const std::string& plural,
+                                  std::size_t most) {
+  const fields::Json* one = object.find(single);
+  const fields::Json* many = object.find(plural);
+  if (one && many) throw InputError(plural, "give " + single + " or " + plural + ", not both");
+  std::vector<std::string> ids;
+  if (one) ids.push_back(read_id(*one, single));
+  if (many) {
+    if (!many->is_array() || many->empty() || many->size() > most) {
+      throw InputError(plural, plural + " must be an array of 1 to " + std::to_string(most) + " dataset ids, got " +
+                                   fields::describe(*many));
+    }
+    for (std::size_t i = 0; i < many->size(); ++i) ids.push_back(read_id((*many)[i], fields::element_path(plural, i)));
+  }
+  return ids;
+}
+
+}  // namespace
+
 RobotIdentificationSpec robot_identification_from_json(const nlohmann::json& body) {
   // The preset's options, named so the refusal can say why rather than "unknown key".
   static const std::vector<std::string> preset_only = {
@@ -105,25 +135,45 @@ RobotIdentificationSpec robot_identification_from_json(const nlohmann::json& bod
       if (body.contains(key)) {
         throw InputError(key, key + " belongs to the paper's preset model; a URDF robot (robot_id) is identified by "
                                     "linear input-error: its options are friction, armature, physical, trim, dt, the "
-                                    "filters and weights");
+                                    "filters, ridge, judge_cutoff, judge_trim, torque_joints and weights");
+      }
+    }
+    for (const char* key : {"comparison_half_length", "comparison_band"}) {
+      if (body.contains(key)) {
+        throw InputError(key, std::string(key) + " no longer exists: the comparison low-pass is a zero-phase Butterworth "
+                                                 "filter, set by comparison_cutoff (Hz, or \"auto\": chosen by held-out "
+                                                 "prediction)");
       }
     }
   }
   const fields::ObjectFields object(body, "",
-                                    {"robot_id", "dataset_id", "validation_dataset_id", "friction", "armature", "physical",
-                                     "trim", "dt", "half_length", "band", "comparison_half_length", "comparison_band",
-                                     "weights"});
+                                    {"robot_id", "dataset_id", "dataset_ids", "validation_dataset_id",
+                                     "validation_dataset_ids", "friction", "armature", "physical", "trim", "dt",
+                                     "half_length", "band", "comparison_cutoff", "ridge", "judge_cutoff", "judge_trim",
+                                     "torque_joints", "weights"});
   RobotIdentificationSpec spec;
   const fields::Json* robot_id = object.find("robot_id");
   spec.robot_id = read_id(*robot_id, "robot_id");
-  const fields::Json* dataset_id = object.find("dataset_id");
-  if (!dataset_id) throw InputError("dataset_id", "missing dataset_id: the measured run to identify from");
-  spec.dataset_id = read_id(*dataset_id, "dataset_id");
-  if (const fields::Json* validation = object.find("validation_dataset_id")) {
-    spec.validation_dataset_id = read_id(*validation, "validation_dataset_id");
+  spec.dataset_ids = read_ids(object, "dataset_id", "dataset_ids", kMostRuns);
+  if (spec.dataset_ids.empty()) {
+    throw InputError("dataset_id", "missing dataset_id (or dataset_ids): the measured run(s) to identify from");
   }
+  spec.dataset_id = spec.dataset_ids.front();
+  spec.validation_dataset_ids = read_ids(object, "validation_dataset_id", "validation_dataset_ids", kMostRuns);
+  if (!spec.validation_dataset_ids.empty()) spec.validation_dataset_id = spec.validation_dataset_ids.front();
   robot::IdentificationOptions& options = spec.options;
-  read_layout(object, options.layout);
+  // Friction: "auto" (the default: chosen by held-out prediction) or the terms.
+  const fields::Json* friction = object.find("friction");
+  if (!friction || (friction->is_string() && friction->get_ref<const std::string&>() == "auto")) {
+    options.friction_auto = true;
+    options.layout.viscous = options.layout.coulomb = options.layout.offset = true;
+    if (const fields::Json* armature = object.find("armature")) {
+      if (!armature->is_boolean()) throw InputError("armature", "armature must be true or false, got " + fields::describe(*armature));
+      options.layout.armature = armature->get<bool>();
+    }
+  } else {
+    read_layout(object, options.layout);
+  }
   if (const fields::Json* physical = object.find("physical")) {
     if (!physical->is_boolean()) throw InputError("physical", "physical must be true or false, got " + fields::describe(*physical));
     spec.physical = physical->get<bool>();
@@ -144,16 +194,34 @@ RobotIdentificationSpec robot_identification_from_json(const nlohmann::json& bod
   }
   if (const fields::Json* value = object.find("half_length")) options.half_length = half_length_field(*value, "half_length");
   if (const fields::Json* value = object.find("band")) options.band = band_field(*value, "band");
-  if (const fields::Json* value = object.find("comparison_half_length")) {
-    options.comparison_half_length = half_length_field(*value, "comparison_half_length");
-  }
-  if (const fields::Json* value = object.find("comparison_band")) options.comparison_band = band_field(*value, "comparison_band");
   if ((options.half_length > 0) != (options.band > 0.0)) {
     throw InputError(options.band > 0.0 ? "half_length" : "band", "give half_length and band together, or neither");
   }
-  if ((options.comparison_half_length > 0) != (options.comparison_band > 0.0)) {
-    throw InputError(options.comparison_band > 0.0 ? "comparison_half_length" : "comparison_band",
-                     "give comparison_half_length and comparison_band together, or neither");
+  if (const fields::Json* value = object.find("comparison_cutoff")) {
+    options.comparison_cutoff_hz = number_or_auto(*value, "comparison_cutoff", 0.0, 1e6, " Hz");
+  }
+  if (const fields::Json* value = object.find("ridge")) {
+    if (value->is_number() && value->get<double>() == 0.0) {
+      options.ridge = 0.0;
+    } else {
+      options.ridge = number_or_auto(*value, "ridge", -1.0, 1.0, "");
+    }
+  }
+  if (const fields::Json* value = object.find("judge_cutoff")) {
+    options.judge.cutoff_hz = fields::read_positive(*value, "judge_cutoff", 1e6, " Hz");
+  }
+  if (const fields::Json* value = object.find("judge_trim")) {
+    options.judge.trim_seconds = fields::read_non_negative(*value, "judge_trim");
+  }
+  if (const fields::Json* joints = object.find("torque_joints")) {
+    if (!joints->is_array() || joints->empty()) {
+      throw InputError("torque_joints", "torque_joints must be an array of joint numbers (1-based), got " +
+                                            fields::describe(*joints));
+    }
+    for (std::size_t i = 0; i < joints->size(); ++i) {
+      options.torque_joints.push_back(
+          static_cast<int>(fields::read_integer((*joints)[i], fields::element_path("torque_joints", i), 1, 1000)) - 1);
+    }
   }
   if (const fields::Json* weights = object.find("weights")) {
     options.weighting = fields::read_choice(*weights, "weights", {"unit", "per-joint"}) == "per-joint"
@@ -229,7 +297,7 @@ void check_excitation(const ExcitationSpec& spec, const robot::Model& model) {
 
 void check_robot_data(int robot_joints, const std::string& robot_name, int data_joints, bool has_torque,
                       const std::string& field) {
-  const std::string noun = field == "validation_dataset_id" ? "the validation dataset" : "the dataset";
+  const std::string noun = field.rfind("validation_dataset_id", 0) == 0 ? "the validation dataset" : "the dataset";
   if (data_joints != robot_joints) {
     throw InputError(field, noun + " has " + std::to_string(data_joints) + " joints, the robot " + robot_name + " has " +
                                 std::to_string(robot_joints));

@@ -32,6 +32,12 @@ Json prediction_json(const robot::TorquePrediction& prediction) {
           {"overall_relative_error", number(prediction.overall_relative_error)}};
 }
 
+Json judge_json(const JudgeOptions& judge) {
+  return {{"lowpass", "zero-phase Butterworth, order 4"},
+          {"cutoff_hz", number(judge.cutoff_hz)},
+          {"trim_seconds", number(judge.trim_seconds)}};
+}
+
 Json vector_json(const Eigen::VectorXd& v) {
   Json array = Json::array();
   for (Eigen::Index i = 0; i < v.size(); ++i) array.push_back(v[i]);  // ±∞ becomes null
@@ -103,11 +109,11 @@ void parse_friction(const std::vector<std::string>& terms, robot::ParameterLayou
   }
 }
 
-nlohmann::ordered_json robot_result_to_json(const robot::Model& model, const robot::ParameterLayout& layout,
-                                            const robot::IdentificationResult& result,
+nlohmann::ordered_json robot_result_to_json(const robot::Model& model, const robot::IdentificationResult& result,
                                             const robot::TorquePrediction& fit,
                                             const std::optional<robot::ValidationReport>& validation) {
   const int n = model.joint_count();
+  const robot::ParameterLayout& layout = result.layout;
   Json joints = Json::array();
   for (const robot::Joint& joint : model.joints) {
     joints.push_back({{"name", joint.name}, {"link", joint.link}, {"type", robot::to_string(joint.type)}});
@@ -125,7 +131,8 @@ nlohmann::ordered_json robot_result_to_json(const robot::Model& model, const rob
                     {"combination", combination},
                     {"estimate", number(estimate)},
                     {"std_error", number(error)},
-                    {"relative_std_error", number(estimate != 0.0 ? std::abs(error / estimate) : NAN)}});
+                    {"relative_std_error", number(estimate != 0.0 ? std::abs(error / estimate) : NAN)},
+                    {"data_share", number(result.data_share[i])}});
   }
   Json correlation = Json::array();
   for (Eigen::Index a = 0; a < result.correlation.rows(); ++a) correlation.push_back(numbers(result.correlation.row(a).transpose()));
@@ -138,6 +145,16 @@ nlohmann::ordered_json robot_result_to_json(const robot::Model& model, const rob
     if (layout.armature) entry["Ia"] = number(result.point[layout.armature_begin(n) + k]);
     friction.push_back(entry);
   }
+  Json torque_joints = Json::array();
+  for (int k : result.torque_joints) torque_joints.push_back(model.joints[static_cast<std::size_t>(k)].name);
+  Json candidates = Json::array();
+  for (const robot::CandidateScore& candidate : result.candidates) {
+    candidates.push_back({{"comparison_cutoff_hz", number(candidate.cutoff_hz)},
+                          {"friction", candidate.friction},
+                          {"ridge", number(candidate.ridge)},
+                          {"held_out_error", number(candidate.held_out_error)}});
+  }
+  const robot::FilterPair& filters = result.filters;
   Json json = {
       {"method", "input-error (linear least squares)"},
       {"robot", {{"name", model.name}, {"base_link", model.base_link}, {"tip_link", model.tip_link}, {"joints", joints}}},
@@ -151,15 +168,23 @@ nlohmann::ordered_json robot_result_to_json(const robot::Model& model, const rob
       {"unidentifiable", result.unidentifiable},
       {"friction", friction},
       {"filters",
-       {{"differentiation", filter_json(result.filters.differentiation)},
-        {"comparison", filter_json(result.filters.comparison)},
-        {"automatic", result.filters_chosen_automatically},
-        {"motion_band_hz", number(result.motion_band_hz)}}},
+       {{"differentiation", filter_json(filters.differentiation)},
+        {"comparison", {{"lowpass", "zero-phase Butterworth, order 4"}, {"cutoff_hz", number(filters.comparison_cutoff_hz)}}},
+        {"working_step", filters.working_step},
+        {"trim_seconds", number(filters.trim_seconds)}}},
+      {"selection",
+       {{"by_held_out", result.chosen_by_held_out},
+        {"ridge", number(result.ridge)},
+        {"held_out_error", number(result.held_out_error)},
+        {"candidates", candidates}}},
+      {"judge", judge_json(result.judge)},
+      {"torque_joints", torque_joints},
+      {"runs", result.runs},
       {"rows", result.rows},
-      {"decimation", result.decimation},
       {"fit",
        {{"residual_rms", numbers(result.residual_rms)},
         {"relative_error", numbers(fit.relative_error)},
+        {"rms_error", numbers(fit.rms_error)},
         {"overall_relative_error", number(fit.overall_relative_error)}}},
   };
   Json links_json = Json::array();

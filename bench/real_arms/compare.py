@@ -15,12 +15,12 @@ DATA = os.path.normpath(os.path.join(HERE, "../../../shared/real-robots"))
 MANIPID = os.path.normpath(os.path.join(HERE, "../../build/release/server/manipid"))
 WORK = "/tmp/real_arms"
 
-CASES = [  # name, URDF, training runs, held-out run, judged joints (0-based), manipid too
-    ("Panda", "panda/panda.urdf", ["panda/train.csv"], "panda/validation.csv", range(7), True),
-    ("KUKA LWR4+", "kuka/kuka_start.urdf", ["kuka/run2.csv"], "kuka/run1.csv", range(7), True),
-    ("Kinova Gen3 (j1-6)", "kinova/gen3_start.urdf", ["kinova/train.csv"], "kinova/validation.csv", range(6), True),
+CASES = [  # name, URDF, training runs, held-out run, judged joints (0-based)
+    ("Panda", "panda/panda.urdf", ["panda/train.csv"], "panda/validation.csv", range(7)),
+    ("KUKA LWR4+", "kuka/kuka_start.urdf", ["kuka/run2.csv"], "kuka/run1.csv", range(7)),
+    ("Kinova Gen3 (j1-6)", "kinova/gen3_start.urdf", ["kinova/train.csv"], "kinova/validation.csv", range(6)),
     ("Kinova Gen3 (j1-6), train+quadratic", "kinova/gen3_start.urdf", ["kinova/train.csv", "kinova/quadratic.csv"],
-     "kinova/validation.csv", range(6), False),
+     "kinova/validation.csv", range(6)),
 ]
 
 
@@ -68,7 +68,7 @@ def rnea_check(urdf, folder, count=300, seed=1):
     return errors
 
 
-def run_case(name, urdf, train, held_out, joints, with_manipid):
+def run_case(name, urdf, train, held_out, joints):
     folder = os.path.join(WORK, name.split()[0].lower() + ("_2runs" if len(train) > 1 else ""))
     os.makedirs(folder, exist_ok=True)
     urdf, train, held_out = os.path.join(DATA, urdf), [os.path.join(DATA, p) for p in train], os.path.join(DATA, held_out)
@@ -79,17 +79,21 @@ def run_case(name, urdf, train, held_out, joints, with_manipid):
     columns, beta = textbook.identify(robot, train, joints)
     row = {"arm": name, "base": len(columns), "textbook": judged(textbook.predict(robot, columns, beta, q, qd, qdd)),
            "prior": judged(robot.regressor(q, qd, qdd) @ robot.standard_parameters())}
-    if with_manipid:
-        states_csv, result = os.path.join(folder, "states.csv"), os.path.join(folder, "result.json")
-        judge.write_states(states_csv, t, q, qd, qdd)
-        identify = ["identify", train[0], "--robot", urdf, "--friction", "viscous,coulomb,offset", "--json"]
-        _, row["seconds"] = manipid(*identify, out=result)
-        validated, row["seconds_validate"] = manipid(*identify, "--validate", held_out)
+    states_csv = os.path.join(folder, "states.csv")
+    judge.write_states(states_csv, t, q, qd, qdd)
+    # The command (friction given), then manipid with every option at its default (friction chosen).
+    for key, friction in (("manipid", ["--friction", "viscous,coulomb,offset"]), ("manipid_auto", [])):
+        result = os.path.join(folder, key + ".json")
+        identify = ["identify", *train, "--robot", urdf, *friction, "--json"]
+        _, row[key + "_seconds"] = manipid(*identify, out=result)
+        validated, _ = manipid(*identify, "--validate", held_out)
         with open(result) as f:
             estimate = json.load(f)
-        row["manipid_base"] = len(estimate["base_parameters"])
-        row["manipid"] = judged(manipid_torque(urdf, states_csv, result))
-        row["manipid_validate"] = json.loads(validated)["validation"]["overall_relative_error"]
+        row[key + "_base"] = len(estimate["base_parameters"])
+        row[key] = judged(manipid_torque(urdf, states_csv, result))
+        row[key + "_validate"] = json.loads(validated)["validation"]["overall_relative_error"]
+        row[key + "_choice"] = (f"{estimate['filters']['comparison']['cutoff_hz']:g} Hz, ridge {estimate['selection']['ridge']:.2g}, "
+                                f"{','.join(estimate['parameters']['friction']) or 'none'}")
     return row
 
 
@@ -101,24 +105,27 @@ def main():
     parser = argparse.ArgumentParser(description="Textbook and manipid's default on the real arms, neutral judge.")
     parser.add_argument("--verbose", action="store_true", help="per-joint figures too")
     args = parser.parse_args()
+    if not os.path.isdir(DATA):
+        print(f"compare.py: {DATA} is absent (the shared real-robot logs): nothing to compare")
+        return
     os.makedirs(WORK, exist_ok=True)
     checks = {c[1]: rnea_check(os.path.join(DATA, c[1]), WORK) for c in CASES}
     rows = [run_case(*case) for case in CASES]
-    print("| arm | textbook | manipid default | manipid's own --validate | URDF prior | base columns: textbook / manipid | manipid identify, s |")
-    print("|---|---|---|---|---|---|---|")
+    print("| arm | textbook | manipid (friction v,c,o) | its own --validate | manipid default | its choice | URDF prior "
+          "| base columns: textbook / manipid | manipid identify, s |")
+    print("|---|---|---|---|---|---|---|---|---|")
     for r in rows:
-        m = r.get("manipid")
-        print(f"| {r['arm']} | {percent(r['textbook'][0])} | {percent(m[0] if m else None)} | "
-              f"{percent(r.get('manipid_validate'))} | {percent(r['prior'][0])} | {r['base']} / {r.get('manipid_base', '—')} | "
-              f"{'%.3f / %.3f' % (r['seconds'], r['seconds_validate']) if m else '—'} |")
+        print(f"| {r['arm']} | {percent(r['textbook'][0])} | {percent(r['manipid'][0])} | {percent(r['manipid_validate'])} | "
+              f"{percent(r['manipid_auto'][0])} | {r['manipid_auto_choice']} | {percent(r['prior'][0])} | "
+              f"{r['base']} / {r['manipid_base']} | {r['manipid_seconds']:.3f} / {r['manipid_auto_seconds']:.3f} |")
     print(f"\nJudge: {judge.CUTOFF:g} Hz zero-phase 4th-order Butterworth on both torques, {judge.TRIM:g} s trimmed at each end, "
-          "||pred - meas||_F / ||meas||_F over the judged joints. manipid identify times: without / with --validate.")
+          "||pred - meas||_F / ||meas||_F over the judged joints. manipid identify times: friction given / chosen.")
     print("RNEA check, largest |textbook regressor x parameters - manipid torque| over 300 random states "
           "(URDF's inertials + random friction; every parameter random): "
           + ", ".join(f"{os.path.basename(u)} {a:.1e} / {b:.1e} N·m" for u, (a, b) in checks.items()))
     if args.verbose:
         for r in rows:
-            for label in ("textbook", "manipid", "prior"):
+            for label in ("textbook", "manipid", "manipid_auto", "prior"):
                 if label in r:
                     print(f"\n{r['arm']}, {label}:\n{judge.report(*r[label], list(range(len(r[label][1]))))}")
 

@@ -325,6 +325,16 @@ void print_urdf_warnings(const UrdfRobotOptions& options, const robot::ParsedUrd
   }
 }
 
+std::vector<std::string> split_list(const std::string& text) {
+  std::vector<std::string> items;
+  std::stringstream stream(text);
+  std::string item;
+  while (std::getline(stream, item, ',')) {
+    if (!item.empty()) items.push_back(item);
+  }
+  return items;
+}
+
 robot::ParameterLayout parameter_layout(const std::string& friction, bool armature) {
   std::vector<std::string> terms;
   std::string term;

@@ -120,6 +120,8 @@ void add_urdf_options(CLI::App& command, UrdfRobotOptions& options, bool require
 robot::ParsedUrdf load_urdf_robot(const UrdfRobotOptions& options);
 /// The parser's warnings on stderr, one "manipid: warning: FILE: ..." line each.
 void print_urdf_warnings(const UrdfRobotOptions& options, const robot::ParsedUrdf& parsed);
+/// The items of a comma-separated list, empty items skipped: "a,,b" → {"a", "b"}.
+std::vector<std::string> split_list(const std::string& text);
 /// "viscous,coulomb,offset" (a list, "none" for no friction) and --armature → the parameter layout.
 robot::ParameterLayout parameter_layout(const std::string& friction, bool armature);
 

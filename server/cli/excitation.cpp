@@ -33,16 +33,6 @@ std::string excitation_option(const std::string& field, const std::string& urdf)
   return urdf;
 }
 
-std::vector<std::string> split_list(const std::string& text) {
-  std::vector<std::string> items;
-  std::stringstream stream(text);
-  std::string item;
-  while (std::getline(stream, item, ',')) {
-    if (!item.empty()) items.push_back(item);
-  }
-  return items;
-}
-
 Eigen::VectorXd parse_accelerations(const std::string& text) {
   const std::vector<std::string> items = split_list(text);
   if (items.empty()) throw InputError("max_acceleration", "--max-acceleration: expected A or A1,...,An in rad/s^2");

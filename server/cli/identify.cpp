@@ -15,16 +15,6 @@
 namespace manipid::server::cli {
 namespace {
 
-std::vector<std::string> split_list(const std::string& text) {
-  std::vector<std::string> items;
-  std::stringstream stream(text);
-  std::string item;
-  while (std::getline(stream, item, ',')) {
-    if (!item.empty()) items.push_back(item);
-  }
-  return items;
-}
-
 std::string list(const Eigen::VectorXd& values, int digits = 6, const char* unit = "") {
   std::string text = "(";
   for (Eigen::Index j = 0; j < values.size(); ++j) text += (j ? ", " : "") + format(values[j], digits) + unit;
@@ -120,7 +110,10 @@ CLI::App* add_identify_command(CLI::App& app, IdentifyOptions& options) {
       "identify",
       "Estimate a robot's parameters from a trajectory CSV (t,q1..qn,tau1..taun[,ref1..refn]) with "
       "the input-error method (default), output-error, or the two-stage method.");
-  command->add_option("data", options.input, "Trajectory CSV file, '-' for stdin")->required();
+  command->add_option("data", options.inputs,
+                      "Trajectory CSV file, '-' for stdin; with --robot, one or more runs (each filtered alone, then "
+                      "fitted together)")
+      ->required();
   command->add_option("--preset", options.preset, "Robot model")->capture_default_str();
   command->add_option("--kinetic-energy", options.kinetic_energy,
                       "complete (default) or paper (the paper's simplified model)")
@@ -143,7 +136,9 @@ CLI::App* add_identify_command(CLI::App& app, IdentifyOptions& options) {
                       "PD gains Kp, comma-separated (default: estimated from the data's tau, q and ref; without tau, "
                       "the preset's)");
   command->add_option("--kd", options.kd, "PD gains Kd, comma-separated (default: as --kp)");
-  command->add_option("--half-length", options.half_length, "Filter half-length M, or 'auto'")->capture_default_str();
+  command->add_option("--half-length", options.half_length,
+                      "Filter half-length M, or 'auto' (with --robot: the differentiation filter's)")
+      ->capture_default_str();
   command->add_option("--band", options.band, "Filter band edge in rad/sample, or 'auto'")->capture_default_str();
   command->add_option("--torque-source", options.torque_source,
                       "auto (measured tau if present), measured, or reference (tau = Kp(r-q) - Kd qd)")
@@ -168,7 +163,9 @@ CLI::App* add_identify_command(CLI::App& app, IdentifyOptions& options) {
                                  "--torque-source", "--max-evaluations", "--max-seconds", "--history"}) {
     command->get_option(paper_only)->excludes(robot);
   }
-  command->add_option("--friction", options.friction, "With --robot: friction terms per joint, any of viscous,coulomb,offset, or none")
+  command->add_option("--friction", options.friction,
+                      "With --robot: friction terms per joint, any of viscous,coulomb,offset, none, or auto (chosen by "
+                      "held-out prediction among none, viscous, viscous+coulomb and viscous+coulomb+offset)")
       ->capture_default_str()
       ->needs(robot);
   command->add_flag("--armature", options.armature, "With --robot: estimate each joint's rotor inertia Ia (tau += Ia qdd)")
@@ -177,38 +174,61 @@ CLI::App* add_identify_command(CLI::App& app, IdentifyOptions& options) {
                     "With --robot: a physically consistent estimate (every link a real rigid body, friction >= 0)")
       ->needs(robot);
   command->add_option("--validate", options.validate,
-                      "With --robot: a second run's CSV to predict with the estimate (and with the URDF's values)")
+                      "With --robot: runs' CSVs to predict with the estimate (and with the URDF's values), judged under "
+                      "--judge-cutoff; repeat it for several runs")
+      ->expected(1)
+      ->take_all()
       ->needs(robot);
   command->add_option("--trim", options.trim, "With --robot: seconds dropped at the start and the end, START,END")
       ->needs(robot);
   command->add_option("--dt", options.dt, "With --robot: resample onto this period, s (default: the median time step)")
       ->check(positive_number())
       ->needs(robot);
-  command->add_option("--comparison-half-length", options.comparison_half_length,
-                      "With --robot: half-length of the low-pass applied to tau and the regressor alike, or 'auto'")
+  command->add_option("--comparison-cutoff", options.comparison_cutoff,
+                      "With --robot: the cut-off (Hz) of the zero-phase low-pass applied to tau and the regressor alike, or "
+                      "'auto' (chosen by held-out prediction)")
+      ->capture_default_str()
+      ->needs(robot);
+  command->add_option("--ridge", options.ridge,
+                      "With --robot: the relative ridge toward the URDF's values (0 = least squares), or 'auto' (chosen by "
+                      "held-out prediction)")
+      ->capture_default_str()
+      ->needs(robot);
+  command->add_option("--torque-joints", options.torque_joints,
+                      "With --robot: the joints with torque sensors, 1-based, e.g. 1-6 or 1,2,4 (default: every joint whose "
+                      "torque is not zero throughout)")
+      ->needs(robot);
+  command->add_option("--judge-cutoff", options.judge_cutoff,
+                      "With --robot: the cut-off (Hz) of the fixed low-pass every torque figure is judged under")
+      ->check(positive_number())
+      ->capture_default_str()
+      ->needs(robot);
+  command->add_option("--judge-trim", options.judge_trim, "With --robot: seconds the judge drops at each end of a run")
+      ->check(CLI::NonNegativeNumber)
       ->capture_default_str()
       ->needs(robot);
   command->add_option("--write-urdf", options.write_urdf,
                       "With --robot: write the estimate (its point) into a copy of the URDF: each link's <inertial>, each "
                       "joint's <dynamics>; everything else as it was")
       ->needs(robot);
-  command->add_option("--comparison-band", options.comparison_band,
-                      "With --robot: its band edge in rad/sample, or 'auto'")
-      ->capture_default_str()
-      ->needs(robot);
   return command;
 }
 
 int run_identify(const IdentifyOptions& options) {
   if (!options.urdf.urdf.empty()) return run_identify_robot(options);
+  if (options.inputs.size() != 1) {
+    throw UsageError("the paper's model is identified from one run; several runs (" + std::to_string(options.inputs.size()) +
+                     " given) are for a URDF robot (--robot)");
+  }
+  const std::string& input = options.inputs.front();
   const KineticEnergy energy = parse_kinetic_energy(options.kinetic_energy);
   const Preset preset = find_preset(options.preset, energy);
   const int n = preset.model.joint_count();
   Trajectory data;
   try {
-    data = api::trajectory_from_csv(read_table(options.input));
+    data = api::trajectory_from_csv(read_table(input));
   } catch (const InputError& error) {
-    rethrow_with_source(error, input_name(options.input));
+    rethrow_with_source(error, input_name(input));
   }
 
   IdentificationOptions identification;

@@ -13,7 +13,7 @@
 namespace manipid::server::cli {
 
 struct IdentifyOptions {
-  std::string input;
+  std::vector<std::string> inputs;   ///< one run; with --robot, one or more
   std::string preset = "cedro2009";
   std::string kinetic_energy = "complete";
   std::vector<std::string> free;     ///< comma lists of names
@@ -32,14 +32,17 @@ struct IdentifyOptions {
   bool json = false;
   // A URDF robot (--robot): linear input-error identification of its base parameters.
   UrdfRobotOptions urdf;
-  std::string friction = "viscous,coulomb";
+  std::string friction = "auto";     ///< "auto" (chosen by held-out prediction) or a list of terms
   bool armature = false;
   bool physical = false;
-  std::string validate;              ///< a second run's CSV, empty = none
+  std::vector<std::string> validate; ///< runs' CSVs judged with the estimate, none = no validation
   std::string trim;                  ///< "START,END" seconds dropped, empty = none
   double dt = 0.0;                   ///< resampling period, 0 = the median step
-  std::string comparison_half_length = "auto";
-  std::string comparison_band = "auto";
+  std::string comparison_cutoff = "auto";
+  std::string ridge = "auto";
+  std::string torque_joints;         ///< "1-6", "1,2,4"; empty = every joint with torque
+  double judge_cutoff = 5.0;
+  double judge_trim = 0.3;
   std::string write_urdf;            ///< write the estimate into a copy of the URDF, empty = none
 };
 CLI::App* add_identify_command(CLI::App& app, IdentifyOptions& options);

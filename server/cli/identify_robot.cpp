@@ -20,15 +20,22 @@ std::string percent(double value) { return std::isfinite(value) ? format(100.0 *
 
 std::string hertz(const FilterSettings& filter) { return format(filter.band / (2.0 * std::numbers::pi * filter.dt), 3) + " Hz"; }
 
-/// "auto" → 0, else an integer / a number (the option's name in errors).
-int half_length_option(const std::string& text, const std::string& option) {
-  return text == "auto" ? 0 : static_cast<int>(parse_integer_option(text, option, 2, 1'000'000));
+/// "auto" → `automatic`, else a number (the option's name in errors).
+double number_or_auto(const std::string& text, const std::string& option, double automatic) {
+  return text == "auto" ? automatic : parse_number_option(text, option);
 }
-double band_option(const std::string& text, const std::string& option) {
-  if (text == "auto") return 0.0;
-  const double band = parse_number_option(text, option);
-  if (!(band > 0.0 && band <= std::numbers::pi)) throw InputError(option, option + " must lie in (0, pi] rad/sample");
-  return band;
+
+/// "1-6", "1,2,4", "1-3,5" (1-based) → 0-based joint indices.
+std::vector<int> joint_list(const std::string& text, int n, const std::string& option) {
+  std::vector<int> joints;
+  for (const std::string& part : split_list(text)) {
+    const auto dash = part.find('-');
+    const long first = parse_integer_option(part.substr(0, dash), option, 1, n);
+    const long last = dash == std::string::npos ? first : parse_integer_option(part.substr(dash + 1), option, first, n);
+    for (long k = first; k <= last; ++k) joints.push_back(static_cast<int>(k - 1));
+  }
+  if (joints.empty()) throw InputError(option, option + " needs joint numbers, e.g. 1-6 or 1,2,4");
+  return joints;
 }
 
 Trajectory read_trajectory(const std::string& path) {
@@ -39,37 +46,55 @@ Trajectory read_trajectory(const std::string& path) {
   }
 }
 
-void print_prediction_row(const char* label, const robot::TorquePrediction& prediction) {
-  std::printf("  %-22s", label);
-  for (Eigen::Index k = 0; k < prediction.relative_error.size(); ++k) std::printf(" %8s", percent(prediction.relative_error[k]).c_str());
-  std::printf("   overall %s\n", percent(prediction.overall_relative_error).c_str());
+std::string names(const std::vector<std::string>& paths) {
+  std::string text;
+  for (const std::string& path : paths) text += (text.empty() ? "" : " + ") + input_name(path);
+  return text;
 }
 
-void print_table(const robot::Model& model, const robot::ParameterLayout& layout, const robot::IdentificationResult& result,
-                 const robot::TorquePrediction& fit, const std::optional<robot::ValidationReport>& validation,
-                 const std::string& data_name, const std::string& validation_name) {
+void print_prediction_rows(const char* label, const robot::TorquePrediction& prediction) {
+  std::printf("  %-22s", label);
+  for (Eigen::Index k = 0; k < prediction.relative_error.size(); ++k) std::printf(" %9s", percent(prediction.relative_error[k]).c_str());
+  std::printf("   overall %s\n", percent(prediction.overall_relative_error).c_str());
+  std::printf("  %-22s", "  (N m RMS)");
+  for (Eigen::Index k = 0; k < prediction.rms_error.size(); ++k) std::printf(" %9s", format(prediction.rms_error[k], 3).c_str());
+  std::printf("\n");
+}
+
+void print_table(const robot::Model& model, const robot::IdentificationResult& result, const robot::TorquePrediction& fit,
+                 const std::optional<robot::ValidationReport>& validation, const std::string& data_name,
+                 const std::string& validation_name) {
   const int n = model.joint_count();
-  std::string terms;
-  for (const std::string& term : api::friction_names(layout)) terms += (terms.empty() ? "" : ", ") + term;
+  const robot::ParameterLayout& layout = result.layout;
   std::printf("robot %s: %d joints (%s .. %s); friction per joint: %s%s\n", model.name.c_str(), n,
-              model.joints.front().name.c_str(), model.joints.back().name.c_str(), terms.empty() ? "none" : terms.c_str(),
+              model.joints.front().name.c_str(), model.joints.back().name.c_str(), robot::friction_text(layout).c_str(),
               layout.armature ? "; armature" : "");
   const robot::FilterPair& filters = result.filters;
-  std::printf("input-error, linear least squares on %s: %d rows (1 in %d filtered instants x %d joints), %d base parameters, "
-              "condition number %s\n",
-              data_name.c_str(), result.rows, result.decimation, n, result.base.size(), format(result.condition_number, 3).c_str());
-  std::printf("filters%s: differentiation M = %d, band %s rad/sample (%s); comparison M = %d, band %s rad/sample (%s)",
-              result.filters_chosen_automatically ? " (chosen from the data)" : "", filters.differentiation.half_length,
-              format(filters.differentiation.band, 4).c_str(), hertz(filters.differentiation).c_str(),
-              filters.comparison.half_length, format(filters.comparison.band, 4).c_str(), hertz(filters.comparison).c_str());
-  if (result.motion_band_hz > 0) std::printf("; motion band %s Hz", format(result.motion_band_hz, 3).c_str());
-  std::printf("\n\n%-60s %14s %12s %9s\n", "base parameter", "estimate", "std error", "rel std");
+  std::printf("input-error, linear least squares on %s: %d rows from %d joint%s, %d base parameters, condition number %s\n",
+              data_name.c_str(), result.rows, static_cast<int>(result.torque_joints.size()),
+              result.torque_joints.size() == 1 ? "" : "s", result.base.size(), format(result.condition_number, 3).c_str());
+  std::printf("filters: differentiation M = %d, band %s rad/sample (%s); comparison: zero-phase Butterworth at %s Hz; "
+              "ridge toward the URDF %s\n",
+              filters.differentiation.half_length, format(filters.differentiation.band, 4).c_str(),
+              hertz(filters.differentiation).c_str(), format(filters.comparison_cutoff_hz, 3).c_str(),
+              format(result.ridge, 3).c_str());
+  if (result.chosen_by_held_out) {
+    std::printf("chosen by held-out prediction (5-fold over time; relative error of the judge's low-passed torque):\n");
+    for (const robot::CandidateScore& candidate : result.candidates) {
+      const bool chosen = candidate.cutoff_hz == filters.comparison_cutoff_hz && candidate.friction == robot::friction_text(layout) &&
+                          candidate.ridge == result.ridge;
+      std::printf("  %s comparison %6s Hz, friction %-22s ridge %-8s held-out %s\n", chosen ? "*" : " ",
+                  format(candidate.cutoff_hz, 3).c_str(), candidate.friction.c_str(), format(candidate.ridge, 2).c_str(),
+                  percent(candidate.held_out_error).c_str());
+    }
+  }
+  std::printf("\n%-60s %14s %12s %9s %6s\n", "base parameter", "estimate", "std error", "rel std", "data");
   for (int i = 0; i < result.base.size(); ++i) {
     const double estimate = result.estimate[i], error = result.std_errors[i];
     std::string name = result.base.names[static_cast<std::size_t>(i)];
     if (name.size() > 60) name = name.substr(0, 57) + "...";
-    std::printf("%-60s %14s %12s %9s\n", name.c_str(), format(estimate).c_str(), format(error, 3).c_str(),
-                estimate != 0.0 ? percent(std::abs(error / estimate)).c_str() : "-");
+    std::printf("%-60s %14s %12s %9s %5.0f%%\n", name.c_str(), format(estimate).c_str(), format(error, 3).c_str(),
+                estimate != 0.0 ? percent(std::abs(error / estimate)).c_str() : "-", 100.0 * result.data_share[i]);
   }
   if (layout.viscous || layout.coulomb || layout.offset || layout.armature) {
     std::printf("\n%-24s %12s %12s %12s%s\n", "friction (point)", layout.viscous ? "fv" : "", layout.coulomb ? "fc" : "",
@@ -84,9 +109,9 @@ void print_table(const robot::Model& model, const robot::ParameterLayout& layout
     }
   }
   if (!result.unidentifiable.empty()) {
-    std::string names;
-    for (const std::string& name : result.unidentifiable) names += (names.empty() ? "" : ", ") + name;
-    std::printf("\nnever in the torque (not identifiable; kept at the URDF's values): %s\n", names.c_str());
+    std::string list;
+    for (const std::string& name : result.unidentifiable) list += (list.empty() ? "" : ", ") + name;
+    std::printf("\nnever in the torque (not identifiable; kept at the URDF's values): %s\n", list.c_str());
   }
   if (result.consistency.consistent()) {
     std::printf("\nphysically consistent: every link a real rigid body%s\n",
@@ -96,12 +121,15 @@ void print_table(const robot::Model& model, const robot::ParameterLayout& layout
     for (const std::string& finding : result.consistency.findings) std::printf("  - %s\n", finding.c_str());
   }
   if (result.physical) std::printf("physical fit: %s\n", result.physical->brief_report().c_str());
-  std::printf("\nrelative error of the filtered torque, per joint (%s .. %s):\n", model.joints.front().name.c_str(),
-              model.joints.back().name.c_str());
-  print_prediction_row(("fit, " + data_name).substr(0, 22).c_str(), fit);
+  std::printf("\ntorque error judged under a zero-phase 4th-order Butterworth low-pass at %s Hz, %s s trimmed at each end "
+              "(--judge-cutoff), per joint:\n  %-22s",
+              format(result.judge.cutoff_hz, 3).c_str(), format(result.judge.trim_seconds, 3).c_str(), "");
+  for (int k : result.torque_joints) std::printf(" %9s", model.joints[static_cast<std::size_t>(k)].name.substr(0, 9).c_str());
+  std::printf("\n");
+  print_prediction_rows("fit (training data)", fit);
   if (validation) {
-    print_prediction_row("validation, estimate", validation->estimate);
-    print_prediction_row("validation, URDF", validation->prior);
+    print_prediction_rows("validation, estimate", validation->estimate);
+    print_prediction_rows("validation, URDF", validation->prior);
     std::printf("  (validation data: %s)\n", validation_name.c_str());
   }
   std::printf("\n%.3f s\n", result.wall_seconds);
@@ -125,7 +153,8 @@ int run_identify_robot(const IdentifyOptions& options) {
   const robot::ParsedUrdf parsed_urdf = load_urdf_robot(options.urdf);
   const robot::Model& model = parsed_urdf.model;
   robot::IdentificationOptions identification;
-  identification.layout = parameter_layout(options.friction, options.armature);
+  identification.friction_auto = options.friction == "auto";
+  identification.layout = parameter_layout(identification.friction_auto ? "viscous,coulomb,offset" : options.friction, options.armature);
   identification.weighting =
       options.weights == "per-joint" ? robot::JointWeighting::per_joint : robot::JointWeighting::unit;
   identification.physical = options.physical;
@@ -136,44 +165,70 @@ int run_identify_robot(const IdentifyOptions& options) {
     identification.preparation.trim_end = parse_number_option(options.trim.substr(comma + 1), "--trim");
   }
   identification.preparation.uniform.dt = options.dt;
-  identification.half_length = half_length_option(options.half_length, "--half-length");
-  identification.band = band_option(options.band, "--band");
-  identification.comparison_half_length = half_length_option(options.comparison_half_length, "--comparison-half-length");
-  identification.comparison_band = band_option(options.comparison_band, "--comparison-band");
+  if ((options.half_length == "auto") != (options.band == "auto")) {
+    throw UsageError("--half-length and --band set the differentiation filter together: give both, or neither");
+  }
+  if (options.half_length != "auto") {
+    identification.half_length = static_cast<int>(parse_integer_option(options.half_length, "--half-length", 2, 1'000'000));
+    identification.band = parse_number_option(options.band, "--band");
+    if (!(identification.band > 0.0 && identification.band <= std::numbers::pi)) {
+      throw InputError("--band", "--band must lie in (0, pi] rad/sample");
+    }
+  }
+  identification.comparison_cutoff_hz = number_or_auto(options.comparison_cutoff, "--comparison-cutoff", 0.0);
+  if (options.comparison_cutoff != "auto" && !(identification.comparison_cutoff_hz > 0.0)) {
+    throw InputError("--comparison-cutoff", "--comparison-cutoff must be a positive number of Hz, or auto");
+  }
+  identification.ridge = number_or_auto(options.ridge, "--ridge", -1.0);
+  if (options.ridge != "auto" && !(identification.ridge >= 0.0)) {
+    throw InputError("--ridge", "--ridge must be a number >= 0 (0: plain least squares), or auto");
+  }
+  identification.judge.cutoff_hz = options.judge_cutoff;
+  identification.judge.trim_seconds = options.judge_trim;
+  if (!options.torque_joints.empty()) {
+    identification.torque_joints = joint_list(options.torque_joints, model.joint_count(), "--torque-joints");
+  }
 
-  const Trajectory data = read_trajectory(options.input);
+  std::vector<Trajectory> runs;
+  for (const std::string& path : options.inputs) runs.push_back(read_trajectory(path));
   robot::IdentificationResult result;
   try {
-    result = robot::identify(model, data, identification);
+    result = robot::identify(model, runs, identification);
   } catch (const InputError& error) {
-    rethrow_with_source(error, input_name(options.input));
+    rethrow_with_source(error, names(options.inputs));
   }
-  std::optional<Trajectory> storage;
-  const Trajectory& prepared = prepare_data(data, identification.preparation, storage);
-  const robot::TorquePrediction fit = robot::predict_torque(model, identification.layout, result.point, prepared, result.filters);
+  std::vector<robot::TorquePrediction> fits;
+  for (const Trajectory& run : runs) {
+    DataPreparation same_grid = identification.preparation;
+    same_grid.uniform.dt = result.filters.differentiation.dt;
+    std::optional<Trajectory> storage;
+    const Trajectory& prepared = prepare_data(run, same_grid, storage);
+    fits.push_back(robot::predict_torque(model, result.layout, result.point, prepared, result.judge, result.torque_joints));
+  }
+  const robot::TorquePrediction fit = robot::combine(fits);
   std::optional<robot::ValidationReport> validation;
   if (!options.validate.empty()) {
-    const Trajectory second = read_trajectory(options.validate);
+    std::vector<Trajectory> held_out;
+    for (const std::string& path : options.validate) held_out.push_back(read_trajectory(path));
     try {
-      validation = robot::validate(model, identification.layout, result, second, identification.preparation);
+      validation = robot::validate(model, result, held_out, identification.preparation);
     } catch (const InputError& error) {
-      rethrow_with_source(error, input_name(options.validate));
+      rethrow_with_source(error, names(options.validate));
     }
   }
   // The URDF's warnings once the call is known to work: a refused call prints one line.
   print_urdf_warnings(options.urdf, parsed_urdf);
   if (!options.write_urdf.empty()) {
     try {
-      write_text(options.write_urdf,
-                 robot::write_identified_urdf(read_text(options.urdf.urdf), model, identification.layout, result.point));
+      write_text(options.write_urdf, robot::write_identified_urdf(read_text(options.urdf.urdf), model, result.layout, result.point));
     } catch (const InputError& error) {
       rethrow_with_source(error, "--write-urdf");
     }
   }
   if (options.json) {
-    std::printf("%s\n", api::robot_result_to_json(model, identification.layout, result, fit, validation).dump(2).c_str());
+    std::printf("%s\n", api::robot_result_to_json(model, result, fit, validation).dump(2).c_str());
   } else {
-    print_table(model, identification.layout, result, fit, validation, input_name(options.input), input_name(options.validate));
+    print_table(model, result, fit, validation, names(options.inputs), names(options.validate));
   }
   return exit_success;
 }

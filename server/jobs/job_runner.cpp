@@ -236,8 +236,9 @@ JobOutcome run_identification_job(const api::JobInfo& job, store::Store& store, 
   return outcome;
 }
 
-/// A URDF robot's identification: one least-squares solve on its dataset, validated on a second one if
-/// asked. No evaluations to stream: the job's progress is its state.
+/// A URDF robot's identification: one least-squares solve on its runs (the filters, ridge and friction terms
+/// chosen by held-out prediction), judged on validation runs if asked. No evaluations to stream: the job's
+/// progress is its state.
 JobOutcome run_robot_identification_job(const api::JobInfo& job, store::Store& store, LiveJob& live) {
   api::RobotIdentificationSpec spec = api::robot_identification_from_json(nlohmann::json::parse(job.request));
   const auto fail_missing = [&](const std::string& what, const std::string& field) {
@@ -249,19 +250,23 @@ JobOutcome run_robot_identification_job(const api::JobInfo& job, store::Store& s
   const auto urdf = store.load_robot_urdf(spec.robot_id);
   if (!robot || !urdf) return fail_missing("robot " + spec.robot_id, "robot_id");
   const api::ParsedRobot parsed = api::parse_robot({robot->name, *urdf, robot->base, robot->tip});
-  const auto data = store.load_dataset(spec.dataset_id);
-  if (!data) return fail_missing("dataset " + spec.dataset_id, "dataset_id");
-  api::check_robot_data(parsed.model.joint_count(), parsed.model.name, data->joint_count(), data->has_torque(), "dataset_id");
-  std::optional<Trajectory> second;
-  if (!spec.validation_dataset_id.empty()) {
-    second = store.load_dataset(spec.validation_dataset_id);
-    if (!second) return fail_missing("dataset " + spec.validation_dataset_id, "validation_dataset_id");
-    api::check_robot_data(parsed.model.joint_count(), parsed.model.name, second->joint_count(), second->has_torque(),
-                          "validation_dataset_id");
-  }
+  const auto load = [&](const std::vector<std::string>& ids, const std::string& field, std::vector<Trajectory>& runs)
+      -> std::optional<JobOutcome> {
+    for (std::size_t i = 0; i < ids.size(); ++i) {
+      const std::string where = ids.size() > 1 ? field + "s[" + std::to_string(i) + "]" : field;
+      auto data = store.load_dataset(ids[i]);
+      if (!data) return fail_missing("dataset " + ids[i], where);
+      api::check_robot_data(parsed.model.joint_count(), parsed.model.name, data->joint_count(), data->has_torque(), where);
+      runs.push_back(std::move(*data));
+    }
+    return std::nullopt;
+  };
+  std::vector<Trajectory> runs, held_out;
+  if (auto missing = load(spec.dataset_ids, "dataset_id", runs)) return *missing;
+  if (auto missing = load(spec.validation_dataset_ids, "validation_dataset_id", held_out)) return *missing;
 
   spec.options.cancel = &live.cancel;
-  const robot::IdentificationResult result = robot::identify(parsed.model, *data, spec.options);
+  const robot::IdentificationResult result = robot::identify(parsed.model, runs, spec.options);
   JobOutcome outcome;
   outcome.dataset_id = spec.dataset_id;
   if (result.cancelled) {
@@ -273,15 +278,24 @@ JobOutcome run_robot_identification_job(const api::JobInfo& job, store::Store& s
     outcome.result = nlohmann::ordered_json{{"cancelled", true}, {"dataset_id", spec.dataset_id}}.dump();
     return outcome;
   }
-  std::optional<Trajectory> storage;
-  const Trajectory& prepared = prepare_data(*data, spec.options.preparation, storage);
-  const robot::TorquePrediction fit = robot::predict_torque(parsed.model, spec.options.layout, result.point, prepared, result.filters);
+  std::vector<robot::TorquePrediction> fits;
+  for (const Trajectory& run : runs) {
+    DataPreparation same_grid = spec.options.preparation;
+    same_grid.uniform.dt = result.filters.differentiation.dt;
+    std::optional<Trajectory> storage;
+    const Trajectory& prepared = prepare_data(run, same_grid, storage);
+    fits.push_back(robot::predict_torque(parsed.model, result.layout, result.point, prepared, result.judge, result.torque_joints));
+  }
   std::optional<robot::ValidationReport> validation;
-  if (second) validation = robot::validate(parsed.model, spec.options.layout, result, *second, spec.options.preparation);
-  nlohmann::ordered_json json = api::robot_result_to_json(parsed.model, spec.options.layout, result, fit, validation);
+  if (!held_out.empty()) validation = robot::validate(parsed.model, result, held_out, spec.options.preparation);
+  nlohmann::ordered_json json = api::robot_result_to_json(parsed.model, result, robot::combine(fits), validation);
   json["robot_id"] = spec.robot_id;
   json["dataset_id"] = spec.dataset_id;
-  if (!spec.validation_dataset_id.empty()) json["validation_dataset_id"] = spec.validation_dataset_id;
+  json["dataset_ids"] = spec.dataset_ids;
+  if (!spec.validation_dataset_ids.empty()) {
+    json["validation_dataset_id"] = spec.validation_dataset_id;
+    json["validation_dataset_ids"] = spec.validation_dataset_ids;
+  }
   outcome.state = api::JobState::succeeded;
   outcome.result = json.dump();
   for (int i = 0; i < result.base.size(); ++i) {

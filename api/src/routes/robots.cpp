@@ -101,12 +101,22 @@ void submit_robot_identification(RouteState& state, const nlohmann::json& body, 
   const RobotIdentificationSpec spec = robot_identification_from_json(body);
   const ParsedRobot robot = stored_robot(state, spec.robot_id, "robot_id");
   const int joints = robot.model.joint_count();
-  for (const auto& [id, field] : {std::pair{spec.dataset_id, std::string("dataset_id")},
-                                  std::pair{spec.validation_dataset_id, std::string("validation_dataset_id")}}) {
-    if (id.empty()) continue;
-    const auto dataset = state.service.dataset(id);
-    if (!dataset) throw ApiError(ProblemKind::invalid_field, "no dataset " + id, field);
-    check_robot_data(joints, robot.model.name, dataset->joints, dataset->has_torque, field);
+  for (const auto& [ids, field] : {std::pair{spec.dataset_ids, std::string("dataset_id")},
+                                   std::pair{spec.validation_dataset_ids, std::string("validation_dataset_id")}}) {
+    for (std::size_t i = 0; i < ids.size(); ++i) {
+      const std::string where = ids.size() > 1 ? field + "s[" + std::to_string(i) + "]" : field;
+      const auto dataset = state.service.dataset(ids[i]);
+      if (!dataset) throw ApiError(ProblemKind::invalid_field, "no dataset " + ids[i], where);
+      check_robot_data(joints, robot.model.name, dataset->joints, dataset->has_torque, where);
+    }
+  }
+  for (int k : spec.options.torque_joints) {
+    if (k >= joints) {
+      throw ApiError(ProblemKind::invalid_field,
+                     "torque_joints names joint " + std::to_string(k + 1) + "; the robot " + robot.model.name + " has " +
+                         std::to_string(joints),
+                     "torque_joints");
+    }
   }
   const SubmitResult submitted = state.service.submit(
       {JobKind::identification, body.dump(), spec.dataset_id, spec.robot_id, spec.validation_dataset_id}, key);

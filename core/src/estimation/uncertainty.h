@@ -2,6 +2,7 @@
 // Gauss–Newton information matrix J_rᵀJ_r of any least-squares identification.
 #pragma once
 
+#include "manipid/core/estimation/rules.h"
 #include "manipid/core/paper/identification.h"
 #include "manipid/core/paper/regressor.h"
 
@@ -33,10 +34,10 @@ struct Uncertainty {
   std::string unavailable;
 };
 
-/// Directions whose scaled singular value is below this fraction of the largest are
-/// reported as not identifiable; below `weak` as poorly determined.
-constexpr double kUnidentifiableRatio = 1e-6;
-constexpr double kWeakRatio = 1e-3;
+/// Directions whose scaled singular value is below estimation::kUnidentifiableRatio of the largest are
+/// reported as not identifiable; below estimation::kWeakRatio as poorly determined (estimation/rules.h).
+using estimation::kUnidentifiableRatio;
+using estimation::kWeakRatio;
 
 Uncertainty assess_uncertainty(const UncertaintyInput& input);
 

@@ -9,6 +9,7 @@
 #include "estimation/optimizer.h"
 #include "paper/output_error_fit.h"
 #include "estimation/uncertainty.h"
+#include "manipid/core/estimation/rules.h"
 
 #include <Eigen/Eigenvalues>
 #include <Eigen/SVD>
@@ -531,11 +532,12 @@ void assess_output_error(const Problem& problem, const OutputErrorCost& output_e
 
 void assess_input_error(const Problem& problem, const InputErrorStage& stage, IdentificationResult& result) {
   const Setup& setup = problem.setup;
-  // σ² per residual, inflated by 1/Σc0² because low-passed residuals are correlated over
-  // about π/Ωg samples (white noise through the filter keeps Σc0² of its variance).
+  // σ² per residual, inflated because low-passed residuals are correlated over about π/Ωg samples
+  // (estimation/rules.h; every sample is a row here: decimation 1).
   const double residual_sum = result.final_cost * stage.filtered().samples();
   const double dof = std::max(1.0, static_cast<double>(stage.cost->residual_count() - count_free(setup.free)));
-  const double correlation_factor = 1.0 / cached_filter(stage.choice.settings)->coefficients(FilterOrder::lowpass).squaredNorm();
+  const double correlation_factor = estimation::filtered_residual_factor(
+      1, cached_filter(stage.choice.settings)->coefficients(FilterOrder::lowpass).squaredNorm());
   const detail::UncertaintyInput uncertainty{
       .names = setup.names,
       .theta = result.estimate,

@@ -1,178 +1,186 @@
-// filtered_regressor.cpp — differential filters, regressor, and the regressor's columns low-passed like
-// the torque, decimated to the band (robot/filtered_regressor.h).
+// filtered_regressor.cpp — D's states on the working grid, the regressor there, and L over its columns and
+// the torque alike (robot/filtered_regressor.h).
 #include "manipid/core/robot/filtered_regressor.h"
 
 #include "manipid/core/errors.h"
 #include "manipid/core/robot/data.h"
 #include "manipid/core/robot/regressor.h"
 #include "manipid/core/robot/rnea.h"
+#include "manipid/core/signal/butterworth.h"
 
 #include <algorithm>
 #include <cmath>
-#include <limits>
 #include <numbers>
 #include <string>
 
 namespace manipid::robot {
 namespace {
 
-/// q^f, q̇^f, q̈^f from D (n × N1, one column per filtered sample: sample M + s of the data).
-struct FirstPass {
-  Eigen::MatrixXd q, qd, qdd;
-  int samples = 0;  // N1
-};
+constexpr int kLowpassOrder = 4;
 
-FirstPass first_pass(const Model& model, const Trajectory& data, const FilterPair& filters,
-                     const DifferentialFilter& differentiation) {
-  const int n = model.joint_count();
-  if (data.joint_count() != n) {
-    throw InputError("q", "the data has " + std::to_string(data.joint_count()) + " joints, the robot " +
-                              std::to_string(n));
+/// The standard indices of row k's non-zero columns: bodies k..n−1, then joint k's friction and armature.
+std::vector<int> row_columns(const ParameterLayout& layout, int n, int k) {
+  std::vector<int> columns;
+  for (int c = kInertialParametersPerBody * k; c < kInertialParametersPerBody * n; ++c) columns.push_back(c);
+  for (int begin : {layout.viscous_begin(n), layout.coulomb_begin(n), layout.offset_begin(n), layout.armature_begin(n)}) {
+    if (begin >= 0) columns.push_back(begin + k);
   }
-  if (data.samples() < filters.shortest_data()) {
-    throw InputError("samples", "the filters (half-lengths M = " + std::to_string(filters.differentiation.half_length) +
-                                    " and M_c = " + std::to_string(filters.comparison.half_length) +
-                                    ") need at least " + std::to_string(filters.shortest_data()) + " samples; the data has " +
-                                    std::to_string(data.samples()) + " (" +
-                                    std::to_string(data.t[data.samples() - 1] - data.t[0]) + " s)");
-  }
-  FirstPass pass;
-  pass.samples = differentiation.output_length(data.samples());
-  Eigen::VectorXd q(pass.samples), qd(pass.samples), qdd(pass.samples);
-  pass.q.resize(n, pass.samples);
-  pass.qd.resize(n, pass.samples);
-  pass.qdd.resize(n, pass.samples);
-  for (int k = 0; k < n; ++k) {
-    differentiation.apply_all(data.q.col(k), q, qd, qdd);
-    pass.q.row(k) = q.transpose();
-    pass.qd.row(k) = qd.transpose();
-    pass.qdd.row(k) = qdd.transpose();
-  }
-  return pass;
+  return columns;
 }
 
-/// L τ at data samples `centre`, `centre + step`, ... (`count` of them), n columns: only the instants
-/// least squares uses, not the whole filtered signal (M_c = 1,000 taps × 20,000 samples × 7 joints
-/// would be most of an identification's time).
-Eigen::MatrixXd lowpass_at(const Trajectory& data, const DifferentialFilter& comparison, int centre, int step, int count) {
-  const int Mc = comparison.settings().half_length;
-  const Eigen::VectorXd& taps = comparison.coefficients(FilterOrder::lowpass);
-  Eigen::MatrixXd result(count, data.joint_count());
-  for (int k = 0; k < data.joint_count(); ++k) {
-    for (int r = 0; r < count; ++r) result(r, k) = taps.dot(data.tau.col(k).segment(centre + r * step - Mc, 2 * Mc + 1));
-  }
-  return result;
+/// Σ h² of filtfilt's impulse response at `cutoff_hz` on a grid `dt` apart.
+double lowpass_energy(const IirFilter& filter, double cutoff_hz, double dt) {
+  const int half = static_cast<int>(std::ceil(20.0 / (cutoff_hz * dt))) + filtfilt_padding(filter);
+  Eigen::VectorXd impulse = Eigen::VectorXd::Zero(2 * half + 1);
+  impulse[half] = 1.0;
+  filtfilt(filter, impulse, impulse);
+  return impulse.squaredNorm();
 }
 
 }  // namespace
 
-FilteredRegressor filtered_regressor(const Model& model, const ParameterLayout& layout, const Trajectory& data,
-                                     const FilterPair& filters, const std::atomic<bool>* cancel) {
+int FilterPair::shortest_data() const {
+  const int trim = static_cast<int>(std::ceil(trim_seconds / differentiation.dt));
+  return 2 * differentiation.half_length + 1 + 2 * trim + 8 * working_step;
+}
+
+FilterPair differentiation_for(double highest_cutoff_hz, double dt, double trim_seconds) {
+  FilterPair filters;
+  filters.trim_seconds = trim_seconds;
+  filters.comparison_cutoff_hz = highest_cutoff_hz;
+  const double band = std::min(std::numbers::pi / 2.0, 2.0 * std::numbers::pi * 4.0 * highest_cutoff_hz * dt);
+  filters.differentiation = FilterSettings{std::max(2, static_cast<int>(std::ceil(6.4 * std::numbers::pi / band))), band, dt};
+  filters.working_step = working_step(filters.differentiation);
+  return filters;
+}
+
+int working_step(const FilterSettings& differentiation) {
+  // f_g Δ = Ωg / 2π: k = ⌊1 / (4 f_g Δ)⌋ = ⌊π / (2 Ωg)⌋.
+  return std::max(1, static_cast<int>(std::floor(std::numbers::pi / (2.0 * differentiation.band))));
+}
+
+RegressorSignals regressor_signals(const Model& model, const ParameterLayout& layout, const Trajectory& data,
+                                   const FilterPair& filters, const std::atomic<bool>* cancel) {
   filters.differentiation.validate();
-  filters.comparison.validate();
-  const auto differentiation = cached_filter(filters.differentiation);
-  const auto comparison = cached_filter(filters.comparison);
-  const FirstPass pass = first_pass(model, data, filters, *differentiation);
   const int n = model.joint_count();
-  const int p = layout.size(n);
+  if (data.joint_count() != n) {
+    throw InputError("q", "the data has " + std::to_string(data.joint_count()) + " joints, the robot " + std::to_string(n));
+  }
+  if (data.samples() < filters.shortest_data()) {
+    throw InputError("samples", "the filters (differentiation half-length M = " +
+                                    std::to_string(filters.differentiation.half_length) + ", " +
+                                    std::to_string(filters.trim_seconds) + " s trimmed at each end) need at least " +
+                                    std::to_string(filters.shortest_data()) + " samples; the data has " +
+                                    std::to_string(data.samples()) + " (" +
+                                    std::to_string(data.t[data.samples() - 1] - data.t[0]) + " s)");
+  }
+  const auto differentiation = cached_filter(filters.differentiation);
   const int M = filters.differentiation.half_length;
-  const int Mc = filters.comparison.half_length;
-  const Eigen::VectorXd& taps = comparison->coefficients(FilterOrder::lowpass);
+  const int k = filters.working_step;
+  const int N1 = differentiation->output_length(data.samples());
+  const int samples = (N1 - 1) / k + 1;
 
-  FilteredRegressor result;
-  result.filters = filters;
-  result.lowpass_energy = taps.squaredNorm();
-  result.decimation = std::max(1, static_cast<int>(std::floor(std::numbers::pi / (2.0 * filters.comparison.band))));
-  const int D = result.decimation;
-  const int second = comparison->output_length(pass.samples);  // compared instants
-  const int R = (second - 1) / D + 1;
-  result.instants = R;
-  result.t.resize(R);
-  // Instant r is data sample M + M_c + r·D: the centre of L's window r·D .. r·D + 2M_c over the first pass.
-  for (int r = 0; r < R; ++r) result.t[r] = data.t[M + Mc + r * D];
-  if (data.has_torque()) {
-    const Eigen::MatrixXd tau = lowpass_at(data, *comparison, M + Mc, D, R);
-    result.tau.resize(static_cast<Eigen::Index>(R) * n);
-    for (int r = 0; r < R; ++r) result.tau.segment(static_cast<Eigen::Index>(r) * n, n) = tau.row(r).transpose();
-  }
-
-  // Row-major W and a row-major copy of each Y, so that adding one joint's row of Y is a contiguous,
-  // vectorised update.
-  using RowMajor = Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor>;
-  RowMajor W = RowMajor::Zero(static_cast<Eigen::Index>(R) * n, p);
-  Data workspace(model);
-  Eigen::MatrixXd Y(n, p);
-  RowMajor Y_rows(n, p);
-  std::vector<int> friction_columns;
-  for (int begin : {layout.viscous_begin(n), layout.coulomb_begin(n), layout.offset_begin(n), layout.armature_begin(n)}) {
-    if (begin >= 0) friction_columns.push_back(begin);
-  }
-  const int last_sample = std::min(pass.samples - 1, (R - 1) * D + 2 * Mc);
-  for (int s = 0; s <= last_sample; ++s) {
-    if (cancel && (s & 1023) == 0 && cancel->load(std::memory_order_relaxed)) return FilteredRegressor{};
-    regressor(model, workspace, layout, pass.q.col(s), pass.qd.col(s), pass.qdd.col(s), Y);
-    Y_rows = Y;
-    // Outputs r whose window [r·D, r·D + 2M_c] covers s; tap index s − r·D.
-    const int first = std::max(0, (s - 2 * Mc + D - 1) / D);
-    const int last = std::min(R - 1, s / D);
-    for (int r = first; r <= last; ++r) {
-      const double weight = taps[s - r * D];
-      for (int k = 0; k < n; ++k) {
-        // Row k of Y is zero left of body k's block (a body never loads the joints beyond it), and
-        // its friction entries sit on the diagonal of each block.
-        const int from = kInertialParametersPerBody * k;
-        const int width = kInertialParametersPerBody * (n - k);
-        auto row = W.row(static_cast<Eigen::Index>(r) * n + k);
-        row.segment(from, width) += weight * Y_rows.row(k).segment(from, width);
-        for (int begin : friction_columns) row[begin + k] += weight * Y_rows(k, begin + k);
+  Eigen::MatrixXd q(n, samples), qd(n, samples), qdd(n, samples);
+  // sign(q̇) at every sample of D's output: Coulomb friction's column is a step at each reversal, which the
+  // working grid could place only to within k samples; it is formed here, anti-aliased like τ and sampled.
+  Eigen::MatrixXd coulomb(layout.coulomb && k > 1 ? N1 : 0, n);
+  {
+    Eigen::VectorXd f0(N1), f1(N1), f2(N1);
+    for (int j = 0; j < n; ++j) {
+      differentiation->apply_all(data.q.col(j), f0, f1, f2);
+      for (int s = 0; s < samples; ++s) {
+        q(j, s) = f0[s * k];
+        qd(j, s) = f1[s * k];
+        qdd(j, s) = f2[s * k];
+      }
+      if (coulomb.rows()) {
+        for (int s = 0; s < N1; ++s) coulomb(s, j) = friction_sign(f1[s]);
       }
     }
   }
-  result.W = W;
-  return result;
+  RegressorSignals signals;
+  signals.dt = filters.working_dt();
+  signals.t.resize(samples);
+  for (int s = 0; s < samples; ++s) signals.t[s] = data.t[M + s * k];
+  // Anti-aliasing at a quarter of the working rate before the working grid samples the torque and the
+  // Coulomb columns.
+  const IirFilter anti_aliasing = butterworth_lowpass(kLowpassOrder, 0.25 / signals.dt, data.dt());
+  if (data.has_torque()) {
+    const Eigen::MatrixXd tau = k > 1 ? filtfilt_columns(anti_aliasing, data.tau) : data.tau;
+    signals.tau.resize(samples, n);
+    for (int s = 0; s < samples; ++s) signals.tau.row(s) = tau.row(M + s * k);
+  }
+  if (coulomb.rows()) coulomb = filtfilt_columns(anti_aliasing, coulomb);
+  signals.columns.resize(static_cast<std::size_t>(n));
+  signals.Y.resize(static_cast<std::size_t>(n));
+  for (int j = 0; j < n; ++j) {
+    signals.columns[static_cast<std::size_t>(j)] = row_columns(layout, n, j);
+    signals.Y[static_cast<std::size_t>(j)].resize(samples, static_cast<Eigen::Index>(signals.columns[static_cast<std::size_t>(j)].size()));
+  }
+  Data workspace(model);
+  Eigen::MatrixXd Y(n, layout.size(n));
+  const int coulomb_begin = layout.coulomb_begin(n);
+  for (int s = 0; s < samples; ++s) {
+    if (cancel && (s & 1023) == 0 && cancel->load(std::memory_order_relaxed)) return RegressorSignals{};
+    regressor(model, workspace, layout, q.col(s), qd.col(s), qdd.col(s), Y);
+    if (coulomb.rows()) {
+      for (int j = 0; j < n; ++j) Y(j, coulomb_begin + j) = coulomb(s * k, j);
+    }
+    for (int j = 0; j < n; ++j) {
+      const auto& columns = signals.columns[static_cast<std::size_t>(j)];
+      auto& target = signals.Y[static_cast<std::size_t>(j)];
+      for (std::size_t c = 0; c < columns.size(); ++c) target(s, static_cast<Eigen::Index>(c)) = Y(j, columns[c]);
+    }
+  }
+  return signals;
 }
 
-TorquePrediction predict_torque(const Model& model, const ParameterLayout& layout, const Eigen::VectorXd& pi,
-                                const Trajectory& data, const FilterPair& filters) {
-  filters.differentiation.validate();
-  filters.comparison.validate();
-  if (!data.has_torque()) throw InputError("tau", "the data has no tau columns to compare the prediction with");
-  const int n = model.joint_count();
-  if (pi.size() != layout.size(n)) {
-    throw InputError("parameters", "the parameter vector has " + std::to_string(pi.size()) + " entries, the robot " +
-                                       std::to_string(layout.size(n)));
+FilteredRows filtered_rows(const RegressorSignals& signals, int parameter_count, double cutoff_hz, double trim_seconds,
+                           const std::vector<int>& joints, const std::vector<int>& wanted) {
+  const double nyquist = 0.5 / signals.dt;
+  if (!(cutoff_hz > 0.0 && cutoff_hz < nyquist)) {
+    throw InputError("comparison_cutoff", "the comparison low-pass's cut-off must lie between 0 and " + std::to_string(nyquist) +
+                                              " Hz (the working grid's Nyquist frequency), not " + std::to_string(cutoff_hz) + " Hz");
   }
-  const auto differentiation = cached_filter(filters.differentiation);
-  const auto comparison = cached_filter(filters.comparison);
-  const FirstPass pass = first_pass(model, data, filters, *differentiation);
-  const int M = filters.differentiation.half_length;
-  const int Mc = filters.comparison.half_length;
-
-  Eigen::MatrixXd modelled(pass.samples, n);
-  Data workspace(model);
-  Eigen::VectorXd tau(n);
-  for (int s = 0; s < pass.samples; ++s) {
-    inverse_dynamics(model, workspace, layout, pi, pass.q.col(s), pass.qd.col(s), pass.qdd.col(s), tau);
-    modelled.row(s) = tau.transpose();
+  const IirFilter lowpass = butterworth_lowpass(kLowpassOrder, cutoff_hz, signals.dt);
+  FilteredRows rows;
+  rows.joints = joints;
+  rows.row_step = std::max(1, static_cast<int>(std::floor(1.0 / (5.0 * cutoff_hz * signals.dt))));
+  rows.lowpass_energy = lowpass_energy(lowpass, cutoff_hz, signals.dt);
+  const Eigen::Index N = signals.t.size();
+  Eigen::Index first = 0, last = N - 1;
+  while (first < N && signals.t[first] < signals.t[0] + trim_seconds) ++first;
+  while (last >= 0 && signals.t[last] > signals.t[N - 1] - trim_seconds) --last;
+  if (last < first) {
+    throw InputError("samples", "nothing is left of the data after trimming " + std::to_string(trim_seconds) + " s at each end");
   }
-  TorquePrediction prediction;
-  const int second = comparison->output_length(pass.samples);
-  prediction.t = data.t.segment(M + Mc, second);
-  prediction.model.resize(second, n);
-  Eigen::MatrixXd measured(comparison->output_length(data.samples()), n);  // sample M_c + j of the data
-  for (int k = 0; k < n; ++k) comparison->apply(FilterOrder::lowpass, data.tau.col(k), measured.col(k));
-  prediction.measured = measured.middleRows(M, second);
-  for (int k = 0; k < n; ++k) comparison->apply(FilterOrder::lowpass, modelled.col(k), prediction.model.col(k));
-  const Eigen::MatrixXd error = prediction.model - prediction.measured;
-  prediction.rms_error = (error.colwise().squaredNorm() / static_cast<double>(second)).cwiseSqrt().transpose();
-  prediction.relative_error.resize(n);
-  for (int k = 0; k < n; ++k) {
-    const double norm = prediction.measured.col(k).norm();
-    prediction.relative_error[k] = norm > 0 ? error.col(k).norm() / norm : std::numeric_limits<double>::quiet_NaN();
+  const Eigen::Index R = (last - first) / rows.row_step + 1;
+  const Eigen::Index J = static_cast<Eigen::Index>(joints.size());
+  rows.t.resize(R);
+  for (Eigen::Index r = 0; r < R; ++r) rows.t[r] = signals.t[first + r * rows.row_step];
+  rows.W = Eigen::MatrixXd::Zero(R * J, parameter_count);
+  rows.tau = signals.tau.size() ? Eigen::VectorXd(R * J) : Eigen::VectorXd();
+  const Eigen::MatrixXd tau = signals.tau.size() ? filtfilt_columns(lowpass, signals.tau) : Eigen::MatrixXd();
+  for (Eigen::Index jj = 0; jj < J; ++jj) {
+    const auto j = static_cast<std::size_t>(joints[static_cast<std::size_t>(jj)]);
+    // Only the columns asked for: a regressor column costs one low-pass over the whole run.
+    std::vector<Eigen::Index> positions;
+    std::vector<int> columns;
+    for (std::size_t c = 0; c < signals.columns[j].size(); ++c) {
+      const int column = signals.columns[j][c];
+      if (wanted.empty() || std::binary_search(wanted.begin(), wanted.end(), column)) {
+        positions.push_back(static_cast<Eigen::Index>(c));
+        columns.push_back(column);
+      }
+    }
+    const Eigen::MatrixXd filtered = filtfilt_columns(lowpass, signals.Y[j](Eigen::all, positions));
+    for (Eigen::Index r = 0; r < R; ++r) {
+      const Eigen::Index s = first + r * rows.row_step;
+      for (std::size_t c = 0; c < columns.size(); ++c) rows.W(r * J + jj, columns[c]) = filtered(s, static_cast<Eigen::Index>(c));
+      if (tau.size()) rows.tau[r * J + jj] = tau(s, static_cast<Eigen::Index>(j));
+    }
   }
-  const double total = prediction.measured.norm();
-  prediction.overall_relative_error = total > 0 ? error.norm() / total : std::numeric_limits<double>::quiet_NaN();
-  return prediction;
+  return rows;
 }
 
 }  // namespace manipid::robot

@@ -1,16 +1,16 @@
-// identification.cpp — base parameters by linear least squares on the consistently filtered rows
-// (robot/identification.h).
+// identification.cpp — base parameters by linear least squares on consistently filtered rows, with the
+// comparison filter, the ridge and the friction terms chosen by held-out prediction (robot/identification.h).
 #include "manipid/core/robot/identification.h"
 
 #include "manipid/core/errors.h"
+#include "manipid/core/estimation/cross_validation.h"
+#include "manipid/core/estimation/linear_least_squares.h"
+#include "manipid/core/estimation/rules.h"
 
-#include <Eigen/QR>
-#include <unsupported/Eigen/FFT>
-#include <Eigen/SVD>
+#include <Eigen/Cholesky>
 
 #include <algorithm>
 #include <chrono>
-#include <complex>
 #include <cmath>
 #include <limits>
 #include <numbers>
@@ -21,8 +21,20 @@ namespace {
 
 using Clock = std::chrono::steady_clock;
 
-/// Relative singular value below which a base direction counts as not excited by the data.
-constexpr double kUnexcitedRatio = 1e-10;
+/// Cross-validation's folds and the time bins each fold is made of (estimation/cross_validation.h).
+constexpr int kFolds = 5;
+constexpr int kBinsPerFold = 4;
+/// A base parameter whose data share is below this is reported as barely seen by the data.
+constexpr double kBarelySeenShare = 0.5;
+/// An estimate this many times its prior is named in a warning; for a prior of zero (below kRoundOff of the
+/// largest prior: a rounded URDF angle's residue), an estimate whose torque alone is kCancelled times the
+/// measured torque (others must cancel it: the signature of collinear columns).
+constexpr double kFarFromPrior = 100.0;
+constexpr double kRoundOff = 1e-9;
+constexpr double kCancelled = 10.0;
+/// A joint whose torque RMS is below this fraction of the largest joint's, in every run, is taken to have no
+/// torque sensor (step 1).
+constexpr double kNoTorqueRatio = 1e-4;
 
 std::string join(const std::vector<std::string>& words) {
   std::string text;
@@ -30,91 +42,196 @@ std::string join(const std::vector<std::string>& words) {
   return text;
 }
 
-/// The least-squares solve in scaled coordinates x = S β (S: column norms of the weighted rows).
-struct Solution {
-  Eigen::VectorXd beta;
-  Eigen::MatrixXd covariance_scaled;  // (A_sᵀ A_s)⁺ restricted to the excited directions, times nothing
-  Eigen::VectorXd scale;
-  Eigen::VectorXd singular_values;    // of the scaled rows, largest first
-  Eigen::MatrixXd null_directions;    // scaled coordinates, columns: directions not excited
-};
+std::string percent(double share) {
+  std::ostringstream text;
+  text.precision(share < 0.1 ? 1 : 2);
+  text << 100.0 * share << " %";
+  return text.str();
+}
 
-Solution solve(const Eigen::MatrixXd& rows, const Eigen::VectorXd& target, const Eigen::VectorXd& row_weights,
-               const Eigen::VectorXd& beta_prior) {
-  const Eigen::Index b = rows.cols();
-  Solution solution;
-  Eigen::MatrixXd A = row_weights.asDiagonal() * rows;
-  const Eigen::VectorXd y = row_weights.asDiagonal() * target;
-  solution.scale = A.colwise().norm().transpose();
-  for (Eigen::Index c = 0; c < b; ++c) {
-    if (!(solution.scale[c] > 0.0)) solution.scale[c] = 1.0;  // an all-zero column: left to the prior below
-  }
-  A = A * solution.scale.cwiseInverse().asDiagonal();
-  // QR first (rows × b → b × b), then an SVD of the small triangle: the singular values are A's.
-  const Eigen::HouseholderQR<Eigen::MatrixXd> qr(A);
-  const Eigen::MatrixXd R = qr.matrixQR().topRows(b).triangularView<Eigen::Upper>();
-  const Eigen::VectorXd z = (qr.householderQ().transpose() * y).head(b);
-  const Eigen::JacobiSVD<Eigen::MatrixXd> svd(R, Eigen::ComputeFullU | Eigen::ComputeFullV);
-  solution.singular_values = svd.singularValues();
-  const double largest = b > 0 ? solution.singular_values[0] : 0.0;
-  int excited = 0;
-  while (excited < b && solution.singular_values[excited] > kUnexcitedRatio * largest) ++excited;
-  const Eigen::MatrixXd V = svd.matrixV();
-  const Eigen::MatrixXd U = svd.matrixU();
-  const Eigen::VectorXd prior_scaled = solution.scale.cwiseProduct(beta_prior);
-  Eigen::VectorXd x = Eigen::VectorXd::Zero(b);
-  solution.covariance_scaled = Eigen::MatrixXd::Zero(b, b);
-  for (int k = 0; k < excited; ++k) {
-    const double sigma = solution.singular_values[k];
-    x += V.col(k) * (U.col(k).dot(z) / sigma);
-    solution.covariance_scaled += V.col(k) * V.col(k).transpose() / (sigma * sigma);
-  }
-  solution.null_directions = V.rightCols(b - excited);
-  x += solution.null_directions * (solution.null_directions.transpose() * prior_scaled);  // unexcited: the prior
-  solution.beta = x.cwiseQuotient(solution.scale);
-  return solution;
+/// π index in `full` of each parameter of `sub` (sub's terms are a subset of full's).
+std::vector<int> layout_map(const ParameterLayout& sub, const ParameterLayout& full, int n) {
+  std::vector<int> map;
+  for (int i = 0; i < kInertialParametersPerBody * n; ++i) map.push_back(i);
+  const auto add = [&](int sub_begin, int full_begin) {
+    if (sub_begin < 0) return;
+    for (int k = 0; k < n; ++k) map.push_back(full_begin + k);
+  };
+  add(sub.viscous_begin(n), full.viscous_begin(n));
+  add(sub.coulomb_begin(n), full.coulomb_begin(n));
+  add(sub.offset_begin(n), full.offset_begin(n));
+  add(sub.armature_begin(n), full.armature_begin(n));
+  return map;
 }
 
 /// Per-row weights from per-joint weights (rows are joint-major within each instant).
 Eigen::VectorXd row_weights(const Eigen::VectorXd& joint_weights, Eigen::Index rows) {
-  const Eigen::Index n = joint_weights.size();
+  const Eigen::Index J = joint_weights.size();
   Eigen::VectorXd weights(rows);
-  for (Eigen::Index r = 0; r < rows; ++r) weights[r] = joint_weights[r % n];
+  for (Eigen::Index r = 0; r < rows; ++r) weights[r] = joint_weights[r % J];
   return weights;
 }
 
-Eigen::VectorXd joint_residual_rms(const Eigen::VectorXd& residual, int n) {
-  Eigen::VectorXd rms = Eigen::VectorXd::Zero(n);
-  const Eigen::Index instants = residual.size() / n;
-  for (Eigen::Index r = 0; r < residual.size(); ++r) rms[r % n] += residual[r] * residual[r];
+Eigen::VectorXd joint_residual_rms(const Eigen::VectorXd& residual, Eigen::Index joints) {
+  Eigen::VectorXd rms = Eigen::VectorXd::Zero(joints);
+  const Eigen::Index instants = residual.size() / std::max<Eigen::Index>(joints, 1);
+  for (Eigen::Index r = 0; r < residual.size(); ++r) rms[r % joints] += residual[r] * residual[r];
   return (rms / static_cast<double>(std::max<Eigen::Index>(instants, 1))).cwiseSqrt();
 }
 
-/// The filters: each given one as given (half-length and band together), the others chosen.
-FilterPair filters_for(const Trajectory& data, const IdentificationOptions& options, IdentificationResult& result) {
-  if ((options.half_length > 0) != (options.band > 0.0)) {
-    throw InputError(options.band > 0.0 ? "half_length" : "band",
-                     "give the differentiation filter's half_length and band together, or neither (chosen from the data)");
+/// The rows of every run stacked, with each row's run.
+struct StackedRows {
+  Eigen::MatrixXd W;
+  Eigen::VectorXd tau;
+  std::vector<int> run_of_row;
+  std::vector<double> time_of_row;
+  int row_step = 1;
+  double lowpass_energy = 1.0;
+};
+
+StackedRows stack(const std::vector<FilteredRows>& per_run) {
+  StackedRows stacked;
+  Eigen::Index total = 0;
+  for (const FilteredRows& rows : per_run) total += rows.W.rows();
+  const Eigen::Index p = per_run.front().W.cols();
+  stacked.W.resize(total, p);
+  stacked.tau.resize(total);
+  Eigen::Index at = 0;
+  for (std::size_t run = 0; run < per_run.size(); ++run) {
+    const FilteredRows& rows = per_run[run];
+    stacked.W.middleRows(at, rows.W.rows()) = rows.W;
+    stacked.tau.segment(at, rows.tau.size()) = rows.tau;
+    const Eigen::Index J = static_cast<Eigen::Index>(rows.joints.size());
+    for (Eigen::Index r = 0; r < rows.W.rows(); ++r) {
+      stacked.run_of_row.push_back(static_cast<int>(run));
+      stacked.time_of_row.push_back(rows.t[r / J]);
+    }
+    at += rows.W.rows();
   }
-  if ((options.comparison_half_length > 0) != (options.comparison_band > 0.0)) {
-    throw InputError(options.comparison_band > 0.0 ? "comparison_half_length" : "comparison_band",
-                     "give the comparison filter's half_length and band together, or neither (chosen from the data)");
+  stacked.row_step = per_run.front().row_step;
+  stacked.lowpass_energy = per_run.front().lowpass_energy;
+  return stacked;
+}
+
+std::vector<int> bins_of_rows(const StackedRows& rows, const estimation::TimeBins& bins) {
+  std::vector<int> of_row(rows.run_of_row.size());
+  for (std::size_t r = 0; r < of_row.size(); ++r) of_row[r] = bins.bin(rows.run_of_row[r], rows.time_of_row[r]);
+  return of_row;
+}
+
+/// Step 1: the runs on one uniform grid.
+std::vector<Trajectory> prepare_runs(const std::vector<Trajectory>& runs, const DataPreparation& preparation,
+                                     std::vector<std::string>& warnings) {
+  std::vector<Trajectory> prepared;
+  DataPreparation same = preparation;
+  for (std::size_t i = 0; i < runs.size(); ++i) {
+    std::vector<std::string> run_warnings;
+    prepared.push_back(prepare_data(runs[i], same, &run_warnings));
+    if (i == 0) same.uniform.dt = prepared.front().dt();
+    for (std::string& warning : run_warnings) {
+      warnings.push_back(runs.size() > 1 ? "run " + std::to_string(i + 1) + ": " + warning : warning);
+    }
   }
-  FilterPair filters;
-  const bool both_given = options.half_length > 0 && options.comparison_half_length > 0;
-  if (!both_given) {
-    filters = choose_filters(data);
-    result.filters_chosen_automatically = true;
-    result.motion_band_hz = motion_band(data);
+  return prepared;
+}
+
+/// Step 1: the joints with a torque measurement.
+std::vector<int> measured_joints(const Model& model, const std::vector<Trajectory>& runs, const std::vector<int>& given,
+                                 std::vector<std::string>& warnings) {
+  const int n = model.joint_count();
+  if (!given.empty()) {
+    std::vector<int> joints = given;
+    std::sort(joints.begin(), joints.end());
+    joints.erase(std::unique(joints.begin(), joints.end()), joints.end());
+    for (int k : joints) {
+      if (k < 0 || k >= n) {
+        throw InputError("torque_joints", "joint " + std::to_string(k + 1) + " does not exist: the robot (" + model.name +
+                                              ") has joints 1 to " + std::to_string(n));
+      }
+    }
+    return joints;
   }
-  if (options.half_length > 0) filters.differentiation = FilterSettings{options.half_length, options.band, data.dt()};
-  if (options.comparison_half_length > 0) {
-    filters.comparison = FilterSettings{options.comparison_half_length, options.comparison_band, data.dt()};
+  Eigen::VectorXd largest_share = Eigen::VectorXd::Zero(n);
+  for (const Trajectory& run : runs) {
+    const Eigen::VectorXd rms = (run.tau.colwise().squaredNorm() / static_cast<double>(run.samples())).cwiseSqrt().transpose();
+    const double top = rms.maxCoeff();
+    for (int k = 0; k < n; ++k) largest_share[k] = std::max(largest_share[k], top > 0 ? rms[k] / top : 0.0);
   }
-  return filters;
+  std::vector<int> joints;
+  std::vector<std::string> silent;
+  for (int k = 0; k < n; ++k) {
+    if (largest_share[k] >= kNoTorqueRatio) {
+      joints.push_back(k);
+    } else {
+      silent.push_back(model.joints[static_cast<std::size_t>(k)].name + " (tau" + std::to_string(k + 1) + ")");
+    }
+  }
+  if (joints.empty()) throw InputError("tau", "every torque column is zero: identification needs measured torques");
+  if (!silent.empty()) {
+    warnings.push_back("the torque of " + join(silent) + " is zero throughout (below 1e-4 of the largest joint's): taken as "
+                       "not measured, so its rows are left out of the fit and the judge; give torque_joints "
+                       "(--torque-joints) to say which joints have torque sensors");
+  }
+  return joints;
+}
+
+/// One friction model tried by step 3.
+struct FrictionCandidate {
+  ParameterLayout layout;
+  BaseParameters base;
+  std::vector<int> columns;  ///< the base's independent parameters as indices of the full layout
+  Eigen::VectorXd beta_prior;
+};
+
+FrictionCandidate friction_candidate(const Model& model, const ParameterLayout& layout, const ParameterLayout& full,
+                                     const Eigen::VectorXd& prior_full, const BaseParameterOptions& options) {
+  const int n = model.joint_count();
+  FrictionCandidate candidate;
+  candidate.layout = layout;
+  candidate.base = base_parameters(model, layout, options);
+  const std::vector<int> map = layout_map(layout, full, n);
+  Eigen::VectorXd prior(layout.size(n));
+  for (int i = 0; i < layout.size(n); ++i) prior[i] = prior_full[map[static_cast<std::size_t>(i)]];
+  candidate.beta_prior = candidate.base.combination * prior;
+  for (int index : candidate.base.independent) candidate.columns.push_back(map[static_cast<std::size_t>(index)]);
+  return candidate;
+}
+
+/// W's columns `columns`.
+Eigen::MatrixXd select_columns(const Eigen::MatrixXd& W, const std::vector<int>& columns) {
+  Eigen::MatrixXd selected(W.rows(), static_cast<Eigen::Index>(columns.size()));
+  for (std::size_t i = 0; i < columns.size(); ++i) selected.col(static_cast<Eigen::Index>(i)) = W.col(columns[i]);
+  return selected;
+}
+
+/// A candidate's held-out score with the base columns of `friction`: its rows' sums over every base
+/// parameter of the full layout's base (so that the target's sums serve every friction model).
+estimation::CrossValidation score(const estimation::BinnedSums& training, const estimation::BinnedSums& target,
+                                  const estimation::TimeBins& bins, double guard, const FrictionCandidate& friction,
+                                  const FrictionCandidate& full, const std::vector<double>& ridges) {
+  // The sums are over the full base's columns; a friction model uses those of its own base that the full base
+  // has (its friction columns are a subset), the rest at the prior.
+  std::vector<int> positions;
+  for (int column : friction.columns) {
+    const auto at = std::find(full.columns.begin(), full.columns.end(), column);
+    if (at != full.columns.end()) positions.push_back(static_cast<int>(at - full.columns.begin()));
+  }
+  Eigen::VectorXd prior = full.beta_prior;
+  // Parameters outside this friction model: at their prior (the URDF's friction, or 0).
+  return estimation::cross_validate(training, target, bins, guard, positions, prior, ridges);
 }
 
 }  // namespace
+
+std::string friction_text(const ParameterLayout& layout) {
+  std::vector<std::string> terms;
+  if (layout.viscous) terms.emplace_back("viscous");
+  if (layout.coulomb) terms.emplace_back("coulomb");
+  if (layout.offset) terms.emplace_back("offset");
+  std::string text;
+  for (const std::string& term : terms) text += (text.empty() ? "" : ",") + term;
+  return text.empty() ? "none" : text;
+}
 
 ParameterStructure parameter_structure(const Model& model, const ParameterLayout& layout) {
   const int n = model.joint_count();
@@ -132,152 +249,263 @@ ParameterStructure parameter_structure(const Model& model, const ParameterLayout
   return structure;
 }
 
-double motion_band(const Trajectory& data, double tail) {
-  const Eigen::Index N = data.samples();
-  Eigen::Index size = 1;
-  while (size < N) size *= 2;
-  Eigen::FFT<double> fft;
-  std::vector<double> signal(static_cast<std::size_t>(size), 0.0);
-  std::vector<std::complex<double>> spectrum;
-  Eigen::VectorXd power = Eigen::VectorXd::Zero(size / 2 + 1);
-  for (int k = 0; k < data.joint_count(); ++k) {
-    const Eigen::VectorXd q = data.q.col(k);
-    const double first = q[0], last = q[N - 1];
-    for (Eigen::Index i = 0; i < N; ++i) {
-      const double x = static_cast<double>(i) / static_cast<double>(std::max<Eigen::Index>(N - 1, 1));
-      const double hann = 0.5 - 0.5 * std::cos(2.0 * std::numbers::pi * x);
-      signal[static_cast<std::size_t>(i)] = (q[i] - first - (last - first) * x) * hann;
-    }
-    fft.fwd(spectrum, signal);
-    for (Eigen::Index f = 0; f <= size / 2; ++f) power[f] += std::norm(spectrum[static_cast<std::size_t>(f)]);
-  }
-  const double total = power.sum();
-  if (!(total > 0.0)) return 0.0;  // no motion at all
-  double cumulative = 0.0;
-  Eigen::Index f = 0;
-  for (; f <= size / 2; ++f) {
-    cumulative += power[f];
-    if (cumulative >= (1.0 - tail) * total) break;
-  }
-  return static_cast<double>(std::min(f, size / 2)) / (static_cast<double>(size) * data.dt());
+IdentificationResult identify(const Model& model, const Trajectory& data, const IdentificationOptions& options) {
+  return identify(model, std::vector<Trajectory>{data}, options);
 }
 
-FilterPair choose_filters(const Trajectory& data) {
-  const double dt = data.dt();
-  const double nyquist_band = std::numbers::pi;
-  // Ω_m: at least one frequency bin, so a motionless or very slow record still gets finite filters.
-  const double resolution = 2.0 * std::numbers::pi / static_cast<double>(data.samples());
-  const double motion = std::max(2.0 * std::numbers::pi * motion_band(data) * dt, resolution);
-  const auto half_length = [](double band) { return std::max(2, static_cast<int>(std::ceil(6.4 * std::numbers::pi / band))); };
-  FilterPair filters;
-  filters.differentiation.dt = filters.comparison.dt = dt;
-  filters.differentiation.band = std::min(nyquist_band / 2, 100.0 * motion);
-  filters.differentiation.half_length = half_length(filters.differentiation.band);
-  // The comparison filter's passband need not be flat (τ and the regressor go through the same one), only
-  // its band matter: a shorter window, M_c = ⌈4π/Ω_c⌉, keeps more data and costs less.
-  filters.comparison.band = std::min(filters.differentiation.band, 5.0 * motion);
-  filters.comparison.half_length = std::max(2, static_cast<int>(std::ceil(4.0 * std::numbers::pi / filters.comparison.band)));
-  // The filters consume M + M_c samples at each end; keep at least two thirds of the data.
-  const int budget = std::max(2, (data.samples() / 3 - 3) / 2 - filters.differentiation.half_length);
-  if (filters.comparison.half_length > budget) {
-    filters.comparison.half_length = budget;
-    filters.comparison.band = std::min(nyquist_band, 4.0 * std::numbers::pi / budget);
-  }
-  return filters;
-}
-
-IdentificationResult identify(const Model& model, const Trajectory& measured, const IdentificationOptions& options) {
+IdentificationResult identify(const Model& model, const std::vector<Trajectory>& measured, const IdentificationOptions& options) {
   const auto started = Clock::now();
   const int n = model.joint_count();
-  const ParameterLayout& layout = options.layout;
-  const int p = layout.size(n);
   IdentificationResult result;
-  result.standard_names = standard_parameter_names(n, layout);
-  result.prior = options.prior.size() ? options.prior : standard_parameters(model, layout);
-  if (result.prior.size() != p) {
-    throw InputError("prior", "the prior has " + std::to_string(result.prior.size()) + " entries, the robot's standard "
+  result.judge = options.judge;
+  result.runs = static_cast<int>(measured.size());
+  if (measured.empty()) throw InputError("dataset_ids", "identification needs at least one run");
+
+  // The full layout: every friction term a candidate may use.
+  ParameterLayout full_layout = options.layout;
+  if (options.friction_auto) full_layout.viscous = full_layout.coulomb = full_layout.offset = true;
+  const int p = full_layout.size(n);
+  const Eigen::VectorXd prior = options.prior.size() ? options.prior : standard_parameters(model, full_layout);
+  if (prior.size() != p) {
+    throw InputError("prior", "the prior has " + std::to_string(prior.size()) + " entries, the robot's standard "
                                   "vector " + std::to_string(p));
   }
-  if (!result.prior.allFinite()) throw InputError("prior", "the prior holds a value that is not a finite number");
-  if (measured.joint_count() != n) {
-    throw InputError("q", "the data has " + std::to_string(measured.joint_count()) + " joints, the robot (" + model.name +
-                              ") has " + std::to_string(n));
+  if (!prior.allFinite()) throw InputError("prior", "the prior holds a value that is not a finite number");
+  for (std::size_t i = 0; i < measured.size(); ++i) {
+    const std::string which = measured.size() > 1 ? "run " + std::to_string(i + 1) + ": " : "";
+    if (measured[i].joint_count() != n) {
+      throw InputError("q", which + "the data has " + std::to_string(measured[i].joint_count()) + " joints, the robot (" +
+                                model.name + ") has " + std::to_string(n));
+    }
+    if (!measured[i].has_torque()) {
+      throw InputError("tau", which + "the data has no tau columns: identification needs measured torques");
+    }
   }
-  if (!measured.has_torque()) throw InputError("tau", "the data has no tau columns: identification needs measured torques");
+  if ((options.half_length > 0) != (options.band > 0.0)) {
+    throw InputError(options.band > 0.0 ? "half_length" : "band",
+                     "give the differentiation filter's half_length and band together, or neither (chosen by rule)");
+  }
+  if (!(options.comparison_cutoff_hz >= 0.0) || !std::isfinite(options.comparison_cutoff_hz)) {
+    throw InputError("comparison_cutoff", "the comparison cut-off must be a positive number of Hz (or 0: chosen)");
+  }
+  if (!std::isfinite(options.ridge)) throw InputError("ridge", "the ridge must be a number >= 0 (or < 0: chosen)");
 
-  std::optional<Trajectory> prepared;  // only when trimming or resampling changes the data
-  const Trajectory& data = prepare_data(measured, options.preparation, prepared, &result.warnings);
-  result.base = base_parameters(model, layout, options.base);
+  // Step 1.
+  const std::vector<Trajectory> runs = prepare_runs(measured, options.preparation, result.warnings);
+  const double dt = runs.front().dt();
+  for (const Trajectory& run : runs) options.judge.validate(dt, run.t[run.samples() - 1] - run.t[0]);
+  result.torque_joints = measured_joints(model, runs, options.torque_joints, result.warnings);
+  const std::vector<int>& joints = result.torque_joints;
+
+  // Step 2: the candidates' cut-offs, D for the highest of them (and the judge's), the regressor signals.
+  std::vector<double> cutoffs;
+  if (options.comparison_cutoff_hz > 0) {
+    cutoffs.push_back(options.comparison_cutoff_hz);
+  } else {
+    for (double factor : kCutoffFactors) {
+      const double cutoff = factor * options.judge.cutoff_hz;
+      if (cutoff < 0.1 / dt) cutoffs.push_back(cutoff);  // at most a fifth of the Nyquist frequency
+    }
+    if (cutoffs.empty()) cutoffs.push_back(std::min(options.judge.cutoff_hz, 0.1 / dt));
+  }
+  const double highest = std::max(*std::max_element(cutoffs.begin(), cutoffs.end()), options.judge.cutoff_hz);
+  FilterPair filters = differentiation_for(highest, dt, options.judge.trim_seconds);
+  if (options.half_length > 0) {
+    filters.differentiation = FilterSettings{options.half_length, options.band, dt};
+    filters.working_step = working_step(filters.differentiation);
+  }
+  std::vector<RegressorSignals> signals;
+  for (const Trajectory& run : runs) {
+    signals.push_back(regressor_signals(model, full_layout, run, filters, options.cancel));
+    if (signals.back().t.size() == 0) {
+      result.cancelled = true;
+      result.wall_seconds = std::chrono::duration<double>(Clock::now() - started).count();
+      return result;
+    }
+  }
+  // Only the full layout's base columns are filtered: every friction model's base is among them, and the
+  // other columns are combinations of them (W = W_b C).
+  std::vector<int> base_columns;
+  const auto rows_at = [&](double cutoff) {
+    std::vector<FilteredRows> per_run;
+    for (const RegressorSignals& run : signals) {
+      per_run.push_back(filtered_rows(run, p, cutoff, filters.trim_seconds, joints, base_columns));
+    }
+    return stack(per_run);
+  };
+
+  // Step 3: the friction models and the candidates.
+  std::vector<FrictionCandidate> frictions;
+  frictions.push_back(friction_candidate(model, full_layout, full_layout, prior, options.base));
+  if (options.friction_auto) {
+    for (const auto& [viscous, coulomb] : {std::pair{false, false}, {true, false}, {true, true}}) {
+      ParameterLayout layout = full_layout;
+      layout.viscous = viscous;
+      layout.coulomb = coulomb;
+      layout.offset = false;
+      frictions.push_back(friction_candidate(model, layout, full_layout, prior, options.base));
+    }
+  }
+  const FrictionCandidate& full = frictions.front();
+  base_columns = full.columns;
+  std::sort(base_columns.begin(), base_columns.end());
+  const std::vector<double> ridges = options.ridge >= 0 ? std::vector<double>{options.ridge} : estimation::default_ridges();
+  const bool choosing = cutoffs.size() > 1 || ridges.size() > 1 || frictions.size() > 1;
+
+  std::vector<StackedRows> candidate_rows;
+  for (double cutoff : cutoffs) candidate_rows.push_back(rows_at(cutoff));
+  std::size_t chosen_cutoff = 0, chosen_friction = 0;
+  double chosen_ridge = ridges.front();
+  result.held_out_error = std::numeric_limits<double>::quiet_NaN();
+  if (choosing) {
+    const StackedRows target = rows_at(options.judge.cutoff_hz);
+    std::vector<std::pair<double, double>> spans;
+    for (std::size_t run = 0; run < runs.size(); ++run) {
+      double from = std::numeric_limits<double>::infinity(), to = -from;
+      for (std::size_t r = 0; r < target.run_of_row.size(); ++r) {
+        if (target.run_of_row[r] != static_cast<int>(run)) continue;
+        from = std::min(from, target.time_of_row[r]);
+        to = std::max(to, target.time_of_row[r]);
+      }
+      spans.emplace_back(from, to);
+    }
+    const estimation::TimeBins bins(spans, kFolds, kBinsPerFold);
+    const Eigen::MatrixXd target_W = select_columns(target.W, full.columns);
+    const estimation::BinnedSums target_sums = estimation::bin_rows(target_W, target.tau, bins_of_rows(target, bins), bins.count());
+    double best = std::numeric_limits<double>::infinity();
+    std::vector<estimation::BinnedSums> sums;
+    for (std::size_t c = 0; c < cutoffs.size(); ++c) {
+      const StackedRows& rows = candidate_rows[c];
+      sums.push_back(estimation::bin_rows(select_columns(rows.W, full.columns), rows.tau, bins_of_rows(rows, bins), bins.count()));
+    }
+    const auto guard_for = [&](double cutoff) {
+      return 0.5 / cutoff + 0.5 / options.judge.cutoff_hz + filters.differentiation.half_length * dt;
+    };
+    // The cut-off with the full friction model, then (with friction_auto) the friction models at that cut-off.
+    for (std::size_t c = 0; c < cutoffs.size(); ++c) {
+      const estimation::CrossValidation cv = score(sums[c], target_sums, bins, guard_for(cutoffs[c]), full, full, ridges);
+      result.candidates.push_back({cutoffs[c], friction_text(full.layout), cv.ridges[static_cast<std::size_t>(cv.best)],
+                                   cv.best_relative_error()});
+      if (cv.best_relative_error() < best) {
+        best = cv.best_relative_error();
+        chosen_cutoff = c;
+        chosen_ridge = cv.ridges[static_cast<std::size_t>(cv.best)];
+      }
+    }
+    for (std::size_t f = 1; f < frictions.size(); ++f) {
+      const estimation::CrossValidation cv =
+          score(sums[chosen_cutoff], target_sums, bins, guard_for(cutoffs[chosen_cutoff]), frictions[f], full, ridges);
+      result.candidates.push_back({cutoffs[chosen_cutoff], friction_text(frictions[f].layout),
+                                   cv.ridges[static_cast<std::size_t>(cv.best)], cv.best_relative_error()});
+      if (cv.best_relative_error() < best) {
+        best = cv.best_relative_error();
+        chosen_friction = f;
+        chosen_ridge = cv.ridges[static_cast<std::size_t>(cv.best)];
+      }
+    }
+    result.held_out_error = best;
+    result.chosen_by_held_out = true;
+  }
+
+  // Step 4: the chosen candidate's rows over its own layout.
+  const FrictionCandidate& friction = frictions[chosen_friction];
+  const StackedRows& rows = candidate_rows[chosen_cutoff];
+  result.layout = friction.layout;
+  result.ridge = chosen_ridge;
+  filters.comparison_cutoff_hz = cutoffs[chosen_cutoff];
+  result.filters = filters;
+  result.base = friction.base;
   const BaseParameters& base = result.base;
-  for (int index : base.absent) result.unidentifiable.push_back(result.standard_names[static_cast<std::size_t>(index)]);
-
-  result.filters = filters_for(data, options, result);
-  const FilteredRegressor rows = filtered_regressor(model, layout, data, result.filters, options.cancel);
-  if (rows.instants == 0) {
-    result.cancelled = true;
-    result.wall_seconds = std::chrono::duration<double>(Clock::now() - started).count();
-    return result;
-  }
-  result.decimation = rows.decimation;
-  result.rows = static_cast<int>(rows.W.rows());
   const int b = base.size();
-  if (result.rows < 2 * b) {
-    throw InputError("samples", "after filtering, the data give " + std::to_string(rows.instants) + " instants x " +
-                                    std::to_string(n) + " joints = " + std::to_string(result.rows) + " rows for " +
-                                    std::to_string(b) + " base parameters (at least " + std::to_string(2 * b) +
-                                    " are needed): give longer data or a wider comparison band");
-  }
-  Eigen::MatrixXd W_b(rows.W.rows(), b);
-  for (int i = 0; i < b; ++i) W_b.col(i) = rows.W.col(base.independent[static_cast<std::size_t>(i)]);
-  const Eigen::VectorXd beta_prior = base.combination * result.prior;
+  result.standard_names = standard_parameter_names(n, result.layout);
+  const std::vector<int> map = layout_map(result.layout, full_layout, n);
+  result.prior.resize(result.layout.size(n));
+  for (int i = 0; i < result.layout.size(n); ++i) result.prior[i] = prior[map[static_cast<std::size_t>(i)]];
+  for (int index : base.absent) result.unidentifiable.push_back(result.standard_names[static_cast<std::size_t>(index)]);
+  result.rows = static_cast<int>(rows.W.rows());
+  const Eigen::MatrixXd W_b = select_columns(rows.W, friction.columns);
+  const Eigen::VectorXd& beta_prior = friction.beta_prior;
+  const Eigen::Index J = static_cast<Eigen::Index>(joints.size());
 
-  // Unweighted first; per-joint weighting then divides each joint by its residual standard deviation.
-  result.joint_weights = Eigen::VectorXd::Ones(n);
-  Solution solution = solve(W_b, rows.tau, row_weights(result.joint_weights, W_b.rows()), beta_prior);
+  estimation::LinearSolveOptions solve_options;
+  solve_options.prior = beta_prior;
+  solve_options.ridge = chosen_ridge;
+  result.joint_weights = Eigen::VectorXd::Ones(J);
+  estimation::LinearSolution solution = estimation::solve_linear(W_b, rows.tau, solve_options);
   if (options.weighting == JointWeighting::per_joint) {
-    const Eigen::VectorXd rms = joint_residual_rms(rows.tau - W_b * solution.beta, n);
-    for (int k = 0; k < n; ++k) result.joint_weights[k] = rms[k] > 0 ? 1.0 / rms[k] : 1.0;
+    const Eigen::VectorXd rms = joint_residual_rms(solution.residual, J);
+    for (Eigen::Index k = 0; k < J; ++k) result.joint_weights[k] = rms[k] > 0 ? 1.0 / rms[k] : 1.0;
     result.joint_weights /= result.joint_weights.maxCoeff();  // the largest weight 1: costs stay in N·m²
-    solution = solve(W_b, rows.tau, row_weights(result.joint_weights, W_b.rows()), beta_prior);
+    const Eigen::VectorXd weights = row_weights(result.joint_weights, W_b.rows());
+    solution = estimation::solve_linear(weights.asDiagonal() * W_b, weights.asDiagonal() * rows.tau, solve_options);
+    solution.residual = rows.tau - W_b * solution.estimate;
   }
-  result.estimate = solution.beta;
+  result.estimate = solution.estimate;
 
-  const Eigen::VectorXd residual = rows.tau - W_b * result.estimate;
-  result.residual_rms = joint_residual_rms(residual, n);
-  const Eigen::Index excited = b - solution.null_directions.cols();
-  const double dof = std::max<double>(1.0, static_cast<double>(residual.size() - excited));
-  const Eigen::VectorXd weighted = row_weights(result.joint_weights, residual.size()).cwiseProduct(residual);
+  // Step 5.
+  const Eigen::VectorXd& residual = solution.residual;
+  result.residual_rms = joint_residual_rms(residual, J);
+  const double dof = std::max(1.0, static_cast<double>(residual.size() - solution.determined));
   result.residual_variance = residual.squaredNorm() / dof;
-  // Filtered residuals are correlated: white noise through L keeps Σc² of its variance, and rows D apart
-  // are about 1/(D Σc²) times less independent than white samples would be (never counted as more).
-  const double correlation_factor = std::max(1.0, 1.0 / (rows.decimation * rows.lowpass_energy));
-  const double weighted_variance = weighted.squaredNorm() / dof * correlation_factor;
-  const Eigen::MatrixXd covariance = solution.scale.cwiseInverse().asDiagonal() * (weighted_variance * solution.covariance_scaled) *
-                                     solution.scale.cwiseInverse().asDiagonal();
+  const Eigen::VectorXd weighted = row_weights(result.joint_weights, residual.size()).cwiseProduct(residual);
+  const double weighted_variance =
+      weighted.squaredNorm() / dof * estimation::filtered_residual_factor(rows.row_step, rows.lowpass_energy);
+  const Eigen::MatrixXd covariance = weighted_variance * solution.covariance_unit;
+  result.data_share = solution.parameter_share;
   result.std_errors = covariance.diagonal().cwiseSqrt();
   result.correlation = Eigen::MatrixXd::Constant(b, b, std::numeric_limits<double>::quiet_NaN());
-  std::vector<bool> unexcited(static_cast<std::size_t>(b), false);
+  std::vector<std::string> barely;
   for (int i = 0; i < b; ++i) {
-    // A base parameter with a visible share in an unexcited direction has no standard error of its own.
-    if (solution.null_directions.cols() > 0 && solution.null_directions.row(i).norm() > 0.05) {
-      unexcited[static_cast<std::size_t>(i)] = true;
-      result.std_errors[i] = std::numeric_limits<double>::quiet_NaN();
+    if (!(result.data_share[i] > 0.0)) result.std_errors[i] = std::numeric_limits<double>::quiet_NaN();
+    if (result.data_share[i] < kBarelySeenShare) {
       result.unexcited.push_back(base.names[static_cast<std::size_t>(i)]);
+      barely.push_back(base.names[static_cast<std::size_t>(i)] + " (" + percent(result.data_share[i]) + ")");
     }
   }
   for (int i = 0; i < b; ++i) {
     for (int j = 0; j < b; ++j) {
-      if (unexcited[static_cast<std::size_t>(i)] || unexcited[static_cast<std::size_t>(j)]) continue;
+      if (std::isnan(result.std_errors[i]) || std::isnan(result.std_errors[j]) || !(covariance(i, i) > 0) ||
+          !(covariance(j, j) > 0)) {
+        continue;
+      }
       result.correlation(i, j) = covariance(i, j) / std::sqrt(covariance(i, i) * covariance(j, j));
     }
   }
-  result.condition_number = solution.null_directions.cols() > 0 || excited == 0
-                                ? std::numeric_limits<double>::infinity()
-                                : solution.singular_values[0] / solution.singular_values[excited - 1];
-  if (!result.unexcited.empty()) {
-    result.warnings.push_back("the data do not excite " + join(result.unexcited) +
-                              ": these base parameters keep the prior's (URDF's) values; a richer excitation "
-                              "(manipid excitation) would determine them");
+  result.condition_number = solution.condition_number;
+  if (!barely.empty()) {
+    result.warnings.push_back("the data barely see " + join(barely) + " (each base parameter's data share: the part of "
+                              "its estimate the data determine rather than the URDF): these stay near the URDF's values; "
+                              "a richer excitation (manipid excitation) or another run would determine them");
+  }
+  {
+    // Far from the prior: an estimate kFarFromPrior times its prior; or, for a prior of zero (to round-off:
+    // below kRoundOff of the largest), an estimate whose torque alone is kCancelled times the measured
+    // torque, which the other parameters must cancel.
+    std::vector<std::string> far;
+    const double torque_norm = rows.tau.norm();
+    const double largest_prior = beta_prior.cwiseAbs().maxCoeff();
+    for (int i = 0; i < b; ++i) {
+      const double estimate = result.estimate[i], prior_value = beta_prior[i];
+      const double column = W_b.col(i).norm();
+      std::ostringstream text;
+      text.precision(3);
+      if (std::abs(prior_value) > kRoundOff * largest_prior) {
+        const double ratio = std::abs(estimate / prior_value);
+        if (ratio <= kFarFromPrior) continue;
+        text << base.names[static_cast<std::size_t>(i)] << " = " << estimate << " (" << ratio << " times the URDF's "
+             << prior_value << ")";
+      } else {
+        const double contribution = std::abs(estimate) * column / torque_norm;
+        if (!(contribution > kCancelled)) continue;
+        text << base.names[static_cast<std::size_t>(i)] << " = " << estimate << " (its torque alone " << contribution
+             << " times the measured torque, cancelled by others)";
+      }
+      far.push_back(text.str());
+    }
+    if (!far.empty()) {
+      result.warnings.push_back("estimates far from the URDF's values: " + join(far) + "; check the URDF, the units and "
+                                "the excitation before trusting them");
+    }
   }
 
   // The standard vector with these base parameters nearest to the prior: π0 + Cᵀ(CCᵀ)⁻¹(β̂ − Cπ0).
@@ -285,12 +513,13 @@ IdentificationResult identify(const Model& model, const Trajectory& measured, co
   const Eigen::VectorXd correction = (C * C.transpose()).ldlt().solve(result.estimate - beta_prior);
   result.point = result.prior + C.transpose() * correction;
 
-  const ParameterStructure structure = parameter_structure(model, layout);
+  // Step 6.
+  const ParameterStructure structure = parameter_structure(model, result.layout);
   if (options.physical) {
-    // The same rows and weights as the least squares, over every standard parameter.
+    // The same rows and weights as the least squares, over every standard parameter of the chosen layout.
     ConsistentFitProblem problem;
     const Eigen::VectorXd weights = row_weights(result.joint_weights, rows.W.rows());
-    problem.R = weights.asDiagonal() * rows.W;
+    problem.R = weights.asDiagonal() * (W_b * C);  // every standard column: W = W_b C for any motion
     problem.z = weights.asDiagonal() * rows.tau;
     problem.unconstrained = result.point;
     problem.prior = result.prior;
@@ -305,7 +534,7 @@ IdentificationResult identify(const Model& model, const Trajectory& measured, co
     } else {
       result.point = result.physical->estimate;
       result.estimate = C * result.point;
-      result.residual_rms = joint_residual_rms(rows.tau - W_b * result.estimate, n);
+      result.residual_rms = joint_residual_rms(rows.tau - W_b * result.estimate, J);
       if (!result.physical->converged()) {
         result.warnings.push_back("the physically consistent fit did not converge: " + result.physical->message);
       }
@@ -316,20 +545,32 @@ IdentificationResult identify(const Model& model, const Trajectory& measured, co
   return result;
 }
 
-ValidationReport validate(const Model& model, const ParameterLayout& layout, const IdentificationResult& result,
-                          const Trajectory& data, const DataPreparation& preparation) {
-  if (data.joint_count() != model.joint_count()) {
-    throw InputError("q", "the validation data has " + std::to_string(data.joint_count()) + " joints, the robot (" +
-                              model.name + ") has " + std::to_string(model.joint_count()));
-  }
-  if (!data.has_torque()) throw InputError("tau", "the validation data has no tau columns to compare the prediction with");
+ValidationReport validate(const Model& model, const IdentificationResult& result, const std::vector<Trajectory>& runs,
+                          const DataPreparation& preparation) {
+  if (runs.empty()) throw InputError("validation_dataset_ids", "validation needs at least one run");
   ValidationReport report;
+  std::vector<TorquePrediction> estimate, prior;
   DataPreparation same_grid = preparation;
-  same_grid.uniform.dt = result.filters.differentiation.dt;  // the filters are built for this period
-  std::optional<Trajectory> prepared;
-  const Trajectory& uniform = prepare_data(data, same_grid, prepared, &report.warnings);
-  report.estimate = predict_torque(model, layout, result.point, uniform, result.filters);
-  report.prior = predict_torque(model, layout, result.prior, uniform, result.filters);
+  same_grid.uniform.dt = result.filters.differentiation.dt;  // the identification's period
+  for (std::size_t i = 0; i < runs.size(); ++i) {
+    const Trajectory& data = runs[i];
+    const std::string which = runs.size() > 1 ? "validation run " + std::to_string(i + 1) + ": " : "";
+    if (data.joint_count() != model.joint_count()) {
+      throw InputError("q", which + "the validation data has " + std::to_string(data.joint_count()) + " joints, the robot (" +
+                                model.name + ") has " + std::to_string(model.joint_count()));
+    }
+    if (!data.has_torque()) {
+      throw InputError("tau", which + "the validation data has no tau columns to compare the prediction with");
+    }
+    std::vector<std::string> warnings;
+    std::optional<Trajectory> prepared;
+    const Trajectory& uniform = prepare_data(data, same_grid, prepared, &warnings);
+    for (const std::string& warning : warnings) report.warnings.push_back(which + warning);
+    estimate.push_back(predict_torque(model, result.layout, result.point, uniform, result.judge, result.torque_joints));
+    prior.push_back(predict_torque(model, result.layout, result.prior, uniform, result.judge, result.torque_joints));
+  }
+  report.estimate = combine(estimate);
+  report.prior = combine(prior);
   return report;
 }
 

@@ -191,10 +191,8 @@ TEST(RobotIdentification, NoiseFreeRoundTripPredictsRandomStatesTo1e5) {
   IdentificationOptions options;
   options.layout = layout;
   const IdentificationResult result = identify(model, data, options);
-  EXPECT_TRUE(result.filters_chosen_automatically);
-  // The fifth harmonic of a 10 s period is 0.5 Hz; the Hann window's leakage adds a few bins.
-  EXPECT_GE(result.motion_band_hz, 0.5);
-  EXPECT_LE(result.motion_band_hz, 1.0);
+  EXPECT_TRUE(result.chosen_by_held_out);
+  EXPECT_EQ(result.candidates.size(), std::size(kCutoffFactors));
   EXPECT_TRUE(result.unexcited.empty());
   EXPECT_LT(random_state_error(model, layout, result.point, truth, engine), 1e-5);
   // The estimate is the truth's base parameters.
@@ -255,7 +253,7 @@ TEST(RobotIdentification, RoundTripOnTheProjectsOwnExcitation) {
   const IdentificationResult estimate = identify(model, noisy, options);
   EXPECT_LT(random_state_error(model, layout, estimate.point, truth, engine), 1.5e-3);
   const Trajectory other = measure_excitation(model, layout, truth, second, 1e-3, 1);
-  const ValidationReport report = validate(model, layout, estimate, other, options.preparation);
+  const ValidationReport report = validate(model, estimate, {other}, options.preparation);
   for (Eigen::Index k = 0; k < 6; ++k) EXPECT_LT(report.estimate.relative_error[k], 0.01) << "joint " << k + 1;
 }
 
@@ -387,7 +385,10 @@ TEST(RobotIdentification, PhysicalEstimatesAreRealBodiesAtASmallCost) {
   EXPECT_LT((physical.estimate - physical.base.combination * physical.point).norm(), 1e-9 * physical.estimate.norm());
 }
 
-TEST(RobotIdentification, ValidationOnASecondRunBeatsThePrior) {
+TEST(RobotIdentification, ValidationOnASecondRunPredictsAsWellAsTheTruthUnderTheJudge) {
+  // Validation is judged under the fixed low-pass (signal/judge.h), whose states come from low-passed q: on
+  // noise-free data its own floor is the truth's figure (Coulomb friction's steps are where it differs). The
+  // estimate predicts the second run as well as the truth does, far better than the prior.
   const Model model = example("ur5_like.urdf");
   const ParameterLayout layout = with_offset();
   std::mt19937_64 engine(13);
@@ -397,11 +398,27 @@ TEST(RobotIdentification, ValidationOnASecondRunBeatsThePrior) {
   IdentificationOptions options;
   options.layout = layout;
   const IdentificationResult result = identify(model, first, options);
-  const ValidationReport report = validate(model, layout, result, second, options.preparation);
-  EXPECT_LT(report.estimate.overall_relative_error, 1e-4);
-  for (Eigen::Index k = 0; k < 6; ++k) EXPECT_LT(report.estimate.relative_error[k], 1e-3) << k;
-  EXPECT_GT(report.prior.overall_relative_error, 100 * report.estimate.overall_relative_error);
+  const ValidationReport report = validate(model, result, {second}, options.preparation);
+  const TorquePrediction floor = predict_torque(model, layout, truth, second, options.judge);
+  EXPECT_LT(floor.overall_relative_error, 1e-3);
+  EXPECT_LT(report.estimate.overall_relative_error, floor.overall_relative_error + 1e-5);
+  for (Eigen::Index k = 0; k < 6; ++k) {
+    EXPECT_LT(report.estimate.relative_error[k], floor.relative_error[k] * 1.01 + 1e-5) << k;
+  }
+  EXPECT_GT(report.prior.overall_relative_error, 50 * report.estimate.overall_relative_error);
   EXPECT_EQ(report.estimate.measured.rows(), report.estimate.model.rows());
+  // Without Coulomb friction the judge's floor is what its states' start-up leaves after 0.3 s (the low-pass's
+  // transient in q̈: 1e-2 of q̈ at 0.3 s, 8e-4 at 0.5 s, 3e-5 at 1 s on a 0.4 Hz motion), and no more.
+  ParameterLayout smooth = layout;
+  smooth.coulomb = false;
+  Eigen::VectorXd no_coulomb(smooth.size(6));
+  no_coulomb << truth.head(66), truth.segment(layout.offset_begin(6), 6);  // inertial and viscous, offsets
+  const Trajectory smooth_run = measure(model, smooth, no_coulomb, Fourier::random(6, 4, engine),
+                                        uniform_times(15.0, 1e-3));
+  EXPECT_LT(predict_torque(model, smooth, no_coulomb, smooth_run, options.judge).overall_relative_error, 1e-3);
+  JudgeOptions long_trim = options.judge;
+  long_trim.trim_seconds = 1.0;
+  EXPECT_LT(predict_torque(model, smooth, no_coulomb, smooth_run, long_trim).overall_relative_error, 1e-4);
 }
 
 TEST(RobotIdentification, AMotionlessJointLeavesItsParametersAtThePriorWithAWarning) {
@@ -419,11 +436,16 @@ TEST(RobotIdentification, AMotionlessJointLeavesItsParametersAtThePriorWithAWarn
   EXPECT_FALSE(result.unexcited.empty());
   EXPECT_TRUE(std::isinf(result.condition_number));
   bool warned = false;
-  for (const std::string& warning : result.warnings) warned = warned || warning.find("do not excite") != std::string::npos;
+  for (const std::string& warning : result.warnings) warned = warned || warning.find("barely see") != std::string::npos;
   EXPECT_TRUE(warned);
   for (const std::string& name : result.unexcited) {
     const auto index = std::find(result.base.names.begin(), result.base.names.end(), name) - result.base.names.begin();
-    EXPECT_TRUE(std::isnan(result.std_errors[index])) << name;
+    EXPECT_LT(result.data_share[index], 0.5) << name;
+    // Not determined at all: no standard error, and the URDF's value.
+    if (result.data_share[index] == 0.0) {
+      EXPECT_TRUE(std::isnan(result.std_errors[index])) << name;
+      EXPECT_EQ(result.estimate[index], (result.base.combination * result.prior)[index]) << name;
+    }
   }
 }
 
@@ -455,10 +477,12 @@ TEST(RobotIdentification, RefusesDataItCannotUseNamingTheProblem) {
   IdentificationOptions given;
   given.half_length = 60;
   given.band = 0.3;
-  given.comparison_half_length = 100;
-  given.comparison_band = 0.2;
-  EXPECT_EQ(field_of(short_run, given).rfind("samples: the filters (half-lengths M = 60 and M_c = 100) need at least 323", 0), 0u)
+  given.judge.trim_seconds = 0.05;
+  EXPECT_EQ(field_of(short_run, given).rfind("samples: the filters (differentiation half-length M = 60, 0.05", 0), 0u)
       << field_of(short_run, given);
+  IdentificationOptions judged;
+  judged.judge.cutoff_hz = 600.0;
+  EXPECT_EQ(field_of(data, judged).rfind("judge_cutoff:", 0), 0u) << field_of(data, judged);
   IdentificationOptions half;
   half.band = 0.1;
   EXPECT_EQ(field_of(data, half).rfind("half_length:", 0), 0u);

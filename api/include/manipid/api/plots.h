@@ -35,11 +35,12 @@ nlohmann::ordered_json trajectory_to_json(const Trajectory& data);
 nlohmann::ordered_json torque_fit_to_json(const std::string& request_json, const std::string& result_json,
                                           const Trajectory& data, long max_points);
 
-/// The same for a URDF robot's identification (request with robot_id): its filtered measured torque on
-/// `data` beside the torque its "point" predicts through its filters, per joint, with "relative_error"
-/// per joint and overall. With `prior`, also the URDF's own values' errors under "prior" (the validation
-/// view). {"filters", "samples", "t", "joints": [{"joint", "name", "measured", "model", "residual",
-/// "rms_measured", "rms_residual", "relative_error"}], "overall_relative_error", "prior"?}.
+/// The same for a URDF robot's identification (request with robot_id): the measured torque on `data` beside
+/// the torque its "point" predicts, both through the result's judge (robot/prediction.h), per fitted joint,
+/// with "relative_error" per joint and overall. With `prior`, also the URDF's own values' errors under "prior"
+/// (the validation view). {"judge": {"lowpass", "cutoff_hz", "trim_seconds"}, "samples", "t", "joints":
+/// [{"joint", "name", "measured", "model", "residual", "rms_measured", "rms_residual", "relative_error"}],
+/// "overall_relative_error", "prior"?}.
 nlohmann::ordered_json robot_fit_to_json(const robot::Model& model, const std::string& request_json,
                                          const std::string& result_json, const Trajectory& data, long max_points,
                                          bool prior);

@@ -5,7 +5,8 @@
 //   { "method": "input-error (linear least squares)",
 //     "robot": {"name", "base_link", "tip_link", "joints": [{"name", "link", "type"}]},
 //     "parameters": {"friction": ["viscous", ...], "armature": false},
-//     "base_parameters": [{"name": "Izz1 + Iyy2 + ...", "estimate", "std_error", "relative_std_error"}],
+//     "base_parameters": [{"name": "Izz1 + Iyy2 + ...", "combination", "estimate", "std_error", "relative_std_error",
+//                          "data_share"}],
 //     "correlation": [[...]]  (base × base),
 //     "condition_number", "unexcited": [...],
 //     "point": {"m1": ..., ..., "fv1": ...}   every standard parameter: the base estimate, nearest to the prior,
@@ -13,9 +14,12 @@
 //     "unidentifiable": [...]                standard parameters no motion can determine,
 //     "friction": [{"joint", "fv", "fc", "fo"}]   per joint, from point (only the layout's terms),
 //     "filters": {"differentiation": {"half_length", "band", "dt", "cutoff_hz"},
-//                 "comparison": {...}, "automatic", "motion_band_hz"},
-//     "rows", "decimation",
-//     "fit": {"residual_rms": [...], "relative_error": [...], "overall_relative_error"},
+//                 "comparison": {"lowpass", "cutoff_hz"}, "working_step", "trim_seconds"},
+//     "selection": {"by_held_out", "ridge", "held_out_error",
+//                   "candidates": [{"comparison_cutoff_hz", "friction", "ridge", "held_out_error"}]},
+//     "judge": {"lowpass", "cutoff_hz", "trim_seconds"}   what "fit" and "validation" are judged under,
+//     "torque_joints": [joint names fitted and judged], "runs", "rows",
+//     "fit": {"residual_rms": [...], "relative_error": [...], "rms_error": [...], "overall_relative_error"},
 //     "validation": {"relative_error": [...], "rms_error": [...], "overall_relative_error",
 //                    "prior": {"relative_error": [...], "rms_error": [...], "overall_relative_error"}}  (if any),
 //     "warnings": [...], "wall_seconds" }
@@ -58,8 +62,7 @@ std::vector<std::string> friction_names(const robot::ParameterLayout& layout);
 /// flags; throws InputError(field) for an unknown or repeated term.
 void parse_friction(const std::vector<std::string>& terms, robot::ParameterLayout& layout, const std::string& field);
 
-nlohmann::ordered_json robot_result_to_json(const robot::Model& model, const robot::ParameterLayout& layout,
-                                            const robot::IdentificationResult& result,
+nlohmann::ordered_json robot_result_to_json(const robot::Model& model, const robot::IdentificationResult& result,
                                             const robot::TorquePrediction& fit,
                                             const std::optional<robot::ValidationReport>& validation);
 

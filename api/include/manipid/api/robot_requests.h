@@ -37,10 +37,15 @@ ParsedRobot parse_robot(const RobotUpload& upload);
 
 // ---- Identifications of a URDF robot -----------------------------------------------------
 
+/// The most runs one identification (or its validation) may name.
+inline constexpr std::size_t kMostRuns = 16;
+
 struct RobotIdentificationSpec {
   std::string robot_id;
-  std::string dataset_id;
-  std::string validation_dataset_id;   ///< empty: no validation
+  std::vector<std::string> dataset_ids;             ///< the training runs, 1 to kMostRuns
+  std::string dataset_id;                           ///< the first of them (the job's dataset)
+  std::vector<std::string> validation_dataset_ids;  ///< runs judged with the estimate; empty: no validation
+  std::string validation_dataset_id;                ///< the first of them, empty: no validation
   robot::IdentificationOptions options;  ///< cancel left empty
   bool physical = false;
 };
@@ -48,12 +53,15 @@ struct RobotIdentificationSpec {
 /// True when the identification request names a robot_id (the URDF robot path) rather than a preset.
 bool names_a_robot(const nlohmann::json& body);
 
-/// {"robot_id": "rb_…", "dataset_id": "ds_…", "validation_dataset_id"?: "ds_…",
-///  "friction"?: ["viscous", "coulomb", "offset"] (default viscous and Coulomb; [] for none),
+/// {"robot_id": "rb_…", "dataset_id": "ds_…" | "dataset_ids": ["ds_…", …],
+///  "validation_dataset_id"?: "ds_…" | "validation_dataset_ids"?: [...],
+///  "friction"?: "auto" (default: chosen by held-out prediction) | ["viscous", "coulomb", "offset"] ([] for none),
 ///  "armature"?: false, "physical"?: false, "trim"?: [start_s, end_s], "dt"?: s,
-///  "half_length"?: int | "auto", "band"?: number | "auto", "comparison_half_length"?,
-///  "comparison_band"?, "weights"?: "unit" | "per-joint"}. The paper preset's options (method,
-///  algorithm, free, initial, kp, ...) are refused with the reason; so is a "preset" beside robot_id.
+///  "half_length"?: int | "auto", "band"?: number | "auto" (the differentiation filter),
+///  "comparison_cutoff"?: Hz | "auto", "ridge"?: number | "auto", "judge_cutoff"?: 5 (Hz), "judge_trim"?: 0.3 (s),
+///  "torque_joints"?: [1-based joint numbers], "weights"?: "unit" | "per-joint"}. The paper preset's options
+///  (method, algorithm, free, initial, kp, ...) are refused with the reason; so is a "preset" beside robot_id,
+///  and the former comparison_half_length / comparison_band (naming comparison_cutoff).
 RobotIdentificationSpec robot_identification_from_json(const nlohmann::json& body);
 
 // ---- Excitations -------------------------------------------------------------------------

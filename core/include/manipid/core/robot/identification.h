@@ -1,41 +1,45 @@
 // identification.h — a rigid-body robot's base parameters from measured q and τ, by the paper's
-// input-error method, which is linear here: one least-squares solve, no iterative optimiser.
+// input-error method, which is linear here: least squares on filtered rows, no iterative optimiser.
 //
-// The steps (each its own header):
-//   1. prepare the data: trim the ramps, drop stale repeated rows, resample onto a uniform grid
-//      (resample.h);
-//   2. filter: q^f, q̇^f, q̈^f from the differential filters, Y(q^f, q̇^f, q̈^f), then L Y beside L τ —
-//      both sides through the same low-pass (robot/filtered_regressor.h). Chosen from the data unless
-//      given: the motion's band f_m — the frequency below which all but 1e-6 of the power of the
-//      detrended angles lies — then differentiation band Ωg = 100·Ω_m (the differentiators exact to
-//      ~1e-5 on the motion; at most π/2) with M = ⌈6.4π/Ωg⌉ (the paper's M = 100, Ωg = 0.2 proportion),
-//      and comparison band Ω_c = 5·Ω_m (the torque the motion makes, its nonlinear harmonics included;
-//      not the noise) with M_c = ⌈4π/Ω_c⌉ (its passband need not be flat: both sides go through it),
-//      shortened — the band widened — if the filters would consume more than a third of the data;
-//   3. solve (L Y_b) β = L τ for the base parameters β (robot/base_parameters.h) by QR on column-scaled
-//      rows, optionally weighting each joint by its residual variance; directions the data do not excite
-//      (relative singular value < 1e-10) stay at the prior's value and a warning names them;
-//   4. report: standard errors σ²(W_bᵀW_b)⁻¹ with σ² from the residual, corrected for the filter's
-//      correlation (white noise through L keeps Σc² of its variance, and rows D apart are not
-//      independent: factor 1/(D Σc²), never below 1), correlations, the scaled regressor's condition
-//      number, the standard parameters no data can determine, and `point`: the full standard vector with
-//      the estimated base parameters that is nearest (Euclidean) to the prior — the URDF's own values —
-//      so what the data cannot see stays at the CAD values;
-//   5. physical consistency (robot/consistency.h): whether each link of `point` is a real body (mass > 0,
-//      pseudo-inertia positive definite: inertia about the centre of mass positive definite, triangle
-//      inequalities) and each fv, fc, Ia ≥ 0. With `physical`, the constrained fit (robot/consistent_fit.h:
-//      log-Cholesky coordinates per link, Levenberg–Marquardt on the same rows, from the projected
-//      least-squares point) replaces `point` and the base estimates, and reports the cost it adds.
+// The steps:
+//   1. prepare each run alone: trim the ramps, drop stale repeated rows, resample onto a uniform grid
+//      (signal/resample.h) — every run onto the first run's period. The joints whose torque is measured:
+//      those given, else every joint whose τ is not zero throughout (a joint logged as ≈ 0 N·m while it
+//      moves has no sensor: its rows would pull its link toward zero, so they are left out, with a warning);
+//   2. filter: the differentiation filter D gives q^f, q̇^f, q̈^f; Y(q^f, q̇^f, q̈^f) and τ both pass the
+//      comparison low-pass L (robot/filtered_regressor.h), each run alone, rows stacked;
+//   3. choose by held-out evidence (estimation/cross_validation.h): each candidate comparison cut-off
+//      (kCutoffFactors × the judge's cut-off, or the one given), each relative ridge toward the prior
+//      (estimation::default_ridges(), or the one given) and, with `friction_auto`, each friction model
+//      (none, viscous, viscous + Coulomb, viscous + Coulomb + offset) is fitted on four fifths of every run
+//      and scored on the fifth it did not see, five times over, against one common target — the judge's
+//      low-pass of the measured torque (signal/judge.h) — so no candidate wins by changing what it is
+//      judged on. The lowest held-out error wins;
+//   4. solve (L Y_b) β = L τ for the base parameters β (robot/base_parameters.h) by the one linear
+//      least-squares rule (estimation/linear_least_squares.h): columns scaled to unit norm, negligible
+//      columns and directions the data do not determine (estimation/rules.h) kept at the prior (the
+//      URDF's values), the rest shrunk toward it by the chosen ridge; optionally each joint weighted by its
+//      residual variance;
+//   5. report: standard errors σ² · cov with σ² from the residual corrected for the filter's correlation
+//      (estimation::filtered_residual_factor), correlations, the scaled regressor's condition number, each
+//      base parameter's data share (how much of its estimate the data determine rather than the prior),
+//      the base parameters the data barely see (`unexcited`, share < 1/2), warnings naming every estimate far
+//      from its prior, and `point`: the full standard vector with the estimated base parameters that is
+//      nearest (Euclidean) to the prior, so what the data cannot see stays at the CAD values;
+//   6. physical consistency (robot/consistency.h): whether each link of `point` is a real body (mass > 0,
+//      pseudo-inertia positive definite) and each fv, fc, Ia ≥ 0. With `physical`, the constrained fit
+//      (robot/consistent_fit.h) replaces `point` and the base estimates, and reports the cost it adds.
 #pragma once
 
-#include "manipid/core/signal/filters.h"
-#include "manipid/core/signal/resample.h"
 #include "manipid/core/robot/base_parameters.h"
 #include "manipid/core/robot/consistency.h"
 #include "manipid/core/robot/consistent_fit.h"
 #include "manipid/core/robot/filtered_regressor.h"
 #include "manipid/core/robot/model.h"
 #include "manipid/core/robot/parameters.h"
+#include "manipid/core/robot/prediction.h"
+#include "manipid/core/signal/judge.h"
+#include "manipid/core/signal/resample.h"
 #include "manipid/core/signal/trajectory.h"
 
 #include <Eigen/Core>
@@ -52,20 +56,32 @@ enum class JointWeighting {
   per_joint,  ///< each joint divided by its residual variance from a first, unweighted fit
 };
 
+/// The comparison cut-offs tried, as multiples of the judge's cut-off (5 Hz: 1.5 .. 10 Hz).
+inline constexpr double kCutoffFactors[] = {0.3, 0.4, 0.6, 0.8, 1.0, 1.4, 2.0};
+
 struct IdentificationOptions {
   /// Friction and armature terms estimated beside the 10 inertial parameters per body.
   ParameterLayout layout;
-  /// Trim and uniform grid (resample.h).
+  /// Choose the friction terms by held-out evidence among none, viscous, viscous + Coulomb and viscous +
+  /// Coulomb + offset (step 3); `layout` then only says whether armature is estimated.
+  bool friction_auto = false;
+  /// Trim and uniform grid (resample.h), for every run.
   DataPreparation preparation;
-  /// The differentiation filter's half-length M and band Ωg (rad/sample); 0 = chosen from the data (both).
+  /// The comparison low-pass's cut-off, Hz; 0 = chosen (step 3).
+  double comparison_cutoff_hz = 0.0;
+  /// The differentiation filter's half-length M and band Ωg (rad/sample); 0 = by the rule of
+  /// differentiation_for() (both). Give both or neither.
   int half_length = 0;
   double band = 0.0;
-  /// The comparison filter's (the low-pass of τ and of the regressor's columns); 0 = chosen (both).
-  int comparison_half_length = 0;
-  double comparison_band = 0.0;
+  /// The relative ridge toward the prior (estimation/linear_least_squares.h); < 0 = chosen (step 3).
+  double ridge = -1.0;
+  /// The judge: the common target of step 3, and what `validate()` and the fit's figures are judged under.
+  JudgeOptions judge;
+  /// Joints (0-based) whose torque is measured and fitted; empty = every joint whose τ is not ≈ 0 (step 1).
+  std::vector<int> torque_joints;
   JointWeighting weighting = JointWeighting::unit;
-  /// A physically consistent estimate (see the file comment, step 5). The standard errors stay the
-  /// unconstrained fit's: they describe the data, and they hold while no link sits on the boundary.
+  /// A physically consistent estimate (step 6). The standard errors stay the unconstrained fit's: they
+  /// describe the data, and they hold while no link sits on the boundary.
   bool physical = false;
   /// The prior standard vector (the CAD values; dim layout.size(n)); empty = the model's own
   /// (standard_parameters(model, layout)).
@@ -75,18 +91,27 @@ struct IdentificationOptions {
   const std::atomic<bool>* cancel = nullptr;
 };
 
+/// One candidate of step 3 and what it scored.
+struct CandidateScore {
+  double cutoff_hz = 0.0;         ///< the comparison low-pass
+  std::string friction;           ///< the friction terms, e.g. "viscous,coulomb,offset" ("none")
+  double ridge = 0.0;             ///< its best ridge
+  double held_out_error = 0.0;    ///< relative RMS of its held-out predictions against the judge's target
+};
+
 struct IdentificationResult {
   std::vector<std::string> standard_names;  ///< π's names, robot/parameters.h
+  ParameterLayout layout;                   ///< the friction terms estimated (chosen with friction_auto)
   Eigen::VectorXd prior;                    ///< the prior π (the URDF's values unless given)
   BaseParameters base;                      ///< names and combinations of the base parameters
   Eigen::VectorXd estimate;                 ///< β̂, base order
-  Eigen::VectorXd std_errors;               ///< of β̂; NaN for a direction the data do not excite
+  Eigen::VectorXd std_errors;               ///< of β̂; NaN where the data do not determine it
+  Eigen::VectorXd data_share;               ///< of β̂: 1 = the data alone, 0 = the prior alone
   Eigen::MatrixXd correlation;              ///< of β̂
-  /// σ_max/σ_min of the column-scaled base regressor the data gave (excitation quality; ∞ when some base
-  /// direction is not excited).
+  /// σ_max/σ_min of the column-scaled base regressor the data gave (excitation quality; ∞ when some
+  /// base direction is not determined).
   double condition_number = 0.0;
-  /// Base parameters (names) the data barely or do not excite (relative singular value < 1e-10): their
-  /// estimates are the prior's.
+  /// Base parameters (names) the data barely see (data share < 1/2): their estimates are mostly the prior's.
   std::vector<std::string> unexcited;
   /// The full standard vector: estimated base parameters, nearest to the prior.
   Eigen::VectorXd point;
@@ -97,45 +122,47 @@ struct IdentificationResult {
   /// With IdentificationOptions::physical: the constrained fit's summary (what it cost, why it stopped).
   std::optional<ConsistentFitSummary> physical;
 
-  FilterPair filters;
-  bool filters_chosen_automatically = false;
-  double motion_band_hz = 0.0;       ///< f_m found in the data (0 when both filters were given)
-  int decimation = 1;
-  int rows = 0;                      ///< least-squares rows (instants × joints)
-  Eigen::VectorXd residual_rms;      ///< per joint, N·m, of L τ − (L Y_b) β̂
-  Eigen::VectorXd joint_weights;     ///< per joint, as used (1 for unit weighting)
-  double residual_variance = 0.0;    ///< σ² of one (unweighted) filtered residual
+  FilterPair filters;                  ///< D and L as used
+  double ridge = 0.0;                  ///< the relative ridge used
+  bool chosen_by_held_out = false;     ///< step 3 chose the cut-off, the ridge or the friction terms
+  std::vector<CandidateScore> candidates;  ///< step 3's scores (empty when nothing was chosen)
+  double held_out_error = 0.0;         ///< the chosen candidate's (NaN when nothing was chosen)
+  JudgeOptions judge;                  ///< the judge's low-pass
+  std::vector<int> torque_joints;      ///< the joints fitted (0-based)
+  int runs = 1;                        ///< training runs
+  int rows = 0;                        ///< least-squares rows (instants × fitted joints, all runs)
+  Eigen::VectorXd residual_rms;        ///< per fitted joint, N·m, of L τ − (L Y_b) β̂
+  Eigen::VectorXd joint_weights;       ///< per fitted joint, as used (1 for unit weighting)
+  double residual_variance = 0.0;      ///< σ² of one (unweighted) filtered residual
   std::vector<std::string> warnings;
   double wall_seconds = 0.0;
   bool cancelled = false;
 };
 
-/// How well a model predicts a second run: the estimate beside the prior (the URDF's own values), both
-/// through the identification's filters (robot/filtered_regressor.h).
+/// How well a model predicts runs it was not fitted on: the estimate beside the prior (the URDF's own
+/// values), both under the identification's judge (robot/prediction.h), over its fitted joints.
 struct ValidationReport {
   TorquePrediction estimate;  ///< with IdentificationResult::point
   TorquePrediction prior;     ///< with IdentificationResult::prior
-  std::vector<std::string> warnings;  ///< e.g. the second run's resampling
+  std::vector<std::string> warnings;  ///< e.g. the run's resampling
 };
 
-/// Predicts `data`'s torque (any time stamps; trimmed and resampled as `preparation` says, onto the
-/// identification's sample period) with the estimate and with the prior.
-ValidationReport validate(const Model& model, const ParameterLayout& layout, const IdentificationResult& result,
-                          const Trajectory& data, const DataPreparation& preparation);
+/// Predicts the runs' torque (any time stamps; each trimmed and resampled as `preparation` says, onto the
+/// identification's period) with the estimate and with the prior; several runs are judged each alone and
+/// their figures combined (robot/prediction.h, combine()).
+ValidationReport validate(const Model& model, const IdentificationResult& result, const std::vector<Trajectory>& runs,
+                          const DataPreparation& preparation);
 
-/// Identifies the base parameters of `model` from `data` (with tau columns; any time stamps). Throws
-/// InputError for unusable input (joint counts, no torque, too short for the filter, a bad prior).
+/// Identifies the base parameters of `model` from one or more runs (with tau columns; any time stamps).
+/// Throws InputError for unusable input (joint counts, no torque, too short for the filters, a bad prior).
+IdentificationResult identify(const Model& model, const std::vector<Trajectory>& runs, const IdentificationOptions& options);
 IdentificationResult identify(const Model& model, const Trajectory& data, const IdentificationOptions& options);
 
 /// Where the links and the non-negative entries (fv, fc, Ia) are in π of `layout`, with their names: what
 /// check_consistency() and fit_consistent() (robot/consistency.h, robot/consistent_fit.h) need to know.
 ParameterStructure parameter_structure(const Model& model, const ParameterLayout& layout);
 
-/// The motion's band f_m, Hz: the frequency below which all but `tail` of the power of the angles lies
-/// (each joint detrended by its end-point line, Hann window, zero-padded FFT; joints summed). Uniform data.
-double motion_band(const Trajectory& data, double tail = 1e-6);
-
-/// The filters identify() uses for uniform `data` when none are given (see the file comment).
-FilterPair choose_filters(const Trajectory& data);
+/// The friction terms of `layout` as text: "viscous,coulomb,offset", "none".
+std::string friction_text(const ParameterLayout& layout);
 
 }  // namespace manipid::robot
