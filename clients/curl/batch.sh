@@ -46,7 +46,8 @@ Options:
   --options JSON      identification options, e.g. '{"half_length":100,"band":0.2}' (default {});
                       with --robot e.g. '{"armature":true,"trim":[1,1],"weights":"per-joint"}'
   --robot URDF        identify a URDF robot's base parameters (uploaded once)
-  --friction TERMS    with --robot: viscous,coulomb,offset (any of them) or none
+  --friction TERMS    with --robot: viscous,coulomb,offset (any of them), none, or auto (the
+                      service's default: chosen by held-out prediction)
                       (default: the service's, viscous,coulomb)
   --validate CSV      with --robot: a run every estimate predicts (its error in the summary);
                       skipped as a run to identify if it lies in DIR
@@ -129,8 +130,9 @@ else
   [[ -z "$validate" || ( -f "$validate" && -r "$validate" ) ]] || die_usage "--validate: cannot read '$validate'"
   if [[ -n "$friction" ]]; then
     [[ "$friction" =~ ^[a-z]+(,[a-z]+)*$ ]] || die_usage "--friction: terms separated by commas, e.g. viscous,coulomb, got '$friction'"
-    # "none" is no friction at all: the empty array.
-    options=$(jq -cS --arg terms "$friction" '. + {friction: ($terms | split(",") | if . == ["none"] then [] else . end)}' <<<"$options")
+    # "none" is no friction at all: the empty array; "auto" is chosen by held-out prediction.
+    options=$(jq -cS --arg terms "$friction" \
+      '. + {friction: (if $terms == "auto" then "auto" else ($terms | split(",") | if . == ["none"] then [] else . end) end)}' <<<"$options")
   fi
 fi
 

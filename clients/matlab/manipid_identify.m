@@ -26,22 +26,33 @@ function job = manipid_identify(url, dataset, options, varargin)
 %       JOB = MANIPID_IDENTIFY(URL, DATASET, 'Robot', RB, 'Validate', DS2, ...)
 %   identify RB's base parameters - its links' masses, first moments and inertias as
 %   far as the data determine them, and each joint's friction - by linear input-error
-%   from DATASET (q and tau of RB's joints; time stamps may jitter):
+%   from DATASET (q and tau of RB's joints; time stamps may jitter) - or from several
+%   runs, DATASET a cell of them, each filtered alone and then fitted together:
 %     'Robot', RB          'rb_...' or the robot struct
-%     'Validate', DS2      a second run the estimate then predicts (R.validation)
-%     'Friction', F        any of viscous, coulomb, offset, as a cell or as
-%                          'viscous,coulomb' (the default); {} or 'none': none
+%     'Validate', DS2      runs (one, or a cell) the estimate then predicts (R.validation)
+%     'Friction', F        'auto' (the default: chosen by held-out prediction), or any of
+%                          viscous, coulomb, offset, as a cell or as 'viscous,coulomb';
+%                          {} or 'none': none
 %     'Armature', TF       each joint's rotor inertia Ia
 %     'Physical', TF       a physically consistent estimate (every link a real body)
 %     'Trim', [A B]        seconds dropped at the start and at the end
 %     'Dt', S              the resampling period, s (default: the median time step)
 %     'Weights', W         'unit' (default) or 'per-joint'
-%   The filter fields (half_length, band, comparison_half_length, comparison_band) go
-%   in OPTIONS; the preset's (method, free, initial, ...) are refused with a robot
+%     'ComparisonCutoff', HZ  the low-pass applied to tau and the regressor alike
+%                          (default 'auto': chosen by held-out prediction)
+%     'Ridge', R           the relative ridge toward the URDF's values (0: least
+%                          squares; default 'auto')
+%     'JudgeCutoff', HZ    the fixed low-pass every torque figure is judged under (5)
+%     'JudgeTrim', S       seconds the judge drops at each end of a run (0.3)
+%     'TorqueJoints', J    the joints with torque sensors, e.g. 1:6 (default: every
+%                          joint whose torque is not zero throughout)
+%   The differentiation filter's fields (half_length, band) go in OPTIONS; the
+%   preset's (method, free, initial, ...) are refused with a robot
 %   (manipid:INVALID_FIELD naming the field), and so is a dataset whose joints are
-%   not the robot's (field dataset_id or validation_dataset_id). The result
-%   (manipid_result) has the base parameters by name (R.base_names, R.base_values,
-%   R.base_std), the friction per joint and the validation figures;
+%   not the robot's (field dataset_id, dataset_ids[k] or validation_dataset_id). The
+%   result (manipid_result) has the base parameters by name (R.base_names,
+%   R.base_values, R.base_std, R.base_share), the friction per joint and the
+%   validation figures with the judge they were judged under (R.judge);
 %   manipid_identified_urdf writes the estimate into the robot's URDF.
 %
 %   JOB is the job struct (id, kind, state 'queued', links, ...). Follow it with
@@ -66,24 +77,31 @@ if ~isstruct(options) || numel(options) ~= 1
   manipid_error('INVALID_FIELD', '', 'options must be a struct whose fields are the request fields', 0);
 end
 defaults = struct('IdempotencyKey', '', 'Robot', [], 'Validate', [], 'Friction', [], 'Armature', [], ...
-                  'Physical', [], 'Trim', [], 'Dt', [], 'Weights', []);
+                  'Physical', [], 'Trim', [], 'Dt', [], 'Weights', [], 'ComparisonCutoff', [], 'Ridge', [], ...
+                  'JudgeCutoff', [], 'JudgeTrim', [], 'TorqueJoints', []);
 settings = manipid_options(varargin, defaults, 'manipid_identify');
 request = struct();
 if ~isempty(dataset)
   if isfield(options, 'dataset_id') && ~isempty(options.dataset_id)
     manipid_error('INVALID_FIELD', 'dataset_id', 'give the dataset either as the argument or as options.dataset_id, not both', 0);
   end
-  request.dataset_id = manipid_id(dataset, 'dataset');
+  if iscell(dataset)
+    request.dataset_ids = cellfun(@(d) manipid_id(d, 'dataset'), dataset, 'UniformOutput', false);
+  else
+    request.dataset_id = manipid_id(dataset, 'dataset');
+  end
 end
 names = fieldnames(options);
 for k = 1:numel(names)
-  if ~(strcmp(names{k}, 'dataset_id') && isfield(request, 'dataset_id'))
+  if ~(strcmp(names{k}, 'dataset_id') && (isfield(request, 'dataset_id') || isfield(request, 'dataset_ids')))
     request.(names{k}) = options.(names{k});
   end
 end
 % The robot options by their request names; one given both ways is an error.
 robot_fields = {'Robot', 'robot_id'; 'Validate', 'validation_dataset_id'; 'Friction', 'friction'; ...
-                'Armature', 'armature'; 'Physical', 'physical'; 'Trim', 'trim'; 'Dt', 'dt'; 'Weights', 'weights'};
+                'Armature', 'armature'; 'Physical', 'physical'; 'Trim', 'trim'; 'Dt', 'dt'; 'Weights', 'weights'; ...
+                'ComparisonCutoff', 'comparison_cutoff'; 'Ridge', 'ridge'; 'JudgeCutoff', 'judge_cutoff'; ...
+                'JudgeTrim', 'judge_trim'; 'TorqueJoints', 'torque_joints'};
 for k = 1:size(robot_fields, 1)
   value = settings.(robot_fields{k, 1});
   field = robot_fields{k, 2};
@@ -98,7 +116,14 @@ for k = 1:size(robot_fields, 1)
     case 'robot_id'
       value = manipid_id(value, 'robot');
     case 'validation_dataset_id'
-      value = manipid_id(value, 'dataset');
+      if iscell(value)
+        field = 'validation_dataset_ids';
+        value = cellfun(@(d) manipid_id(d, 'dataset'), value, 'UniformOutput', false);
+      else
+        value = manipid_id(value, 'dataset');
+      end
+    case 'torque_joints'
+      value = reshape(double(value), 1, []);
     case 'friction'
       value = manipid_friction(value);
     case {'armature', 'physical'}
@@ -108,7 +133,7 @@ for k = 1:size(robot_fields, 1)
   end
   request.(field) = value;
 end
-if isfield(request, 'validation_dataset_id') && ~isfield(request, 'robot_id')
+if (isfield(request, 'validation_dataset_id') || isfield(request, 'validation_dataset_ids')) && ~isfield(request, 'robot_id')
   manipid_error('INVALID_FIELD', 'validation_dataset_id', ...
                 'Validate needs Robot: only robot identifications predict a validation run', 0);
 end

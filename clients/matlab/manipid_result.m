@@ -21,17 +21,22 @@ function result = manipid_result(url, job_id)
 %                        parameter such as 'fv2', or the combination the data determine,
 %                        such as 'my2 - 0.316*m3 - mz3' - and two 1-by-b vectors (std NaN
 %                        where there is none); R.base_parameters is the same as a struct
-%                        array (name, estimate, std_error, relative_std_error)
+%                        array (name, estimate, std_error, relative_std_error, data_share)
+%     R.base_share       1-by-b: the share of each estimate the data determine (0..1; the
+%                        rest is the URDF's value)
 %     R.friction         struct array per joint: joint (its URDF name), fv, fc, fo, Ia
 %                        (NaN for the terms not identified)
 %     R.point, R.prior   structs of every standard parameter by name (m1, mx1, ...,
 %                        Izz7, fv1, ...): the estimate nearest to the URDF's values (what
 %                        manipid_identified_urdf writes), and the URDF's own values
-%     R.validation       with 'Validate': relative_error and rms_error (1-by-joints),
-%                        overall_relative_error, and .prior: the same for the URDF's values
-%     R.fit              residual_rms, relative_error (1-by-joints), overall_relative_error
+%     R.validation       with 'Validate': relative_error and rms_error (1-by-fitted
+%                        joints), overall_relative_error, and .prior: the same for the
+%                        URDF's values - under R.judge (cutoff_hz, trim_seconds)
+%     R.fit              residual_rms, relative_error, rms_error (1-by-fitted joints),
+%                        overall_relative_error, under R.judge
 %     R.correlation (matrix, NaN where undefined), R.condition_number, R.unexcited,
-%     R.unidentifiable, R.warnings (cells), R.filters, R.robot_id, R.dataset_id
+%     R.unidentifiable, R.torque_joints, R.warnings (cells), R.filters, R.selection
+%     (what held-out prediction chose), R.robot_id, R.dataset_id
 %   For a simulation job, R is its result (dataset_id, joints, samples, dt, ...); for
 %   an excitation, its dataset_id, samples, condition_number and coefficients.
 %   A cancelled identification returns the best point it reached (R.cancelled true).
@@ -115,18 +120,20 @@ end
 end
 
 function r = tidy_robot_identification(r)
-r.base_parameters = struct_array(r.base_parameters, {'name', 'estimate', 'std_error', 'relative_std_error'});
+r.base_parameters = struct_array(r.base_parameters, {'name', 'estimate', 'std_error', 'relative_std_error', 'data_share'});
 r.base_names = {r.base_parameters.name};
 r.base_values = [r.base_parameters.estimate];
 r.base_std = [r.base_parameters.std_error];
+r.base_share = [r.base_parameters.data_share];
 if isempty(r.base_parameters)
   r.base_values = zeros(1, 0);
   r.base_std = zeros(1, 0);
+  r.base_share = zeros(1, 0);
 end
 if isfield(r, 'friction')
   r.friction = struct_array(r.friction, {'joint', 'fv', 'fc', 'fo', 'Ia'});
 end
-for name = {'warnings', 'unexcited', 'unidentifiable'}
+for name = {'warnings', 'unexcited', 'unidentifiable', 'torque_joints'}
   if isfield(r, name{1}), r.(name{1}) = manipid_cellstr(r.(name{1})); end
 end
 if isfield(r, 'correlation') && iscell(r.correlation)

@@ -5,6 +5,7 @@
 #include "fake_service.h"
 
 #include "manipid/api/dashboard.h"
+#include "manipid/api/robot_requests.h"
 #include "manipid/api/routes.h"
 
 #include "manipid/api/http_server.h"  // includes httplib.h: after the manipid headers (it breaks Eigen if first)
@@ -1229,6 +1230,54 @@ TEST_F(Routes, ARobotIdentificationIsCheckedAgainstTheRobotAndBothDatasets) {
   refused({{"robot_id", "rb_1"}, {"dataset_id", "ds_two"}, {"band", 0.1}}, "half_length");
   refused({{"robot_id", "rb_1"}, {"dataset_id", "ds_two"}, {"weights", "inverse-variance"}}, "weights");
   refused({{"robot_id", "rb_1"}}, "dataset_id");
+  EXPECT_EQ(fake_.submissions().size(), 1u);  // nothing more was queued
+}
+
+TEST_F(Routes, ARobotIdentificationTakesSeveralRunsAndTheHeldOutOptions) {
+  ASSERT_EQ(post("/v1/robots", kTwoJointUrdf, "application/xml")->status, 201);
+  fake_.add_dataset(dataset_info("ds_a", 2, 5000));
+  fake_.add_dataset(dataset_info("ds_b", 2, 4000));
+  fake_.add_dataset(dataset_info("ds_c", 2, 3000));
+  fake_.add_dataset(dataset_info("ds_four", 4, 5000));
+  const Json request = {{"robot_id", "rb_1"},          {"dataset_ids", {"ds_a", "ds_b"}},
+                        {"validation_dataset_ids", {"ds_c"}}, {"comparison_cutoff", 3},
+                        {"ridge", "auto"},             {"judge_cutoff", 4},
+                        {"judge_trim", 0.5},           {"torque_joints", {1, 2}}};
+  const auto queued = post("/v1/identifications", request.dump());
+  ASSERT_TRUE(queued);
+  EXPECT_EQ(queued->status, 202) << queued->body;
+  ASSERT_EQ(fake_.submissions().size(), 1u);
+  // The job's datasets are the first of each list (what protects them from deletion while it waits).
+  EXPECT_EQ(fake_.submissions()[0].dataset_id, "ds_a");
+  EXPECT_EQ(fake_.submissions()[0].validation_dataset_id, "ds_c");
+  const RobotIdentificationSpec spec = robot_identification_from_json(request);
+  EXPECT_EQ(spec.dataset_ids, (std::vector<std::string>{"ds_a", "ds_b"}));
+  EXPECT_EQ(spec.options.comparison_cutoff_hz, 3.0);
+  EXPECT_LT(spec.options.ridge, 0.0);  // chosen
+  EXPECT_EQ(spec.options.judge.cutoff_hz, 4.0);
+  EXPECT_EQ(spec.options.judge.trim_seconds, 0.5);
+  EXPECT_EQ(spec.options.torque_joints, (std::vector<int>{0, 1}));
+  // Friction is chosen unless given.
+  EXPECT_TRUE(spec.options.friction_auto);
+  EXPECT_FALSE(robot_identification_from_json(Json{{"robot_id", "rb_1"}, {"dataset_id", "ds_a"}, {"friction", {"viscous"}}})
+                   .options.friction_auto);
+  EXPECT_EQ(robot_identification_from_json(Json{{"robot_id", "rb_1"}, {"dataset_id", "ds_a"}, {"ridge", 0}}).options.ridge, 0.0);
+
+  const auto refused = [&](Json body, const std::string& field) {
+    return expect_problem(post("/v1/identifications", body.dump()), 422, "INVALID_FIELD", field);
+  };
+  refused({{"robot_id", "rb_1"}, {"dataset_ids", {"ds_a", "ds_four"}}}, "dataset_ids[1]");
+  refused({{"robot_id", "rb_1"}, {"dataset_ids", {"ds_a", "ds_nothing"}}}, "dataset_ids[1]");
+  refused({{"robot_id", "rb_1"}, {"dataset_id", "ds_a"}, {"dataset_ids", {"ds_b"}}}, "dataset_ids");
+  refused({{"robot_id", "rb_1"}, {"dataset_ids", Json::array()}}, "dataset_ids");
+  refused({{"robot_id", "rb_1"}, {"dataset_id", "ds_a"}, {"torque_joints", {3}}}, "torque_joints");
+  refused({{"robot_id", "rb_1"}, {"dataset_id", "ds_a"}, {"torque_joints", {0}}}, "torque_joints[0]");
+  refused({{"robot_id", "rb_1"}, {"dataset_id", "ds_a"}, {"comparison_cutoff", -1}}, "comparison_cutoff");
+  refused({{"robot_id", "rb_1"}, {"dataset_id", "ds_a"}, {"ridge", "some"}}, "ridge");
+  refused({{"robot_id", "rb_1"}, {"dataset_id", "ds_a"}, {"judge_cutoff", 0}}, "judge_cutoff");
+  // The former comparison filter's fields name their replacement.
+  const Json old = refused({{"robot_id", "rb_1"}, {"dataset_id", "ds_a"}, {"comparison_band", 0.1}}, "comparison_band");
+  EXPECT_NE(old["detail"].get<std::string>().find("comparison_cutoff"), std::string::npos) << old;
   EXPECT_EQ(fake_.submissions().size(), 1u);  // nothing more was queued
 }
 

@@ -258,7 +258,7 @@ try {
   check((await page.textContent("#physical-summary")).includes("1.23 %") && (await page.textContent("#physical-summary")).includes("12 iterations"),
         "physical: the cost increase in % and the message");
   check(await page.getAttribute('#base-table tr[data-index="1"]', "data-quality") === "unexcited" &&
-        (await page.textContent('#base-table tr[data-index="1"]')).includes("unexcited"), "an unexcited base parameter is marked");
+        (await page.textContent('#base-table tr[data-index="1"]')).includes("barely seen"), "an unexcited base parameter is marked");
   await page.locator("#consistency").screenshot({ path: shot("robot-job-consistency.png") });
   await page.unroute(`**/v1/jobs/${jobId}`);
 

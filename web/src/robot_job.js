@@ -29,6 +29,13 @@ function consistencyInWords(result) {
     : "not consistent";
 }
 
+/** "judged under a zero-phase Butterworth low-pass at 5 Hz, 0.3 s trimmed at each end". */
+function judgeInWords(judge) {
+  if (!judge) return "judged under the identification's filters";
+  return `judged under a zero-phase 4th-order Butterworth low-pass at ${number(judge.cutoff_hz, 3)} Hz, ` +
+         `${number(judge.trim_seconds, 3)} s trimmed at each end`;
+}
+
 function glance(job, result) {
   const joints = result.robot?.joints?.length ?? result.friction?.length ?? 0;
   const validation = result.validation;
@@ -38,10 +45,10 @@ function glance(job, result) {
       ["Robot", [h("a", { href: robotPath(job.robot_id), id: "robot-link" }, result.robot?.name || job.robot_id),
                  ` — ${plural(joints, "joint")}, ${result.robot?.base_link ?? "?"} → ${result.robot?.tip_link ?? "?"}`]],
       ["Base parameters", [`${result.base_parameters.length} estimated`,
-                           unexcited.length ? `, ${unexcited.length} not excited (kept at the URDF's values)` : ", every one excited"]],
+                           unexcited.length ? `, ${unexcited.length} barely seen by the data (kept near the URDF's values)` : ", every one seen by the data"]],
       ["Condition number", h("span", { id: "condition-number" }, number(result.condition_number, 4))],
       ["Fit error", [h("span", { id: "fit-overall" }, percent(result.fit?.overall_relative_error)),
-                     " of the filtered measured torque (‖τ̂ − τ‖ / ‖τ‖ over every joint)"]],
+                     ` of the measured torque (‖τ̂ − τ‖ / ‖τ‖ over the fitted joints), ${judgeInWords(result.judge)}`]],
       ["Validation error", validation
         ? [h("span", { id: "validation-overall" }, percent(validation.overall_relative_error)),
            ` on the validation run; the URDF's own values: ${percent(validation.prior?.overall_relative_error)}`]
@@ -99,7 +106,8 @@ function baseParameterRow(parameter, index, unexcited) {
                                                          relative: value(parameter.relative_std_error) } },
     h("td", { class: "number" }, String(index + 1)),
     h("th", { scope: "row", class: "name", title: parameter.name }, expression(parameter.name),
-      unexcited ? [" ", h("span", { class: "badge unexcited" }, "unexcited: URDF value")] : null),
+      unexcited ? [" ", h("span", { class: "badge unexcited" },
+        `barely seen: ${percent(parameter.data_share ?? 0, 2)} data, the rest the URDF's value`)] : null),
     h("td", { class: "number", dataset: { estimate: value(parameter.estimate) } }, number(parameter.estimate, 6)),
     h("td", { class: "number", dataset: { stdError: value(parameter.std_error) } }, number(parameter.std_error, 3)),
     h("td", { class: `number relative ${kind}`, dataset: { relative: value(parameter.relative_std_error) } },
@@ -122,7 +130,7 @@ function baseParameterSection(result) {
   const filter = h("input", { type: "search", id: "base-filter", autocomplete: "off", spellcheck: "false",
                               placeholder: "e.g. Izz or m7", "aria-controls": "base-table" });
   const show = h("select", { id: "base-quality", "aria-controls": "base-table" },
-    [["all", "all"], ["uncertain", "σ over 10 % of the estimate"], ["well", "σ within 10 %"], ["unexcited", "not excited"]]
+    [["all", "all"], ["uncertain", "σ over 10 % of the estimate"], ["well", "σ within 10 %"], ["unexcited", "barely seen by the data"]]
       .map(([value, label]) => h("option", { value }, label)));
   const status = h("p", { id: "base-count", class: "muted", role: "status", "aria-live": "polite" });
 
@@ -273,7 +281,11 @@ function identifiabilitySection(result) {
   const unidentifiable = result.unidentifiable || [];
   const unexcited = result.unexcited || [];
   const filters = result.filters || {};
+  const selection = result.selection || {};
   const filter = (f) => (f ? `M = ${f.half_length}, Ωg = ${number(f.band, 3)} rad/sample (${number(f.cutoff_hz, 3)} Hz)` : "–");
+  const candidates = selection.candidates || [];
+  const chosen = (c) => c.comparison_cutoff_hz === filters.comparison?.cutoff_hz && c.ridge === selection.ridge &&
+                        c.friction === (result.parameters?.friction?.join(",") || "none");
   return section("identifiability", "Identifiability and data",
     facts([
       ["Condition number", `${number(result.condition_number, 4)} (the column-scaled base regressor's σmax/σmin: how well the data excite it)`],
@@ -284,11 +296,28 @@ function identifiabilitySection(result) {
             h("ul", { class: "names" }, unidentifiable.map((name) => h("li", {}, h("code", {}, name)))))
         : "none"],
       ["Differentiation filter", filter(filters.differentiation)],
-      ["Comparison low-pass", filter(filters.comparison)],
-      ["Motion band", filters.motion_band_hz !== undefined ? `${number(filters.motion_band_hz, 3)} Hz${filters.automatic ? " (filters chosen from it)" : ""}` : null],
-      ["Rows", result.rows !== undefined ? `${result.rows} regressor rows (every ${result.decimation}th filtered sample)` : null],
+      ["Comparison low-pass", filters.comparison
+        ? `zero-phase Butterworth at ${number(filters.comparison.cutoff_hz, 3)} Hz, on τ and the regressor alike` : "–"],
+      ["Ridge toward the URDF", selection.ridge !== undefined ? number(selection.ridge, 3) : null],
+      ["Chosen by", selection.by_held_out
+        ? `held-out prediction: ${percent(selection.held_out_error)} error on the blocks each fit did not see`
+        : "the request (nothing was chosen)"],
+      ["Judged under", judgeInWords(result.judge)],
+      ["Fitted joints", result.torque_joints ? result.torque_joints.join(", ") : null],
+      ["Rows", result.rows !== undefined ? `${result.rows} regressor rows from ${plural(result.runs ?? 1, "run")}` : null],
       ["Method", `${result.method}, ${number(result.wall_seconds, 3)} s`],
     ]),
+    candidates.length
+      ? h("details", { id: "candidates" },
+          h("summary", {}, `${plural(candidates.length, "candidate")} tried by held-out prediction`),
+          h("div", { class: "scroll" }, h("table", { class: "data" },
+            h("thead", {}, h("tr", {}, ["Comparison low-pass", "Friction", "Ridge", "Held-out error"].map((label) => h("th", { scope: "col" }, label)))),
+            h("tbody", {}, candidates.map((c) => h("tr", { class: chosen(c) ? "chosen" : "" },
+              h("td", { class: "number" }, `${number(c.comparison_cutoff_hz, 3)} Hz`),
+              h("td", {}, c.friction),
+              h("td", { class: "number" }, number(c.ridge, 2)),
+              h("td", { class: "number" }, percent(c.held_out_error), chosen(c) ? " ← chosen" : "")))))))
+      : null,
     h("h3", {}, "Warnings"),
     result.warnings?.length
       ? h("ul", { class: "warnings", id: "warnings" }, result.warnings.map((warning) => h("li", {}, warning)))
@@ -322,7 +351,7 @@ function jointTorqueCharts(id, fit, joints, { measuredLabel, modelLabel }) {
     element.dataset.drawMs = String(Math.round(performance.now() - started));
   };
   const drawJoint = (joint, i) => {
-    const meta = joints[i];
+    const meta = joints[joint.joint - 1];  // the fitted joints may be fewer than the robot's
     charts.push(lineChart(boxes[i], {
       title: `${joint.name}: error ${percent(joint.relative_error)}`,
       xLabel: "t, s", yLabel: torqueUnit(meta), height: 200, sync: id, legend: false,

@@ -528,17 +528,21 @@ class Client:
         """
         return Job(self, self._request("POST", "/v1/simulations", options, headers=_idempotency(idempotency_key)))
 
-    def identify(self, dataset: Union[str, Dataset, Mapping[str, Any], None] = None,
+    def identify(self, dataset: Union[str, Dataset, Mapping[str, Any], Sequence[Any], None] = None,
                  idempotency_key: Optional[str] = None, *,
                  robot: Union[str, Robot, Mapping[str, Any], None] = None,
-                 validate: Union[str, Dataset, Mapping[str, Any], None] = None,
+                 validate: Union[str, Dataset, Mapping[str, Any], Sequence[Any], None] = None,
                  friction: Union[Sequence[str], str, None] = None, armature: Optional[bool] = None,
                  physical: Optional[bool] = None, trim: Optional[Sequence[float]] = None,
-                 dt: Optional[float] = None, weights: Optional[str] = None, **options: Any) -> Job:
+                 dt: Optional[float] = None, weights: Optional[str] = None,
+                 comparison_cutoff: Union[float, str, None] = None, ridge: Union[float, str, None] = None,
+                 judge_cutoff: Optional[float] = None, judge_trim: Optional[float] = None,
+                 torque_joints: Optional[Sequence[int]] = None, **options: Any) -> Job:
         """Queues an identification (POST /v1/identifications); returns its Job.
 
         dataset: a Dataset, a dataset id (or the dict of one), or None with simulation={...}
-        (simulate, then identify).
+        (simulate, then identify). With robot=, also a list of them: several runs, each filtered
+        alone, then fitted together.
 
         Without robot: the paper's preset model. Keyword options are the request's JSON fields:
         preset, method, algorithm, free, initial, lower, upper, kp, kd, half_length, band,
@@ -546,27 +550,41 @@ class Client:
         the server, 422).
 
         With robot (a Robot, its id, or its dict): that URDF robot's base parameters by linear
-        input-error (a RobotIdentificationRequest). The dataset needs q and tau for the robot's
-        joints (422 naming dataset_id otherwise); its time stamps may jitter.
-        - validate: a second run (Dataset or id) the estimate then predicts (result's
-          "validation", Client.validation(job));
-        - friction: any of "viscous", "coulomb", "offset" (a list, or "viscous,coulomb"; [] or
-          "none" for no friction; server default viscous and Coulomb);
+        input-error (a RobotIdentificationRequest). Each dataset needs q and tau for the robot's
+        joints (422 naming the dataset otherwise); its time stamps may jitter.
+        - validate: runs (a Dataset or id, or a list) the estimate then predicts under the judge
+          (result's "validation", Client.validation(job));
+        - friction: "auto" (the server's default: chosen by held-out prediction) or any of
+          "viscous", "coulomb", "offset" (a list, or "viscous,coulomb"; [] or "none" for none);
         - armature: each joint's rotor inertia Ia; physical: a physically consistent estimate;
         - trim: (start, end) seconds dropped at each end; dt: the resampling period (default the
           median step); weights: "unit" or "per-joint";
-        - options: half_length, band, comparison_half_length, comparison_band.
+        - comparison_cutoff: the low-pass (Hz) applied to tau and the regressor alike, ridge: the
+          relative ridge toward the URDF's values (0: least squares) — both "auto" by default,
+          chosen by held-out prediction;
+        - judge_cutoff (Hz, default 5), judge_trim (s, default 0.3): the fixed low-pass every
+          torque figure is judged under; torque_joints: the joints with torque sensors (1-based;
+          default every joint whose torque is not zero throughout);
+        - options: half_length, band (the differentiation filter).
         job.robot_result() gives the result by name (RobotResult); to_urdf(job) the URDF.
         Arguments left at None are not sent (the server's default applies).
         """
         body = _drop_none(dict(options))
         robot_fields = _drop_none({"friction": _friction(friction) if friction is not None else None,
                                    "armature": armature, "physical": physical,
-                                   "trim": list(trim) if trim is not None else None, "dt": dt, "weights": weights})
+                                   "trim": list(trim) if trim is not None else None, "dt": dt, "weights": weights,
+                                   "comparison_cutoff": comparison_cutoff, "ridge": ridge,
+                                   "judge_cutoff": judge_cutoff, "judge_trim": judge_trim,
+                                   "torque_joints": list(torque_joints) if torque_joints is not None else None})
         if dataset is not None:
-            if "dataset_id" in body:
+            if "dataset_id" in body or "dataset_ids" in body:
                 raise TypeError("give the dataset either positionally or as dataset_id=, not both")
-            body["dataset_id"] = _dataset_id(dataset)
+            if _is_several(dataset):
+                if robot is None:
+                    raise TypeError("several datasets need robot=: the paper's model is identified from one run")
+                body["dataset_ids"] = [_dataset_id(item) for item in dataset]
+            else:
+                body["dataset_id"] = _dataset_id(dataset)
         if robot is not None:
             if "robot_id" in body:
                 raise TypeError("give the robot either as robot= or as robot_id=, not both")
@@ -574,7 +592,10 @@ class Client:
         if validate is not None:
             if "robot_id" not in body:
                 raise TypeError("validate= needs robot=: only robot identifications predict a validation run")
-            body["validation_dataset_id"] = _dataset_id(validate)
+            if _is_several(validate):
+                body["validation_dataset_ids"] = [_dataset_id(item) for item in validate]
+            else:
+                body["validation_dataset_id"] = _dataset_id(validate)
         body.update(robot_fields)
         return Job(self, self._request("POST", "/v1/identifications", body, headers=_idempotency(idempotency_key)))
 
@@ -760,8 +781,15 @@ def _drop_none(fields: Mapping[str, Any]) -> Dict[str, Any]:
     return {key: value for key, value in fields.items() if value is not None}
 
 
-def _friction(terms: Union[Sequence[str], str]) -> List[str]:
-    """["viscous", "coulomb"] from a list or from "viscous,coulomb"; "none" or "" is []."""
+def _is_several(value: Any) -> bool:
+    """A list or tuple of datasets (not one dataset's dict, id or Dataset)."""
+    return isinstance(value, (list, tuple))
+
+
+def _friction(terms: Union[Sequence[str], str]) -> Union[List[str], str]:
+    """["viscous", "coulomb"] from a list or from "viscous,coulomb"; "none" or "" is []; "auto" stays "auto"."""
+    if isinstance(terms, str) and terms.strip() == "auto":
+        return "auto"
     if isinstance(terms, str):
         terms = [term.strip() for term in terms.split(",") if term.strip()]
     terms = list(terms)

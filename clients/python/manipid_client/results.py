@@ -34,12 +34,16 @@ class RobotResult:
       point            {standard parameter: value}: every link's m, mx..mz, Ixx..Izz and the
                        friction, the estimate nearest to the URDF's values (what /urdf writes);
       prior            {standard parameter: value}: the URDF's own values;
-      validation       the validation run's figures (relative_error and rms_error per joint,
-                       overall_relative_error, and "prior": the same for the URDF's values), or
-                       None without a validation run;
-      fit              the identification run's figures (residual_rms, relative_error per joint,
-                       overall_relative_error);
-      warnings, unexcited, unidentifiable, condition_number, robot_id, dataset_id.
+      data_share       {base parameter: the share of its estimate the data determine, 0..1}
+                       (the rest is the URDF's value);
+      validation       the validation runs' figures under the judge (relative_error and rms_error
+                       per fitted joint, overall_relative_error, and "prior": the same for the
+                       URDF's values), or None without a validation run;
+      fit              the identification runs' figures (residual_rms, relative_error, rms_error
+                       per fitted joint, overall_relative_error), under the judge;
+      judge            {"lowpass", "cutoff_hz", "trim_seconds"}: what every figure is judged under;
+      selection        what held-out prediction chose ("ridge", "held_out_error", "candidates");
+      warnings, unexcited, unidentifiable, condition_number, torque_joints, robot_id, dataset_id.
     `data` is the whole JSON; result["key"] reads it too.
     """
 
@@ -73,6 +77,22 @@ class RobotResult:
     @property
     def prior(self) -> Dict[str, float]:
         return dict(self.data.get("prior", {}))
+
+    @property
+    def data_share(self) -> Dict[str, Optional[float]]:
+        return {entry["name"]: entry.get("data_share") for entry in self.data["base_parameters"]}
+
+    @property
+    def judge(self) -> dict:
+        return dict(self.data.get("judge", {}))
+
+    @property
+    def selection(self) -> dict:
+        return dict(self.data.get("selection", {}))
+
+    @property
+    def torque_joints(self) -> List[str]:
+        return list(self.data.get("torque_joints", []))
 
     @property
     def validation(self) -> Optional[dict]:
