@@ -207,6 +207,11 @@ CLI::App* add_identify_command(CLI::App& app, IdentifyOptions& options) {
       ->check(CLI::NonNegativeNumber)
       ->capture_default_str()
       ->needs(robot);
+  // The former comparison filter (a finite window): refused, naming what replaced it.
+  for (const char* removed : {"--comparison-half-length", "--comparison-band"}) {
+    command->add_option_function<std::string>(removed, [&options, removed](const std::string&) { options.removed_option = removed; })
+        ->group("");
+  }
   command->add_option("--write-urdf", options.write_urdf,
                       "With --robot: write the estimate (its point) into a copy of the URDF: each link's <inertial>, each "
                       "joint's <dynamics>; everything else as it was")

@@ -43,6 +43,7 @@ struct IdentifyOptions {
   std::string torque_joints;         ///< "1-6", "1,2,4"; empty = every joint with torque
   double judge_cutoff = 5.0;
   double judge_trim = 0.3;
+  std::string removed_option;        ///< a former option given (hidden, refused naming its replacement)
   std::string write_urdf;            ///< write the estimate into a copy of the URDF, empty = none
 };
 CLI::App* add_identify_command(CLI::App& app, IdentifyOptions& options);

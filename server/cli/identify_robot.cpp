@@ -150,6 +150,10 @@ int run_identify_robot(const IdentifyOptions& options) {
   if (options.weights == "inverse-variance") {
     throw UsageError("--weights: a URDF robot takes unit or per-joint (each joint by its residual's variance)");
   }
+  if (!options.removed_option.empty()) {
+    throw UsageError(options.removed_option + " no longer exists: the comparison low-pass is a zero-phase Butterworth filter, "
+                     "set by --comparison-cutoff HZ (or auto: chosen by held-out prediction)");
+  }
   const robot::ParsedUrdf parsed_urdf = load_urdf_robot(options.urdf);
   const robot::Model& model = parsed_urdf.model;
   robot::IdentificationOptions identification;
@@ -195,6 +199,12 @@ int run_identify_robot(const IdentifyOptions& options) {
   try {
     result = robot::identify(model, runs, identification);
   } catch (const InputError& error) {
+    // An option's value at fault is named by the option, anything else by the data it came from.
+    for (const auto& [field, option] : {std::pair{"judge_cutoff", "--judge-cutoff"}, {"judge_trim", "--judge-trim"},
+                                        {"comparison_cutoff", "--comparison-cutoff"}, {"torque_joints", "--torque-joints"},
+                                        {"ridge", "--ridge"}, {"half_length", "--half-length"}, {"band", "--band"}}) {
+      if (error.field() == field) rethrow_with_source(error, option);
+    }
     rethrow_with_source(error, names(options.inputs));
   }
   std::vector<robot::TorquePrediction> fits;

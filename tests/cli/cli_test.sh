@@ -455,6 +455,26 @@ check "identify --robot: friction per joint" grep -Eq "^shoulder_pan_joint +[-0-
 check "identify --robot: validation against the URDF's own values" grep -q "validation, URDF" robot_table.txt
 overall=$(awk '/validation, estimate/ { for (i = 1; i <= NF; i++) if ($i == "overall") print $(i + 1) }' robot_table.txt)
 check "identify --robot: the second run predicted within 1 %" awk -v e="$overall" 'BEGIN { exit !(e + 0 < 1.0) }'
+check "identify --robot: says what the figures are judged under" \
+  grep -q "judged under a zero-phase 4th-order Butterworth low-pass at 5 Hz, 0.3 s trimmed" robot_table.txt
+check "identify --robot: the choice by held-out prediction, every candidate listed" \
+  test "$(grep -c "^  [ *] comparison .* held-out" robot_table.txt)" -ge 7
+# Two runs at once, a judge of one's own, the torque joints named: figures over those joints only.
+"$manipid" identify robot_run.csv robot_run2.csv --robot "$robots/ur5_like.urdf" --friction viscous,coulomb \
+  --judge-cutoff 3 --torque-joints 1-5 --json >robot_two.json 2>/dev/null
+check "identify --robot: two runs, 5 torque joints, judged at 3 Hz" python3 -c '
+import json, sys
+r = json.load(open("robot_two.json"))
+sys.exit(not (r["runs"] == 2 and len(r["torque_joints"]) == 5 and r["judge"]["cutoff_hz"] == 3
+              and len(r["fit"]["relative_error"]) == 5 and r["fit"]["overall_relative_error"] < 0.01))'
+expect_error "identify --robot: a torque joint the robot does not have" 2 "--torque-joints" \
+  "$manipid" identify robot_run.csv --robot "$robots/ur5_like.urdf" --torque-joints 1-7
+expect_error "identify --robot: the judge's cut-off above Nyquist" 2 "--judge-cutoff: the judge's low-pass cut-off must lie between 0 and the data's Nyquist frequency (250 Hz), not 400 Hz" \
+  "$manipid" identify robot_run.csv --robot "$robots/ur5_like.urdf" --judge-cutoff 400
+expect_error "identify: several runs are for a URDF robot" 2 "several runs (2 given) are for a URDF robot" \
+  "$manipid" identify paper.csv paper.csv
+expect_error "identify --robot: the former comparison filter option" 2 "--comparison-half-length no longer exists: the comparison low-pass is a zero-phase Butterworth filter, set by --comparison-cutoff" \
+  "$manipid" identify robot_run.csv --robot "$robots/ur5_like.urdf" --comparison-half-length 100
 "$manipid" identify robot_run.csv --robot "$robots/ur5_like.urdf" --json >robot.json 2>/dev/null
 check "identify --robot --json: base parameters by name" grep -q '"base_parameters"' robot.json
 check "identify --robot --json: the point has every standard parameter" grep -q '"Izz6":' robot.json

@@ -225,6 +225,17 @@ check(isequal(size(r.validation.relative_error), [1 7]) ...
               r.validation.overall_relative_error, r.validation.prior.overall_relative_error));
 passed = passed + 1;
 
+% Two runs together, judged at 4 Hz over joints 1..6: the request's arrays stay arrays.
+two = manipid_identify(url, {ds, chk}, 'Robot', rb, 'Friction', 'auto', 'JudgeCutoff', 4, 'TorqueJoints', 1:6, ...
+                       'Validate', {chk});
+check(isequal(two.request.dataset_ids, {ds.id; chk.id}) && isequal(two.request.validation_dataset_ids, {chk.id}) ...
+      && strcmp(two.request.friction, 'auto') && two.request.judge_cutoff == 4 && isequal(two.request.torque_joints(:)', 1:6), ...
+      'manipid_identify with a cell of runs sends dataset_ids, the judge and the torque joints');
+r2 = manipid_result(url, manipid_wait(url, two, 300, 'Quiet', true));
+check(r2.runs == 2 && r2.judge.cutoff_hz == 4 && numel(r2.torque_joints) == 6 && isequal(size(r2.validation.relative_error), [1 6]) ...
+      && all(r2.base_share >= 0 & r2.base_share <= 1), 'the result: two runs, the judge, six joints, data shares');
+passed = passed + 1;
+
 % The identified URDF: the server's document, with the estimate's masses.
 file = [tempname() '.urdf'];
 cleanup = onCleanup(@() delete(file)); %#ok<NASGU>

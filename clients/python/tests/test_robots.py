@@ -283,6 +283,22 @@ class RobotsAgainstServer(unittest.TestCase):
         self.assertFalse([name for name in result.base_parameters if name[:2] in ("fv", "fc", "fo")])
         self.assertEqual(result.friction, {joint: {} for joint in PANDA_JOINTS})
 
+    def test_several_runs_and_the_held_out_options(self) -> None:
+        job = self.client.identify([self.jitter, self.check], robot=self.arm, validate=[self.check], friction="auto",
+                                   judge_cutoff=4, torque_joints=range(1, 7))
+        self.assertEqual(job.data["request"], {"robot_id": self.arm.id, "dataset_ids": [self.jitter.id, self.check.id],
+                                               "validation_dataset_ids": [self.check.id], "friction": "auto",
+                                               "judge_cutoff": 4, "torque_joints": [1, 2, 3, 4, 5, 6]})
+        result = job.robot_result(timeout=300)
+        self.assertEqual(result["runs"], 2)
+        self.assertEqual(result.judge["cutoff_hz"], 4)
+        self.assertEqual(result.torque_joints, PANDA_JOINTS[:6])
+        self.assertEqual(len(result.validation["relative_error"]), 6)
+        self.assertTrue(result.selection["by_held_out"])
+        self.assertTrue(all(0.0 <= share <= 1.0 for share in result.data_share.values()))
+        with self.assertRaises(TypeError):
+            self.client.identify([self.jitter, self.check])  # several runs are for a robot
+
     # --- errors ----------------------------------------------------------------------------
     def test_unknown_robot(self) -> None:
         with self.assertRaises(ManipidError) as caught:

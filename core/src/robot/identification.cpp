@@ -3,6 +3,7 @@
 #include "manipid/core/robot/identification.h"
 
 #include "manipid/core/errors.h"
+#include "numbers.h"
 #include "manipid/core/estimation/cross_validation.h"
 #include "manipid/core/estimation/linear_least_squares.h"
 #include "manipid/core/estimation/rules.h"

@@ -2,6 +2,7 @@
 #include "manipid/core/signal/butterworth.h"
 
 #include "manipid/core/errors.h"
+#include "numbers.h"
 
 #include <Eigen/LU>
 
@@ -63,8 +64,8 @@ IirFilter butterworth_lowpass(int order, double cutoff_hz, double dt) {
   const double nyquist = 0.5 / dt;
   if (!(cutoff_hz > 0.0 && cutoff_hz < nyquist)) {
     throw InputError("cutoff_hz", "the low-pass cut-off must lie between 0 and the Nyquist frequency (" +
-                                      std::to_string(nyquist) + " Hz for samples " + std::to_string(dt) + " s apart), not " +
-                                      std::to_string(cutoff_hz) + " Hz");
+                                      detail::message_number(nyquist) + " Hz for samples " + detail::message_number(dt) + " s apart), not " +
+                                      detail::message_number(cutoff_hz) + " Hz");
   }
   // Normalised as scipy does: sampling frequency 2, cut-off Wn = f_c / f_Nyquist.
   const double fs = 2.0;

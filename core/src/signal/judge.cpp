@@ -2,6 +2,7 @@
 #include "manipid/core/signal/judge.h"
 
 #include "manipid/core/errors.h"
+#include "numbers.h"
 #include "manipid/core/signal/butterworth.h"
 
 #include <cmath>
@@ -30,14 +31,14 @@ void JudgeOptions::validate(double dt, double duration) const {
   const double nyquist = 0.5 / dt;
   if (!(cutoff_hz > 0.0 && cutoff_hz < nyquist)) {
     throw InputError("judge_cutoff", "the judge's low-pass cut-off must lie between 0 and the data's Nyquist frequency (" +
-                                         std::to_string(nyquist) + " Hz), not " + std::to_string(cutoff_hz) + " Hz");
+                                         detail::message_number(nyquist) + " Hz), not " + detail::message_number(cutoff_hz) + " Hz");
   }
   if (!(trim_seconds >= 0.0) || !std::isfinite(trim_seconds)) {
     throw InputError("judge_trim", "the judge's trim must be a number of seconds >= 0");
   }
   if (duration - 2.0 * trim_seconds < 8.0 * dt) {
-    throw InputError("judge_trim", "the judge trims " + std::to_string(trim_seconds) + " s at each end of a run of " +
-                                       std::to_string(duration) + " s: nothing would be left to compare");
+    throw InputError("judge_trim", "the judge trims " + detail::message_number(trim_seconds) + " s at each end of a run of " +
+                                       detail::message_number(duration) + " s: nothing would be left to compare");
   }
 }
 
