@@ -110,8 +110,8 @@ void parse_friction(const std::vector<std::string>& terms, robot::ParameterLayou
 }
 
 nlohmann::ordered_json robot_result_to_json(const robot::Model& model, const robot::IdentificationResult& result,
-                                            const robot::TorquePrediction& fit,
                                             const std::optional<robot::ValidationReport>& validation) {
+  const robot::TorquePrediction& fit = result.fit;
   const int n = model.joint_count();
   const robot::ParameterLayout& layout = result.layout;
   Json joints = Json::array();

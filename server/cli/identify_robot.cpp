@@ -61,7 +61,7 @@ void print_prediction_rows(const char* label, const robot::TorquePrediction& pre
   std::printf("\n");
 }
 
-void print_table(const robot::Model& model, const robot::IdentificationResult& result, const robot::TorquePrediction& fit,
+void print_table(const robot::Model& model, const robot::IdentificationResult& result,
                  const std::optional<robot::ValidationReport>& validation, const std::string& data_name,
                  const std::string& validation_name) {
   const int n = model.joint_count();
@@ -126,7 +126,7 @@ void print_table(const robot::Model& model, const robot::IdentificationResult& r
               format(result.judge.cutoff_hz, 3).c_str(), format(result.judge.trim_seconds, 3).c_str(), "");
   for (int k : result.torque_joints) std::printf(" %9s", model.joints[static_cast<std::size_t>(k)].name.substr(0, 9).c_str());
   std::printf("\n");
-  print_prediction_rows("fit (training data)", fit);
+  print_prediction_rows("fit (training data)", result.fit);
   if (validation) {
     print_prediction_rows("validation, estimate", validation->estimate);
     print_prediction_rows("validation, URDF", validation->prior);
@@ -207,15 +207,6 @@ int run_identify_robot(const IdentifyOptions& options) {
     }
     rethrow_with_source(error, names(options.inputs));
   }
-  std::vector<robot::TorquePrediction> fits;
-  for (const Trajectory& run : runs) {
-    DataPreparation same_grid = identification.preparation;
-    same_grid.uniform.dt = result.filters.differentiation.dt;
-    std::optional<Trajectory> storage;
-    const Trajectory& prepared = prepare_data(run, same_grid, storage);
-    fits.push_back(robot::predict_torque(model, result.layout, result.point, prepared, result.judge, result.torque_joints));
-  }
-  const robot::TorquePrediction fit = robot::combine(fits);
   std::optional<robot::ValidationReport> validation;
   if (!options.validate.empty()) {
     std::vector<Trajectory> held_out;
@@ -236,9 +227,9 @@ int run_identify_robot(const IdentifyOptions& options) {
     }
   }
   if (options.json) {
-    std::printf("%s\n", api::robot_result_to_json(model, result, fit, validation).dump(2).c_str());
+    std::printf("%s\n", api::robot_result_to_json(model, result, validation).dump(2).c_str());
   } else {
-    print_table(model, result, fit, validation, names(options.inputs), names(options.validate));
+    print_table(model, result, validation, names(options.inputs), names(options.validate));
   }
   return exit_success;
 }

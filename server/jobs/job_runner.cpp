@@ -278,17 +278,9 @@ JobOutcome run_robot_identification_job(const api::JobInfo& job, store::Store& s
     outcome.result = nlohmann::ordered_json{{"cancelled", true}, {"dataset_id", spec.dataset_id}}.dump();
     return outcome;
   }
-  std::vector<robot::TorquePrediction> fits;
-  for (const Trajectory& run : runs) {
-    DataPreparation same_grid = spec.options.preparation;
-    same_grid.uniform.dt = result.filters.differentiation.dt;
-    std::optional<Trajectory> storage;
-    const Trajectory& prepared = prepare_data(run, same_grid, storage);
-    fits.push_back(robot::predict_torque(parsed.model, result.layout, result.point, prepared, result.judge, result.torque_joints));
-  }
   std::optional<robot::ValidationReport> validation;
   if (!held_out.empty()) validation = robot::validate(parsed.model, result, held_out, spec.options.preparation);
-  nlohmann::ordered_json json = api::robot_result_to_json(parsed.model, result, robot::combine(fits), validation);
+  nlohmann::ordered_json json = api::robot_result_to_json(parsed.model, result, validation);
   json["robot_id"] = spec.robot_id;
   json["dataset_id"] = spec.dataset_id;
   json["dataset_ids"] = spec.dataset_ids;

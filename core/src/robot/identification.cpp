@@ -542,6 +542,11 @@ IdentificationResult identify(const Model& model, const std::vector<Trajectory>&
     }
   }
   result.consistency = check_consistency(structure, result.point);
+  std::vector<TorquePrediction> fits;
+  for (const Trajectory& run : runs) {
+    fits.push_back(predict_torque(model, result.layout, result.point, run, result.judge, result.torque_joints));
+  }
+  result.fit = combine(fits);
   result.wall_seconds = std::chrono::duration<double>(Clock::now() - started).count();
   return result;
 }

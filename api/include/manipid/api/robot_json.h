@@ -63,7 +63,6 @@ std::vector<std::string> friction_names(const robot::ParameterLayout& layout);
 void parse_friction(const std::vector<std::string>& terms, robot::ParameterLayout& layout, const std::string& field);
 
 nlohmann::ordered_json robot_result_to_json(const robot::Model& model, const robot::IdentificationResult& result,
-                                            const robot::TorquePrediction& fit,
                                             const std::optional<robot::ValidationReport>& validation);
 
 /// A standard parameter vector for `model` from JSON: an identify result (its "point": the layout is

@@ -25,7 +25,8 @@
 //      base parameter's data share (how much of its estimate the data determine rather than the prior),
 //      the base parameters the data barely see (`unexcited`, share < 1/2), warnings naming every estimate far
 //      from its prior, and `point`: the full standard vector with the estimated base parameters that is
-//      nearest (Euclidean) to the prior, so what the data cannot see stays at the CAD values;
+//      nearest (Euclidean) to the prior, so what the data cannot see stays at the CAD values; and how `point`
+//      predicts the training runs under the judge (`fit`);
 //   6. physical consistency (robot/consistency.h): whether each link of `point` is a real body (mass > 0,
 //      pseudo-inertia positive definite) and each fv, fc, Ia ≥ 0. With `physical`, the constrained fit
 //      (robot/consistent_fit.h) replaces `point` and the base estimates, and reports the cost it adds.
@@ -132,6 +133,8 @@ struct IdentificationResult {
   int runs = 1;                        ///< training runs
   int rows = 0;                        ///< least-squares rows (instants × fitted joints, all runs)
   Eigen::VectorXd residual_rms;        ///< per fitted joint, N·m, of L τ − (L Y_b) β̂
+  /// The training runs predicted with `point`, under the judge (robot/prediction.h; runs combined).
+  TorquePrediction fit;
   Eigen::VectorXd joint_weights;       ///< per fitted joint, as used (1 for unit weighting)
   double residual_variance = 0.0;      ///< σ² of one (unweighted) filtered residual
   std::vector<std::string> warnings;
