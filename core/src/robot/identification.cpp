@@ -120,6 +120,37 @@ std::vector<int> bins_of_rows(const StackedRows& rows, const estimation::TimeBin
   return of_row;
 }
 
+/// The warning naming every estimate far from its prior (an empty string when none is): an estimate
+/// kFarFromPrior times its prior; or, for a prior of zero (to round-off: below kRoundOff of the largest), an
+/// estimate whose torque alone is kCancelled times the measured torque, which the other parameters must cancel.
+std::string far_from_prior(const BaseParameters& base, const Eigen::VectorXd& estimate, const Eigen::VectorXd& beta_prior,
+                           const Eigen::MatrixXd& W_b, const Eigen::VectorXd& tau) {
+  std::vector<std::string> far;
+  const double torque_norm = tau.norm();
+  const double largest_prior = beta_prior.cwiseAbs().maxCoeff();
+  for (int i = 0; i < base.size(); ++i) {
+    const double value = estimate[i], prior_value = beta_prior[i];
+    const double column = W_b.col(i).norm();
+    std::ostringstream text;
+    text.precision(3);
+    if (std::abs(prior_value) > kRoundOff * largest_prior) {
+      const double ratio = std::abs(value / prior_value);
+      if (ratio <= kFarFromPrior) continue;
+      text << base.names[static_cast<std::size_t>(i)] << " = " << value << " (" << ratio << " times the URDF's "
+           << prior_value << ")";
+    } else {
+      const double contribution = std::abs(value) * column / torque_norm;
+      if (!(contribution > kCancelled)) continue;
+      text << base.names[static_cast<std::size_t>(i)] << " = " << value << " (its torque alone " << contribution
+           << " times the measured torque, cancelled by others)";
+    }
+    far.push_back(text.str());
+  }
+  if (far.empty()) return {};
+  return "estimates far from the URDF's values: " + join(far) + "; check the URDF, the units and the excitation before "
+         "trusting them";
+}
+
 /// Step 1: the runs on one uniform grid.
 std::vector<Trajectory> prepare_runs(const std::vector<Trajectory>& runs, const DataPreparation& preparation,
                                      std::vector<std::string>& warnings) {
@@ -478,37 +509,6 @@ IdentificationResult identify(const Model& model, const std::vector<Trajectory>&
                               "its estimate the data determine rather than the URDF): these stay near the URDF's values; "
                               "a richer excitation (manipid excitation) or another run would determine them");
   }
-  {
-    // Far from the prior: an estimate kFarFromPrior times its prior; or, for a prior of zero (to round-off:
-    // below kRoundOff of the largest), an estimate whose torque alone is kCancelled times the measured
-    // torque, which the other parameters must cancel.
-    std::vector<std::string> far;
-    const double torque_norm = rows.tau.norm();
-    const double largest_prior = beta_prior.cwiseAbs().maxCoeff();
-    for (int i = 0; i < b; ++i) {
-      const double estimate = result.estimate[i], prior_value = beta_prior[i];
-      const double column = W_b.col(i).norm();
-      std::ostringstream text;
-      text.precision(3);
-      if (std::abs(prior_value) > kRoundOff * largest_prior) {
-        const double ratio = std::abs(estimate / prior_value);
-        if (ratio <= kFarFromPrior) continue;
-        text << base.names[static_cast<std::size_t>(i)] << " = " << estimate << " (" << ratio << " times the URDF's "
-             << prior_value << ")";
-      } else {
-        const double contribution = std::abs(estimate) * column / torque_norm;
-        if (!(contribution > kCancelled)) continue;
-        text << base.names[static_cast<std::size_t>(i)] << " = " << estimate << " (its torque alone " << contribution
-             << " times the measured torque, cancelled by others)";
-      }
-      far.push_back(text.str());
-    }
-    if (!far.empty()) {
-      result.warnings.push_back("estimates far from the URDF's values: " + join(far) + "; check the URDF, the units and "
-                                "the excitation before trusting them");
-    }
-  }
-
   // The standard vector with these base parameters nearest to the prior: π0 + Cᵀ(CCᵀ)⁻¹(β̂ − Cπ0).
   const Eigen::MatrixXd& C = base.combination;
   const Eigen::VectorXd correction = (C * C.transpose()).ldlt().solve(result.estimate - beta_prior);
@@ -542,6 +542,9 @@ IdentificationResult identify(const Model& model, const std::vector<Trajectory>&
     }
   }
   result.consistency = check_consistency(structure, result.point);
+  if (std::string far = far_from_prior(base, result.estimate, beta_prior, W_b, rows.tau); !far.empty()) {
+    result.warnings.push_back(std::move(far));
+  }
   std::vector<TorquePrediction> fits;
   for (const Trajectory& run : runs) {
     fits.push_back(predict_torque(model, result.layout, result.point, run, result.judge, result.torque_joints));
