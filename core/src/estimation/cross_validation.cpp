@@ -99,7 +99,7 @@ double CrossValidation::relative_error(int i) const {
 
 std::vector<double> default_ridges() {
   std::vector<double> ridges{0.0};
-  for (int e = -12; e <= -2; ++e) ridges.push_back(std::pow(10.0, e / 2.0));
+  for (int e = -12; e <= 0; ++e) ridges.push_back(std::pow(10.0, e / 2.0));
   return ridges;
 }
 

@@ -242,14 +242,14 @@ estimation::CrossValidation score(const estimation::BinnedSums& training, const 
                                   const estimation::TimeBins& bins, double guard, const FrictionCandidate& friction,
                                   const FrictionCandidate& full, const std::vector<double>& ridges) {
   // The sums are over the full base's columns; a friction model uses those of its own base that the full base
-  // has (its friction columns are a subset), the rest at the prior.
+  // has (its friction columns are a subset). The terms it lacks are zero, as in the model it stands for.
   std::vector<int> positions;
   for (int column : friction.columns) {
     const auto at = std::find(full.columns.begin(), full.columns.end(), column);
     if (at != full.columns.end()) positions.push_back(static_cast<int>(at - full.columns.begin()));
   }
-  Eigen::VectorXd prior = full.beta_prior;
-  // Parameters outside this friction model: at their prior (the URDF's friction, or 0).
+  Eigen::VectorXd prior = Eigen::VectorXd::Zero(full.beta_prior.size());
+  for (int position : positions) prior[position] = full.beta_prior[position];
   return estimation::cross_validate(training, target, bins, guard, positions, prior, ridges);
 }
 

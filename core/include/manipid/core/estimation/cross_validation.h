@@ -65,7 +65,7 @@ CrossValidation cross_validate(const BinnedSums& training, const BinnedSums& tar
                                const std::vector<int>& columns, const Eigen::VectorXd& prior,
                                const std::vector<double>& ridges);
 
-/// The ridge grid cross_validate() is given by default: 0 and 10^-6 .. 10^-1 in steps of √10.
+/// The ridge grid cross_validate() is given by default: 0 and 10^-6 .. 1 in steps of √10.
 std::vector<double> default_ridges();
 
 }  // namespace manipid::estimation
