@@ -83,6 +83,9 @@ Setup validate(const RobotModel& model, const Trajectory& data, const Identifica
   Setup setup;
   setup.n = model.joint_count();
   const int n = setup.n;
+  if (options.weighting == JointWeighting::per_joint) {
+    throw InputError("weights", "the paper's model weights its joints unit or by inverse variance; per-joint is a URDF robot's");
+  }
   data.validate();
   if (data.joint_count() != n) {
     throw InputError("q", "the data has " + std::to_string(data.joint_count()) + " joints, the model has " +

@@ -321,6 +321,9 @@ IdentificationResult identify(const Model& model, const std::vector<Trajectory>&
     throw InputError("comparison_cutoff", "the comparison cut-off must be a positive number of Hz (or 0: chosen)");
   }
   if (!std::isfinite(options.ridge)) throw InputError("ridge", "the ridge must be a number >= 0 (or < 0: chosen)");
+  if (options.weighting == JointWeighting::inverse_variance) {
+    throw InputError("weights", "a URDF robot's joints are weighted unit or per-joint (each by its residual's variance)");
+  }
 
   // Step 1.
   const std::vector<Trajectory> runs = prepare_runs(measured, options.preparation, result.warnings);

@@ -19,6 +19,7 @@
 #pragma once
 
 #include "manipid/core/errors.h"
+#include "manipid/core/estimation/joint_weighting.h"
 #include "manipid/core/paper/controller_gains.h"
 #include "manipid/core/signal/filters.h"
 #include "manipid/core/paper/model.h"
@@ -61,10 +62,8 @@ enum class TorqueSource {
   reference,  ///< τ = Kp (r − q) − Kd q̇ from the data's ref columns, filtered consistently (the paper)
 };
 
-enum class JointWeighting {
-  unit,              ///< every joint's mean squared torque error counts alike (the paper)
-  inverse_variance,  ///< each joint divided by the variance of its filtered torque
-};
+/// unit or inverse_variance (estimation/joint_weighting.h); per_joint is a URDF robot's and refused here.
+using estimation::JointWeighting;
 
 struct IdentificationOptions {
   IdentificationMethod method = IdentificationMethod::input_error;

@@ -32,6 +32,7 @@
 //      (robot/consistent_fit.h) replaces `point` and the base estimates, and reports the cost it adds.
 #pragma once
 
+#include "manipid/core/estimation/joint_weighting.h"
 #include "manipid/core/robot/base_parameters.h"
 #include "manipid/core/robot/consistency.h"
 #include "manipid/core/robot/consistent_fit.h"
@@ -52,10 +53,8 @@
 
 namespace manipid::robot {
 
-enum class JointWeighting {
-  unit,       ///< every joint's squared torque error counts alike
-  per_joint,  ///< each joint divided by its residual variance from a first, unweighted fit
-};
+/// unit or per_joint (estimation/joint_weighting.h); inverse_variance is the paper's and refused here.
+using estimation::JointWeighting;
 
 /// The comparison cut-offs tried, as multiples of the judge's cut-off (5 Hz: 1.5 .. 10 Hz).
 inline constexpr double kCutoffFactors[] = {0.3, 0.4, 0.6, 0.8, 1.0, 1.4, 2.0};
