@@ -1,12 +1,15 @@
 // encoding.cpp — value encodings every store backend shares (see encoding.h).
 #include "store/encoding.h"
 
+#include "store/store.h"
+
 #include <stdexcept>
 #include <string>
 
 #include <array>
 #include <bit>
 #include <cstring>
+#include <limits>
 
 namespace manipid::server::store {
 
@@ -66,6 +69,40 @@ void check_dataset_shape(const Trajectory& data) {
   check_block(data.ref, samples, joints, "ref");
   check_block(data.qd, samples, joints, "qd");
   check_block(data.qdd, samples, joints, "qdd");
+}
+
+Trajectory decode_samples(const std::string& id, const StoredSamples& stored) {
+  const auto samples = static_cast<Eigen::Index>(stored.samples);
+  const auto joints = static_cast<Eigen::Index>(stored.joints);
+  Trajectory data;
+  data.t.resize(samples);
+  data.q.resize(samples, joints);
+  data.tau.resize(samples, stored.has_torque ? joints : 0);
+  data.ref.resize(samples, stored.has_reference ? joints : 0);
+  data.qd.resize(samples, stored.has_rates ? joints : 0);
+  data.qdd.resize(samples, stored.has_accelerations ? joints : 0);
+  const auto fill = [](std::span<const unsigned char> blob, double* values, Eigen::Index count) {
+    return decode_doubles(blob, values, static_cast<std::size_t>(count));
+  };
+  const bool intact = fill(stored.t, data.t.data(), data.t.size()) && fill(stored.q, data.q.data(), data.q.size()) &&
+                      fill(stored.tau, data.tau.data(), data.tau.size()) &&
+                      fill(stored.ref, data.ref.data(), data.ref.size()) &&
+                      fill(stored.qd, data.qd.data(), data.qd.size()) &&
+                      fill(stored.qdd, data.qdd.data(), data.qdd.size());
+  if (!intact) throw StoreError("dataset " + id + " has samples of the wrong size in the database");
+  return data;
+}
+
+api::HistoryEntry decode_history_entry(std::int64_t index, std::optional<double> cost,
+                                       std::span<const unsigned char> theta, const std::string& job_id) {
+  api::HistoryEntry entry;
+  entry.index = static_cast<long>(index);
+  entry.cost = cost.value_or(std::numeric_limits<double>::quiet_NaN());
+  entry.theta.resize(theta.size() / sizeof(double));
+  if (!decode_doubles(theta, entry.theta.data(), entry.theta.size())) {
+    throw StoreError("history entry of job " + job_id + " has a damaged theta in the database");
+  }
+  return entry;
 }
 
 const char* state_text(api::JobState state) { return kStateTexts.at(static_cast<std::size_t>(state)); }

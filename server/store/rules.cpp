@@ -1,6 +1,8 @@
 // rules.cpp — ids, time stamps, page sizes and page tokens shared by every store (rules.h).
 #include "store/rules.h"
 
+#include "store/encoding.h"
+
 #include <chrono>
 #include <cstdio>
 #include <ctime>
@@ -90,6 +92,11 @@ std::int64_t decode_page_token(std::string_view token, std::string_view tag, std
   // Re-encoding must give the same text: rejects leading zeros, upper case and a wrong check.
   if (hex(position, 1) != digits || check != hex(token_check(tag, digits, context), 8)) malformed_token();
   return static_cast<std::int64_t>(position);
+}
+
+std::string job_list_context(const api::JobFilter& filter) {
+  return std::string("state=") + (filter.state ? state_text(*filter.state) : "") +
+         ";kind=" + (filter.kind ? kind_text(*filter.kind) : "") + ";robot=" + filter.robot_id;
 }
 
 int effective_page_size(int requested) {

@@ -28,6 +28,10 @@ std::string encode_page_token(std::string_view tag, std::int64_t position, std::
 /// The position; throws PageRequestError (field "page_token") when malformed.
 std::int64_t decode_page_token(std::string_view token, std::string_view tag, std::string_view context);
 
+/// What a job list's page tokens are bound to: its filter (a token from another filter would skip
+/// or repeat jobs).
+std::string job_list_context(const api::JobFilter& filter);
+
 /// Page sizes: 0 → 50, above 1000 → 1000; negative → PageRequestError (field "page_size").
 int effective_page_size(int requested);
 

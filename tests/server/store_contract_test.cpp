@@ -3,6 +3,7 @@
 // life cycle, paging, recovery after a reopen and concurrent callers, each test on a fresh store
 // in its own temporary directory. What only one backend does lives beside it (sqlite_store_test).
 #include "store/store.h"
+#include "store/idempotency.h"
 
 #include <gtest/gtest.h>
 #include <libpq-fe.h>
@@ -1175,6 +1176,38 @@ TEST_P(StoreContract, AWatcherHearsWhatAnotherProcessDid) {
   }
   store_->watch_jobs({});
   other.reset();
+}
+
+// The rule both backends apply to a key's live record (store/idempotency.h), without a database:
+// the paths the suite above cannot reach directly (a record whose resource is gone).
+TEST(IdempotencyRule, ReplaysRefusesOrGoesOn) {
+  const api::IdempotencyKey key{"k", "f1"};
+  int asked = 0;
+  const auto find = [&](const std::string& id) -> std::optional<api::JobInfo> {
+    ++asked;
+    if (id != "job_1") return std::nullopt;
+    api::JobInfo job;
+    job.id = id;
+    return job;
+  };
+  // No live record: go on and create.
+  EXPECT_FALSE(answer_from_key<SubmitOutcome>(std::nullopt, key, find));
+  // Another body: refused, whether or not the earlier job exists, and it is not looked for.
+  for (const char* earlier : {"job_1", "job_gone"}) {
+    const auto refused = answer_from_key<SubmitOutcome>(KeyRecord{"f2", earlier}, key, find);
+    ASSERT_TRUE(refused);
+    EXPECT_EQ(refused->status, SubmitStatus::key_reused);
+    EXPECT_TRUE(refused->job.id.empty());
+  }
+  EXPECT_EQ(asked, 0);
+  // The same body: the earlier job again.
+  const auto replayed = answer_from_key<SubmitOutcome>(KeyRecord{"f1", "job_1"}, key, find);
+  ASSERT_TRUE(replayed);
+  EXPECT_EQ(replayed->status, SubmitStatus::replayed);
+  EXPECT_EQ(replayed->job.id, "job_1");
+  // The same body, its job gone: go on (the new job takes the key over).
+  EXPECT_FALSE(answer_from_key<SubmitOutcome>(KeyRecord{"f1", "job_gone"}, key, find));
+  EXPECT_EQ(asked, 2);
 }
 
 }  // namespace

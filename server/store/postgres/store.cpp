@@ -1,4 +1,7 @@
-// store.cpp — the Store (store/store.h) over a PostgreSQL database that many processes share.
+// store.cpp — the Store (store/store.h) over a PostgreSQL database that many processes share:
+// its methods, each one transaction (or one statement) on a pooled connection. The rows several
+// methods share are rows.cpp's, the announcements and the listener events.cpp's, the array and
+// COPY literals literals.cpp's, the cache of recent samples recent_datasets.cpp's.
 // How each guarantee of the contract is kept when other processes write at the same time:
 //  - a claim takes the oldest queued job with FOR UPDATE SKIP LOCKED, so concurrent claimers
 //    never wait on each other and never get the same job;
@@ -7,7 +10,9 @@
 //    attempt's write (progress, history, end) changes nothing and is rolled back whole;
 //  - an Idempotency-Key is claimed by inserting it (ON CONFLICT DO NOTHING on its primary key):
 //    of two processes sending the same key, the second waits for the first's commit and then
-//    finds its row — never a read-then-write;
+//    finds its row — never a read-then-write (rows.cpp's claim_key); what the row it finds
+//    means (replay, refuse, or take the key over) is the rule both backends share
+//    (store/idempotency.h);
 //  - the queue limit's count and insert run under a transaction-scoped advisory lock, so
 //    concurrent submissions cannot overshoot it;
 //  - recovery locks the expired jobs it takes back (SKIP LOCKED: a job another process is
@@ -19,20 +24,17 @@
 #include "store/postgres/store.h"
 
 #include "store/encoding.h"
+#include "store/new_records.h"
 #include "store/postgres/connection.h"
+#include "store/postgres/events.h"
+#include "store/postgres/literals.h"
+#include "store/postgres/recent_datasets.h"
+#include "store/postgres/rows.h"
 #include "store/postgres/schema.h"
 #include "store/rules.h"
 
-#include <algorithm>
-#include <cmath>
-#include <condition_variable>
 #include <cstdint>
-#include <cstdio>
-#include <limits>
-#include <list>
-#include <mutex>
 #include <stdexcept>
-#include <thread>
 
 namespace manipid::server::store::postgres {
 
@@ -40,17 +42,6 @@ namespace {
 
 /// Any fixed number: the advisory lock that orders submissions checked against the queue limit.
 constexpr const char* kQueueLock = "1835101802";
-
-const std::string kJobColumns =
-    "id, kind, state, created_at, started_at, finished_at, request, dataset_id, evaluations, best_cost, "
-    "cancel_requested, attempts, result, error, robot_id, validation_dataset_id, worker, seq";
-constexpr int kJobSeqColumn = 17;
-const std::string kDatasetColumns =
-    "id, name, created_at, source_job, joints, samples, dt, has_torque, has_reference, uniform, has_rates, "
-    "has_accelerations, seq";
-constexpr int kDatasetSeqColumn = 12;
-const std::string kRobotColumns = "id, name, created_at, base, tip, joints, summary, seq";
-constexpr int kRobotSeqColumn = 7;
 
 /// The guard of every write of a running job: $1 id, $2 owner, $3 attempt.
 const std::string kHeldBy = "WHERE id = $1 AND state = 'running' AND worker = $2 AND attempts = $3";
@@ -67,347 +58,19 @@ std::vector<unsigned char> encode(const double* values, Eigen::Index count) {
   return encode_doubles(values, static_cast<std::size_t>(count));
 }
 
-api::JobInfo read_job(const Result& rows, int row) {
-  api::JobInfo job;
-  job.id = rows.text(row, 0);
-  const auto kind = kind_from_text(rows.text(row, 1));
-  const auto state = state_from_text(rows.text(row, 2));
-  if (!kind || !state) throw StoreError("job " + job.id + " has an unknown kind or state in the database");
-  job.kind = *kind;
-  job.state = *state;
-  job.created_at = rows.text(row, 3);
-  job.started_at = rows.text(row, 4);
-  job.finished_at = rows.text(row, 5);
-  job.request = rows.text(row, 6);
-  job.dataset_id = rows.text(row, 7);
-  job.evaluations = static_cast<long>(rows.integer(row, 8));
-  job.best_cost = rows.real_or_null(row, 9);
-  job.cancel_requested = rows.boolean(row, 10);
-  job.attempts = static_cast<int>(rows.integer(row, 11));
-  job.result = rows.text(row, 12);
-  job.error = rows.text(row, 13);
-  job.robot_id = rows.text(row, 14);
-  job.validation_dataset_id = rows.text(row, 15);
-  job.worker = rows.text(row, 16);
-  return job;
-}
-
-api::DatasetInfo read_dataset(const Result& rows, int row) {
-  api::DatasetInfo dataset;
-  dataset.id = rows.text(row, 0);
-  dataset.name = rows.text(row, 1);
-  dataset.created_at = rows.text(row, 2);
-  dataset.source_job = rows.text(row, 3);
-  dataset.joints = static_cast<int>(rows.integer(row, 4));
-  dataset.samples = static_cast<int>(rows.integer(row, 5));
-  dataset.dt = rows.real(row, 6);
-  dataset.has_torque = rows.boolean(row, 7);
-  dataset.has_reference = rows.boolean(row, 8);
-  dataset.uniform = rows.boolean(row, 9);
-  dataset.has_rates = rows.boolean(row, 10);
-  dataset.has_accelerations = rows.boolean(row, 11);
-  return dataset;
-}
-
-api::RobotInfo read_robot(const Result& rows, int row) {
-  api::RobotInfo robot;
-  robot.id = rows.text(row, 0);
-  robot.name = rows.text(row, 1);
-  robot.created_at = rows.text(row, 2);
-  robot.base = rows.text(row, 3);
-  robot.tip = rows.text(row, 4);
-  robot.joints = static_cast<int>(rows.integer(row, 5));
-  robot.summary = rows.text(row, 6);
-  return robot;
-}
-
-api::HistoryEntry history_entry(const Result& rows, int row, const std::string& id) {
-  api::HistoryEntry entry;
-  entry.index = static_cast<long>(rows.integer(row, 0));
-  entry.cost = rows.real_or_null(row, 1).value_or(std::numeric_limits<double>::quiet_NaN());
-  const auto theta = rows.bytes(row, 2);
-  entry.theta.resize(theta.size() / sizeof(double));
-  if (!decode_doubles(theta, entry.theta.data(), entry.theta.size())) {
-    throw StoreError("history entry of job " + id + " has a damaged theta in the database");
-  }
-  return entry;
-}
-
-std::optional<api::JobInfo> select_job(Connection& connection, const std::string& id) {
-  auto rows = connection.exec("SELECT " + kJobColumns + " FROM jobs WHERE id = $1", Params().text(id));
-  if (rows.rows() == 0) return std::nullopt;
-  return read_job(rows, 0);
-}
-
-std::optional<api::DatasetInfo> select_dataset(Connection& connection, const std::string& id) {
-  auto rows = connection.exec("SELECT " + kDatasetColumns + " FROM datasets WHERE id = $1", Params().text(id));
-  if (rows.rows() == 0) return std::nullopt;
-  return read_dataset(rows, 0);
-}
-
-std::optional<api::RobotInfo> select_robot(Connection& connection, const std::string& id) {
-  auto rows = connection.exec("SELECT " + kRobotColumns + " FROM robots WHERE id = $1", Params().text(id));
-  if (rows.rows() == 0) return std::nullopt;
-  return read_robot(rows, 0);
-}
-
-/// The job's state, its row locked until the transaction ends (`lock`), or nullopt.
-std::optional<api::JobState> select_state(Connection& connection, const std::string& id, bool lock) {
-  auto rows = connection.exec(std::string("SELECT state FROM jobs WHERE id = $1") + (lock ? " FOR UPDATE" : ""),
-                              Params().text(id));
-  if (rows.rows() == 0) return std::nullopt;
-  const auto state = state_from_text(rows.text(0, 0));
-  if (!state) throw StoreError("job " + id + " has an unknown state in the database");
-  return state;
-}
-
-/// A fresh random id not held by a row of `table` (a 64-bit collision is unlikely, but a
-/// UNIQUE failure would be a 500).
-std::string unused_id(Connection& connection, const char* prefix, const std::string& table) {
-  for (;;) {
-    std::string id = random_id(prefix);
-    if (connection.exec("SELECT 1 FROM " + table + " WHERE id = $1", Params().text(id)).rows() == 0) return id;
-  }
-}
-
-struct KeyRecord {
-  std::string fingerprint;
-  std::string resource_id;
-};
-
-/// Claims Idempotency-Key `key` in `scope` for the new resource `id`: nullopt when the key is
-/// now ours (create the resource), else the live record that holds it. Expired keys are
-/// forgotten first (by the index on their age).
-std::optional<KeyRecord> claim_key(Connection& connection, const char* scope, const api::IdempotencyKey& key,
-                                   const std::string& id, const std::string& now, const std::string& not_before) {
-  connection.exec("DELETE FROM idempotency_keys WHERE created_at < $1", Params().text(not_before));
-  auto inserted = connection.exec(
-      "INSERT INTO idempotency_keys (scope, key, fingerprint, resource_id, created_at) VALUES ($1, $2, $3, $4, $5) "
-      "ON CONFLICT (scope, key) DO NOTHING",
-      Params().text(scope).text(key.key).text(key.fingerprint).text(id).text(now));
-  if (inserted.changed() == 1) return std::nullopt;
-  auto held = connection.exec("SELECT fingerprint, resource_id FROM idempotency_keys WHERE scope = $1 AND key = $2",
-                              Params().text(scope).text(key.key));
-  if (held.rows() == 0) throw ConflictRetry("an Idempotency-Key was removed while it was being claimed");
-  return KeyRecord{held.text(0, 0), held.text(0, 1)};
-}
-
-/// The key now names `id` (its earlier resource is gone).
-void retake_key(Connection& connection, const char* scope, const api::IdempotencyKey& key, const std::string& id,
-                const std::string& now) {
-  connection.exec("UPDATE idempotency_keys SET resource_id = $3, created_at = $4 WHERE scope = $1 AND key = $2",
-                  Params().text(scope).text(key.key).text(id).text(now));
-}
-
-void forget_keys_of(Connection& connection, const char* scope, const std::string& id) {
-  connection.exec("DELETE FROM idempotency_keys WHERE scope = $1 AND resource_id = $2", Params().text(scope).text(id));
-}
-
-/// What a keyed submission should do: create (the key is ours or there is none), replay the
-/// earlier resource, or refuse (the key was used for another body).
-enum class KeyVerdict { create, replay, reused };
-
-struct KeyDecision {
-  KeyVerdict verdict = KeyVerdict::create;
-  std::string earlier_id;
-};
-
-/// Claims the key (when given) for `id`; `exists(earlier)` tells whether its earlier resource
-/// still exists (a key whose resource is gone is taken over).
-template <class Exists>
-KeyDecision decide_key(Connection& connection, const char* scope, const std::optional<api::IdempotencyKey>& key,
-                       const std::string& id, const std::string& now, const std::string& not_before, Exists&& exists) {
-  if (!key) return {};
-  const auto earlier = claim_key(connection, scope, *key, id, now, not_before);
-  if (!earlier) return {};
-  if (earlier->fingerprint != key->fingerprint) return {KeyVerdict::reused, {}};
-  if (exists(earlier->resource_id)) return {KeyVerdict::replay, earlier->resource_id};
-  retake_key(connection, scope, *key, id, now);
-  return {};
-}
-
-/// The channel every process LISTENs on; a payload is "<kind> <job id>" (JobEvent).
-constexpr const char* kChannel = "manipid_jobs";
-
-/// Tells every listening process, when the transaction commits (NOTIFY is transactional: a
-/// rolled-back change is never announced).
-void announce(Connection& connection, const char* kind, const std::string& id) {
-  connection.exec(std::string("SELECT pg_notify('") + kChannel + "', $1)", Params().text(std::string(kind) + " " + id));
-}
-
-/// The tail of a statement whose CTE `rows` returns the ids of changed jobs: announces each
-/// (as announce does) in the same round trip; the statement returns one row per id.
-std::string announcement(const char* kind, const char* rows) {
-  return std::string("SELECT pg_notify('") + kChannel + "', '" + kind + " ' || id) FROM " + rows;
-}
-
-std::optional<JobEvent> parse_event(const std::string& payload) {
-  const std::size_t space = payload.find(' ');
-  if (space == std::string::npos) return std::nullopt;
-  const std::string kind = payload.substr(0, space);
-  JobEvent event;
-  event.job_id = payload.substr(space + 1);
-  if (kind == "queued") event.kind = JobEvent::Kind::queued;
-  else if (kind == "cancel") event.kind = JobEvent::Kind::cancel_requested;
-  else if (kind == "changed") event.kind = JobEvent::Kind::changed;
-  else return std::nullopt;
-  return event;
-}
-
-/// A PostgreSQL array literal of texts, every element quoted.
-std::string array_literal(const std::vector<std::string>& texts) {
-  std::string out = "{";
-  for (std::size_t i = 0; i < texts.size(); ++i) {
-    if (i > 0) out += ',';
-    out += '"';
-    for (char c : texts[i]) {
-      if (c == '"' || c == '\\') out += '\\';
-      out += c;
-    }
-    out += '"';
-  }
-  return out + "}";
-}
-
-/// A PostgreSQL array literal of doubles (17 significant digits: exact), NULL for none.
-std::string array_literal(const std::vector<std::optional<double>>& numbers) {
-  std::string out = "{";
-  for (std::size_t i = 0; i < numbers.size(); ++i) {
-    if (i > 0) out += ',';
-    if (!numbers[i]) {
-      out += "NULL";
-    } else if (std::isnan(*numbers[i])) {
-      out += "NaN";
-    } else if (std::isinf(*numbers[i])) {
-      out += *numbers[i] > 0 ? "Infinity" : "-Infinity";
-    } else {
-      char buffer[32];
-      std::snprintf(buffer, sizeof buffer, "%.17g", *numbers[i]);
-      out += buffer;
-    }
-  }
-  return out + "}";
-}
-
-/// A PostgreSQL array literal of ids ({"a","b"}); ids are letters, digits and '_', quoted anyway.
-std::string id_array(const std::vector<std::string>& ids) { return array_literal(ids); }
-
-/// COPY's text format for one history row: job id, index, cost (\N for NaN, as NULL), θ as
-/// bytea hex (the backslash doubled: COPY reads "\\x…" as "\x…"), \N when θ is empty.
-void append_history_row(std::string& out, const std::string& id, const api::HistoryEntry& entry) {
-  static constexpr char digits[] = "0123456789abcdef";
-  out += id;
-  out += '\t';
-  out += std::to_string(entry.index);
-  out += '\t';
-  if (std::isnan(entry.cost)) {
-    out += "\\N";
-  } else if (std::isinf(entry.cost)) {
-    out += entry.cost > 0 ? "Infinity" : "-Infinity";
-  } else {
-    char buffer[32];
-    std::snprintf(buffer, sizeof buffer, "%.17g", entry.cost);
-    out += buffer;
-  }
-  out += '\t';
-  if (entry.theta.empty()) {
-    out += "\\N";
-  } else {
-    out += "\\\\x";
-    for (unsigned char byte : encode_doubles(entry.theta.data(), entry.theta.size())) {
-      out += digits[byte >> 4];
-      out += digits[byte & 15];
-    }
-  }
-  out += '\n';
-}
-
-/// The samples of the datasets read last, up to a byte budget, oldest dropped first.
-class RecentDatasets {
- public:
-  explicit RecentDatasets(std::size_t budget) : budget_(budget) {}
-
-  std::optional<Trajectory> find(const std::string& id) {
-    std::lock_guard lock(mutex_);
-    for (auto entry = entries_.begin(); entry != entries_.end(); ++entry) {
-      if (entry->id != id) continue;
-      entries_.splice(entries_.begin(), entries_, entry);  // now the most recent
-      return entry->data;
-    }
-    return std::nullopt;
-  }
-
-  void insert(const std::string& id, const Trajectory& data) {
-    const std::size_t bytes = sizeof(double) * static_cast<std::size_t>(data.t.size() + data.q.size() + data.tau.size() +
-                                                                        data.ref.size() + data.qd.size() + data.qdd.size());
-    if (bytes > budget_ / 4) return;  // a huge dataset is read when needed, not kept
-    std::lock_guard lock(mutex_);
-    for (const auto& entry : entries_) {
-      if (entry.id == id) return;
-    }
-    entries_.push_front({id, data, bytes});
-    held_ += bytes;
-    while (held_ > budget_) {
-      held_ -= entries_.back().bytes;
-      entries_.pop_back();
-    }
-  }
-
-  void erase(const std::string& id) {
-    std::lock_guard lock(mutex_);
-    entries_.remove_if([&](const Entry& entry) {
-      if (entry.id != id) return false;
-      held_ -= entry.bytes;
-      return true;
-    });
-  }
-
- private:
-  struct Entry {
-    std::string id;
-    Trajectory data;
-    std::size_t bytes = 0;
-  };
-  std::size_t budget_;
-  std::size_t held_ = 0;
-  std::list<Entry> entries_;
-  std::mutex mutex_;
-};
-
 class PostgresStore final : public Store {
  public:
   PostgresStore(const std::string& uri, const StoreOptions& options, std::size_t connections)
-      : options_(options), pool_(uri, connections) {
+      : options_(options), pool_(uri, connections), listener_(pool_.conninfo()) {
     auto connection = pool_.checkout();
     prepare_database(*connection);
-  }
-
-  ~PostgresStore() override {
-    {
-      std::lock_guard lock(listen_mutex_);
-      stop_listening_ = true;
-    }
-    listen_wake_.notify_all();
-    if (listener_.joinable()) listener_.join();
   }
 
   PostgresStore(const PostgresStore&) = delete;
   PostgresStore& operator=(const PostgresStore&) = delete;
 
   bool watch_jobs(std::function<void(const JobEvent&)> on_event) override {
-    const bool watch = static_cast<bool>(on_event);
-    {
-      std::lock_guard lock(watcher_mutex_);  // waits for an event being handed over
-      on_event_ = std::move(on_event);
-    }
-    std::unique_lock lock(listen_mutex_);
-    if (watch && !listener_.joinable()) {
-      listener_ = std::thread([this] { listen(); });
-      // Heard from here on: return once the first LISTEN has been tried (a notification sent
-      // before it would be missed). A database that is away does not hold this up for long:
-      // the attempt fails and the watcher polls meanwhile.
-      listen_wake_.wait_for(lock, std::chrono::seconds(10), [this] { return listen_attempted_ || stop_listening_; });
-    }
+    listener_.watch(std::move(on_event));
     return true;
   }
 
@@ -415,40 +78,25 @@ class PostgresStore final : public Store {
 
   DatasetOutcome insert_dataset(const std::string& name, const Trajectory& data, const std::string& source_job,
                                 const std::optional<api::IdempotencyKey>& key) override {
-    const int samples = data.samples();
-    const int joints = data.joint_count();
-    check_dataset_shape(data);
-    api::DatasetInfo dataset;
-    dataset.name = name;
-    dataset.source_job = source_job;
-    dataset.joints = joints;
-    dataset.samples = samples;
-    dataset.dt = data.sample_period();  // uniform: t[1] − t[0]; jittery: the median step
-    dataset.uniform = data.is_uniform();
-    dataset.has_torque = data.has_torque();
-    dataset.has_reference = data.has_reference();
-    dataset.has_rates = data.has_rates();
-    dataset.has_accelerations = data.has_accelerations();
+    api::DatasetInfo dataset = describe_dataset(name, data, source_job);
     const std::string keys_not_before = rfc3339_ago(options_.idempotency_ttl);
 
     auto connection = pool_.checkout();
     return run_transaction(*connection, TransactionKind::write, [&]() -> DatasetOutcome {
       dataset.id = unused_id(*connection, "ds_", "datasets");
       dataset.created_at = now_rfc3339();
-      const KeyDecision decision =
-          decide_key(*connection, "dataset", key, dataset.id, dataset.created_at, keys_not_before,
-                     [&](const std::string& earlier) { return select_dataset(*connection, earlier).has_value(); });
-      if (decision.verdict == KeyVerdict::reused) return {SubmitStatus::key_reused, {}};
-      if (decision.verdict == KeyVerdict::replay) {
-        return {SubmitStatus::replayed, *select_dataset(*connection, decision.earlier_id)};
+      if (auto answer = claim_key_for<DatasetOutcome>(
+              *connection, "dataset", key, dataset.id, dataset.created_at, keys_not_before,
+              [&](const std::string& earlier) { return select_dataset(*connection, earlier); })) {
+        return *answer;
       }
       Params params;
       params.text(dataset.id)
           .text(dataset.name)
           .text(dataset.created_at)
           .text_or_null(dataset.source_job)
-          .integer(joints)
-          .integer(samples)
+          .integer(dataset.joints)
+          .integer(dataset.samples)
           .real(dataset.dt)
           .boolean(dataset.uniform)
           .boolean(dataset.has_torque)
@@ -492,22 +140,20 @@ class PostgresStore final : public Store {
         "FROM datasets WHERE id = $1",
         Params().text(id), true);
     if (row.rows() == 0) return std::nullopt;
-    const auto samples = static_cast<Eigen::Index>(row.binary_integer(0, 0));
-    const auto joints = static_cast<Eigen::Index>(row.binary_integer(0, 1));
-    Trajectory data;
-    data.t.resize(samples);
-    data.q.resize(samples, joints);
-    data.tau.resize(samples, row.binary_boolean(0, 2) ? joints : 0);
-    data.ref.resize(samples, row.binary_boolean(0, 3) ? joints : 0);
-    data.qd.resize(samples, row.binary_boolean(0, 4) ? joints : 0);
-    data.qdd.resize(samples, row.binary_boolean(0, 5) ? joints : 0);
-    const auto fill = [&](int column, double* values, Eigen::Index count) {
-      return decode_doubles(row.binary_bytes(0, column), values, static_cast<std::size_t>(count));
-    };
-    const bool intact = fill(6, data.t.data(), data.t.size()) && fill(7, data.q.data(), data.q.size()) &&
-                        fill(8, data.tau.data(), data.tau.size()) && fill(9, data.ref.data(), data.ref.size()) &&
-                        fill(10, data.qd.data(), data.qd.size()) && fill(11, data.qdd.data(), data.qdd.size());
-    if (!intact) throw StoreError("dataset " + id + " has samples of the wrong size in the database");
+    StoredSamples stored;
+    stored.samples = row.binary_integer(0, 0);
+    stored.joints = row.binary_integer(0, 1);
+    stored.has_torque = row.binary_boolean(0, 2);
+    stored.has_reference = row.binary_boolean(0, 3);
+    stored.has_rates = row.binary_boolean(0, 4);
+    stored.has_accelerations = row.binary_boolean(0, 5);
+    stored.t = row.binary_bytes(0, 6);
+    stored.q = row.binary_bytes(0, 7);
+    stored.tau = row.binary_bytes(0, 8);
+    stored.ref = row.binary_bytes(0, 9);
+    stored.qd = row.binary_bytes(0, 10);
+    stored.qdd = row.binary_bytes(0, 11);
+    Trajectory data = decode_samples(id, stored);
     recent_datasets_.insert(id, data);
     return data;
   }
@@ -544,19 +190,14 @@ class PostgresStore final : public Store {
     const std::string keys_not_before = rfc3339_ago(options_.idempotency_ttl);
     auto connection = pool_.checkout();
     return run_transaction(*connection, TransactionKind::write, [&]() -> RobotOutcome {
-      api::RobotInfo created;
+      api::RobotInfo created = describe_robot(robot);
       created.id = unused_id(*connection, "rb_", "robots");
-      created.name = robot.name;
       created.created_at = now_rfc3339();
-      created.base = robot.base;
-      created.tip = robot.tip;
-      created.joints = robot.joints;
-      created.summary = robot.summary;
-      const KeyDecision decision =
-          decide_key(*connection, "robot", key, created.id, created.created_at, keys_not_before,
-                     [&](const std::string& earlier) { return select_robot(*connection, earlier).has_value(); });
-      if (decision.verdict == KeyVerdict::reused) return {SubmitStatus::key_reused, {}};
-      if (decision.verdict == KeyVerdict::replay) return {SubmitStatus::replayed, *select_robot(*connection, decision.earlier_id)};
+      if (auto answer = claim_key_for<RobotOutcome>(
+              *connection, "robot", key, created.id, created.created_at, keys_not_before,
+              [&](const std::string& earlier) { return select_robot(*connection, earlier); })) {
+        return *answer;
+      }
       connection->exec(
           "INSERT INTO robots (id, name, created_at, base, tip, joints, summary, urdf) "
           "VALUES ($1, $2, $3, $4, $5, $6, $7, $8)",
@@ -628,8 +269,7 @@ class PostgresStore final : public Store {
   api::Page<api::JobInfo> list_jobs(const api::JobFilter& filter, const api::PageRequest& page) override {
     const int size = effective_page_size(page.page_size);
     // The token is bound to the filter: a token from another filter would skip or repeat jobs.
-    const std::string context = std::string("state=") + (filter.state ? state_text(*filter.state) : "") +
-                                ";kind=" + (filter.kind ? kind_text(*filter.kind) : "") + ";robot=" + filter.robot_id;
+    const std::string context = job_list_context(filter);
     const std::int64_t before = page.page_token.empty() ? INT64_MAX : decode_page_token(page.page_token, "j1", context);
     // Fixed SQL fragments per filter combination (values bound, never in the text).
     Params params;
@@ -893,52 +533,19 @@ class PostgresStore final : public Store {
     std::optional<double> best_cost;
   };
 
-  static std::string qualified_job_columns() {
-    std::string out;
-    std::size_t start = 0;
-    while (start < kJobColumns.size()) {
-      std::size_t end = kJobColumns.find(", ", start);
-      if (end == std::string::npos) end = kJobColumns.size();
-      if (!out.empty()) out += ", ";
-      out += "jobs." + kJobColumns.substr(start, end - start);
-      start = end + 2;
-    }
-    return out;
-  }
-
-  template <class Item, class Read>
-  static api::Page<Item> page_of(const Result& rows, int size, const char* tag, const std::string& context,
-                                 int seq_column, Read read) {
-    api::Page<Item> result;
-    for (int row = 0; row < rows.rows(); ++row) {
-      if (static_cast<int>(result.items.size()) == size) {
-        result.next_page_token = encode_page_token(tag, rows.integer(row - 1, seq_column), context);
-        break;
-      }
-      result.items.push_back(read(rows, row));
-    }
-    return result;
-  }
-
   /// submit_job's transaction; QueueFull rolls it back whole (the key claimed in it too).
   static SubmitOutcome submit(Connection& connection, const NewJob& job, const std::optional<api::IdempotencyKey>& key,
                               int queue_limit, const std::string& keys_not_before) {
     return run_transaction(connection, TransactionKind::write, [&]() -> SubmitOutcome {
-      api::JobInfo created;
+      api::JobInfo created = describe_job(job);
       created.id = random_id("job_");
-      created.kind = job.kind;
-      created.state = api::JobState::queued;
       created.created_at = now_rfc3339();
-      created.request = job.request;
-      created.dataset_id = job.dataset_id;
-      created.robot_id = job.robot_id;
-      created.validation_dataset_id = job.validation_dataset_id;
       // The key first: a replay or a reused key is answered whatever the queue's length.
-      const KeyDecision decision =
-          decide_key(connection, "job", key, created.id, created.created_at, keys_not_before,
-                     [&](const std::string& earlier) { return select_job(connection, earlier).has_value(); });
-      if (decision.verdict == KeyVerdict::reused) return {SubmitStatus::key_reused, {}};
-      if (decision.verdict == KeyVerdict::replay) return {SubmitStatus::replayed, *select_job(connection, decision.earlier_id)};
+      if (auto answer = claim_key_for<SubmitOutcome>(
+              connection, "job", key, created.id, created.created_at, keys_not_before,
+              [&](const std::string& earlier) { return select_job(connection, earlier); })) {
+        return *answer;
+      }
       if (queue_limit > 0) {
         connection.exec(std::string("SELECT pg_advisory_xact_lock(") + kQueueLock + ")");
         auto count = connection.exec("SELECT count(*) FROM jobs WHERE state = 'queued'");
@@ -966,33 +573,6 @@ class PostgresStore final : public Store {
     });
   }
 
-  /// History entries of job `id` as COPY text rows (made before the transaction).
-  static std::string history_rows(const std::string& id, const std::vector<api::HistoryEntry>& batch) {
-    std::string rows;
-    for (const auto& entry : batch) append_history_row(rows, id, entry);
-    return rows;
-  }
-
-  /// The per-session staging table write_history copies into: made once per connection, outside
-  /// any transaction (a rollback would take it along).
-  static void prepare_staging(Connection& connection) {
-    if (connection.staging_ready) return;
-    connection.execute(
-        "CREATE TEMP TABLE IF NOT EXISTS history_in (job_id text, idx bigint, cost double precision, theta bytea) "
-        "ON COMMIT DELETE ROWS");
-    connection.staging_ready = true;
-  }
-
-  /// COPY into the per-session staging table (prepare_staging), then one upsert: an index written again replaces
-  /// its row, as in the SQLite store. Nothing when `rows` is empty.
-  static void write_history(Connection& connection, const std::string& rows) {
-    if (rows.empty()) return;
-    connection.copy_in("COPY history_in (job_id, idx, cost, theta) FROM STDIN", rows);
-    connection.exec(
-        "INSERT INTO job_history (job_id, idx, cost, theta) SELECT job_id, idx, cost, theta FROM history_in "
-        "ON CONFLICT (job_id, idx) DO UPDATE SET cost = excluded.cost, theta = excluded.theta");
-  }
-
   /// The guarded update of a held lease: progress and/or a new expiry; what it learned.
   static LeaseStatus extend(Connection& connection, const Lease& lease, std::optional<std::chrono::milliseconds> duration,
                             const Progress* progress) {
@@ -1013,12 +593,6 @@ class PostgresStore final : public Store {
     auto updated = connection.exec(sql, params);
     if (updated.rows() == 0) return LeaseStatus::lost;
     return updated.boolean(0, 0) ? LeaseStatus::cancel_requested : LeaseStatus::held;
-  }
-
-  static void clear_progress(Connection& connection, const std::vector<std::string>& ids) {
-    const std::string array = id_array(ids);
-    connection.exec("DELETE FROM job_history WHERE job_id = ANY($1::text[])", Params().text(array));
-    connection.exec("DELETE FROM estimates WHERE job_id = ANY($1::text[])", Params().text(array));
   }
 
   /// Ends or requeues the running jobs `lost` (their worker is gone; their rows are locked).
@@ -1070,56 +644,10 @@ class PostgresStore final : public Store {
     return outcome;
   }
 
-  /// The listener thread: one connection of its own LISTENing on the channel, handing each
-  /// notification to the watcher; a lost connection is opened again (events meanwhile are
-  /// missed: watchers poll as well).
-  void listen() {
-    std::chrono::milliseconds pause{100};
-    const auto stopping = [this] {
-      std::lock_guard lock(listen_mutex_);
-      return stop_listening_;
-    };
-    while (!stopping()) {
-      const auto attempted = [this] {
-        {
-          std::lock_guard lock(listen_mutex_);
-          listen_attempted_ = true;
-        }
-        listen_wake_.notify_all();
-      };
-      try {
-        Connection connection(pool_.conninfo());
-        connection.execute(std::string("LISTEN ") + kChannel);
-        attempted();
-        pause = std::chrono::milliseconds(100);
-        while (!stopping()) {
-          for (const std::string& payload : connection.notifications(std::chrono::milliseconds(200))) {
-            const auto event = parse_event(payload);
-            if (!event) continue;
-            std::lock_guard lock(watcher_mutex_);
-            if (on_event_) on_event_(*event);
-          }
-        }
-      } catch (const StoreError&) {
-        // The database is away: try again after a pause that grows to 5 s.
-        attempted();
-      }
-      std::unique_lock lock(listen_mutex_);
-      listen_wake_.wait_for(lock, pause, [this] { return stop_listening_; });
-      pause = std::min(pause * 2, std::chrono::milliseconds(5000));
-    }
-  }
-
   StoreOptions options_;
   ConnectionPool pool_;
   RecentDatasets recent_datasets_{64u << 20};  ///< 64 MiB of samples
-  std::mutex watcher_mutex_;  ///< guards on_event_, held while it runs
-  std::function<void(const JobEvent&)> on_event_;
-  std::mutex listen_mutex_;
-  std::condition_variable listen_wake_;
-  bool stop_listening_ = false;
-  bool listen_attempted_ = false;  ///< the listener's first LISTEN has succeeded or failed
-  std::thread listener_;  ///< last: joined (in the destructor) before the members it uses go
+  JobListener listener_;  ///< last: its thread stops before the members above go
 };
 
 }  // namespace

@@ -1,6 +1,8 @@
 // store.h — the PostgreSQL backend of the store: one database shared by any number of
-// `manipid serve` and `manipid worker` processes on any number of machines (store.cpp), its
-// schema and migrations (schema.cpp), libpq connections (connection.cpp).
+// `manipid serve` and `manipid worker` processes on any number of machines (store.cpp), the rows
+// its methods share (rows.cpp), its job announcements and listener (events.cpp), array and COPY
+// literals (literals.cpp), recent samples in memory (recent_datasets.cpp), its schema and
+// migrations (schema.cpp), libpq connections (connection.cpp, libpq.cpp).
 #pragma once
 
 #include "store/store.h"

@@ -6,14 +6,6 @@
 
 namespace manipid::server::store::sqlite {
 
-const std::string kJobColumns =
-    "id, kind, state, created_at, started_at, finished_at, request, dataset_id, evaluations, best_cost, "
-    "cancel_requested, attempts, result, error, robot_id, validation_dataset_id, worker, seq";
-const std::string kDatasetColumns =
-    "id, name, created_at, source_job, joints, samples, dt, has_torque, has_reference, uniform, has_rates, "
-    "has_accelerations, seq";
-const std::string kRobotColumns = "id, name, created_at, base, tip, joints, summary, seq";
-
 api::JobInfo read_job(const Statement& row) {
   api::JobInfo job;
   job.id = row.text(0);

@@ -1,8 +1,10 @@
 // rows.h — reading and writing the SQLite store's rows that several store methods
-// share: whole job and dataset records, idempotency keys, fresh ids, a job's progress rows.
+// share: whole job, dataset and robot records, idempotency keys, fresh ids, a job's progress rows.
 // Every function runs inside the caller's transaction on the caller's connection.
 #pragma once
 
+#include "store/columns.h"
+#include "store/idempotency.h"
 #include "store/sqlite/connection.h"
 
 #include "manipid/api/records.h"
@@ -12,16 +14,7 @@
 
 namespace manipid::server::store::sqlite {
 
-/// Column lists for whole records, in the order read_job / read_dataset expect; seq last.
-extern const std::string kJobColumns;
-inline constexpr int kJobSeqColumn = 17;
-/// Only the description: the sample blobs stay on disk.
-extern const std::string kDatasetColumns;
-inline constexpr int kDatasetSeqColumn = 12;
-/// Only the description: the URDF document stays on disk.
-extern const std::string kRobotColumns;
-inline constexpr int kRobotSeqColumn = 7;
-
+/// Whole records, from a statement that selects store/columns.h's columns.
 api::JobInfo read_job(const Statement& row);
 api::DatasetInfo read_dataset(const Statement& row);
 api::RobotInfo read_robot(const Statement& row);
@@ -30,12 +23,9 @@ std::optional<api::JobInfo> select_job(Connection& connection, const std::string
 std::optional<api::DatasetInfo> select_dataset(Connection& connection, const std::string& id);
 std::optional<api::JobState> select_state(Connection& connection, const std::string& id);
 
-struct KeyRecord {
-  std::string fingerprint;
-  std::string resource_id;
-};
 /// scope: "job", "dataset" or "robot".
-/// The key's record if it was stored at `not_before` or later (older keys have expired).
+/// The key's record if it was stored at `not_before` or later (older keys have expired); what
+/// it means for the request is the rule both backends share (answer_from_key, store/idempotency.h).
 std::optional<KeyRecord> select_key(Connection& connection, const char* scope, const std::string& key,
                                     const std::string& not_before);
 /// Stores the key for `id` (INSERT OR REPLACE: a key whose resource has gone, or that expired, is

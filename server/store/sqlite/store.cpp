@@ -3,6 +3,8 @@
 // change is one BEGIN IMMEDIATE transaction run through run_transaction (retried on BUSY).
 #include "store/sqlite/connection.h"
 #include "store/encoding.h"
+#include "store/idempotency.h"
+#include "store/new_records.h"
 #include "store/sqlite/rows.h"
 #include "store/sqlite/schema.h"
 #include "store/sqlite/store.h"
@@ -10,7 +12,6 @@
 
 #include <cstdint>
 #include <filesystem>
-#include <limits>
 #include <stdexcept>
 #include <system_error>
 
@@ -18,18 +19,9 @@ namespace manipid::server::store::sqlite {
 
 namespace {
 
-
 /// One job_history row (idx, cost, theta) of the statement's current step.
 api::HistoryEntry history_entry(const Statement& rows, const std::string& id) {
-  api::HistoryEntry entry;
-  entry.index = static_cast<long>(rows.integer(0));
-  entry.cost = rows.real_or_null(1).value_or(std::numeric_limits<double>::quiet_NaN());
-  const auto theta = rows.blob(2);
-  entry.theta.resize(theta.size() / sizeof(double));
-  if (!decode_doubles(theta, entry.theta.data(), entry.theta.size())) {
-    throw StoreError("history entry of job " + id + " has a damaged theta in the database");
-  }
-  return entry;
+  return decode_history_entry(rows.integer(0), rows.real_or_null(1), rows.blob(2), id);
 }
 
 class SqliteStore final : public Store {
@@ -41,9 +33,7 @@ class SqliteStore final : public Store {
 
   DatasetOutcome insert_dataset(const std::string& name, const Trajectory& data, const std::string& source_job,
                                 const std::optional<api::IdempotencyKey>& key) override {
-    const int samples = data.samples();
-    const int joints = data.joint_count();
-    check_dataset_shape(data);
+    api::DatasetInfo dataset = describe_dataset(name, data, source_job);
     // Encoded before the transaction: the write lock is held only for the insert itself.
     const auto t = encode_doubles(data.t.data(), static_cast<std::size_t>(data.t.size()));
     const auto q = encode_doubles(data.q.data(), static_cast<std::size_t>(data.q.size()));
@@ -51,32 +41,19 @@ class SqliteStore final : public Store {
     const auto ref = encode_doubles(data.ref.data(), static_cast<std::size_t>(data.ref.size()));
     const auto qd = encode_doubles(data.qd.data(), static_cast<std::size_t>(data.qd.size()));
     const auto qdd = encode_doubles(data.qdd.data(), static_cast<std::size_t>(data.qdd.size()));
-    const bool uniform = data.is_uniform();
 
     const std::string keys_not_before = rfc3339_ago(options_.idempotency_ttl);
     auto connection = pool_.checkout();
     return sqlite::run_transaction(*connection, TransactionKind::write, [&]() -> DatasetOutcome {
       if (key) {
-        if (auto earlier = select_key(*connection, "dataset", key->key, keys_not_before)) {
-          if (earlier->fingerprint != key->fingerprint) return {SubmitStatus::key_reused, {}};
-          if (auto dataset = select_dataset(*connection, earlier->resource_id)) {
-            return {SubmitStatus::replayed, *dataset};
-          }
+        if (auto answer = answer_from_key<DatasetOutcome>(
+                select_key(*connection, "dataset", key->key, keys_not_before), *key,
+                [&](const std::string& earlier) { return select_dataset(*connection, earlier); })) {
+          return *answer;
         }
       }
-      api::DatasetInfo dataset;
       dataset.id = unused_id(*connection, "ds_", "SELECT 1 FROM datasets WHERE id = ?1");
-      dataset.name = name;
       dataset.created_at = now_rfc3339();
-      dataset.source_job = source_job;
-      dataset.joints = joints;
-      dataset.samples = samples;
-      dataset.dt = data.sample_period();  // uniform: t[1] − t[0]; jittery: the median step
-      dataset.uniform = uniform;
-      dataset.has_torque = data.has_torque();
-      dataset.has_reference = data.has_reference();
-      dataset.has_rates = data.has_rates();
-      dataset.has_accelerations = data.has_accelerations();
 
       auto insert = connection->prepare(
           "INSERT INTO datasets (id, name, created_at, source_job, joints, samples, dt, has_torque, "
@@ -86,8 +63,8 @@ class SqliteStore final : public Store {
           .bind_text(2, dataset.name)
           .bind_text(3, dataset.created_at)
           .bind_text_or_null(4, dataset.source_job)
-          .bind_integer(5, joints)
-          .bind_integer(6, samples)
+          .bind_integer(5, dataset.joints)
+          .bind_integer(6, dataset.samples)
           .bind_real(7, dataset.dt)
           .bind_integer(8, dataset.has_torque ? 1 : 0)
           .bind_integer(9, dataset.has_reference ? 1 : 0)
@@ -95,7 +72,7 @@ class SqliteStore final : public Store {
           .bind_blob_or_null(11, q)
           .bind_blob_or_null(12, tau)
           .bind_blob_or_null(13, ref)
-          .bind_integer(14, uniform ? 1 : 0)
+          .bind_integer(14, dataset.uniform ? 1 : 0)
           .bind_integer(15, dataset.has_rates ? 1 : 0)
           .bind_blob_or_null(16, qd)
           .bind_integer(17, dataset.has_accelerations ? 1 : 0)
@@ -119,23 +96,20 @@ class SqliteStore final : public Store {
           "FROM datasets WHERE id = ?1");
       row.bind_text(1, id);
       if (!row.step()) return std::nullopt;
-      const auto samples = static_cast<Eigen::Index>(row.integer(0));
-      const auto joints = static_cast<Eigen::Index>(row.integer(1));
-      Trajectory data;
-      data.t.resize(samples);
-      data.q.resize(samples, joints);
-      data.tau.resize(samples, row.integer(2) != 0 ? joints : 0);
-      data.ref.resize(samples, row.integer(3) != 0 ? joints : 0);
-      data.qd.resize(samples, row.integer(8) != 0 ? joints : 0);
-      data.qdd.resize(samples, row.integer(10) != 0 ? joints : 0);
-      const bool intact = decode_doubles(row.blob(4), data.t.data(), static_cast<std::size_t>(data.t.size())) &&
-                          decode_doubles(row.blob(5), data.q.data(), static_cast<std::size_t>(data.q.size())) &&
-                          decode_doubles(row.blob(6), data.tau.data(), static_cast<std::size_t>(data.tau.size())) &&
-                          decode_doubles(row.blob(7), data.ref.data(), static_cast<std::size_t>(data.ref.size())) &&
-                          decode_doubles(row.blob(9), data.qd.data(), static_cast<std::size_t>(data.qd.size())) &&
-                          decode_doubles(row.blob(11), data.qdd.data(), static_cast<std::size_t>(data.qdd.size()));
-      if (!intact) throw StoreError("dataset " + id + " has samples of the wrong size in the database");
-      return data;
+      StoredSamples stored;
+      stored.samples = row.integer(0);
+      stored.joints = row.integer(1);
+      stored.has_torque = row.integer(2) != 0;
+      stored.has_reference = row.integer(3) != 0;
+      stored.has_rates = row.integer(8) != 0;
+      stored.has_accelerations = row.integer(10) != 0;
+      stored.t = row.blob(4);
+      stored.q = row.blob(5);
+      stored.tau = row.blob(6);
+      stored.ref = row.blob(7);
+      stored.qd = row.blob(9);
+      stored.qdd = row.blob(11);
+      return decode_samples(id, stored);
     });
   }
 
@@ -186,21 +160,15 @@ class SqliteStore final : public Store {
     auto connection = pool_.checkout();
     return sqlite::run_transaction(*connection, TransactionKind::write, [&]() -> RobotOutcome {
       if (key) {
-        if (auto earlier = select_key(*connection, "robot", key->key, keys_not_before)) {
-          if (earlier->fingerprint != key->fingerprint) return {SubmitStatus::key_reused, {}};
-          if (auto existing = sqlite::select_robot(*connection, earlier->resource_id)) {
-            return {SubmitStatus::replayed, *existing};
-          }
+        if (auto answer = answer_from_key<RobotOutcome>(
+                select_key(*connection, "robot", key->key, keys_not_before), *key,
+                [&](const std::string& earlier) { return sqlite::select_robot(*connection, earlier); })) {
+          return *answer;
         }
       }
-      api::RobotInfo created;
+      api::RobotInfo created = describe_robot(robot);
       created.id = unused_id(*connection, "rb_", "SELECT 1 FROM robots WHERE id = ?1");
-      created.name = robot.name;
       created.created_at = now_rfc3339();
-      created.base = robot.base;
-      created.tip = robot.tip;
-      created.joints = robot.joints;
-      created.summary = robot.summary;
       auto insert = connection->prepare(
           "INSERT INTO robots (id, name, created_at, base, tip, joints, summary, urdf) "
           "VALUES (?1, ?2, ?3, ?4, ?5, ?6, ?7, ?8)");
@@ -239,7 +207,7 @@ class SqliteStore final : public Store {
         page.page_token.empty() ? INT64_MAX : decode_page_token(page.page_token, "r1", "");
     auto connection = pool_.checkout();
     return sqlite::run_transaction(*connection, TransactionKind::read, [&] {
-      auto rows = connection->prepare("SELECT " + sqlite::kRobotColumns +
+      auto rows = connection->prepare("SELECT " + kRobotColumns +
                                       " FROM robots WHERE seq < ?1 ORDER BY seq DESC LIMIT ?2");
       rows.bind_integer(1, before).bind_integer(2, size + 1);
       api::Page<api::RobotInfo> result;
@@ -250,7 +218,7 @@ class SqliteStore final : public Store {
           break;
         }
         result.items.push_back(sqlite::read_robot(rows));
-        last_seq = rows.integer(sqlite::kRobotSeqColumn);
+        last_seq = rows.integer(kRobotSeqColumn);
       }
       return result;
     });
@@ -280,24 +248,19 @@ class SqliteStore final : public Store {
     auto connection = pool_.checkout();
     return sqlite::run_transaction(*connection, TransactionKind::write, [&]() -> SubmitOutcome {
       if (key) {
-        if (auto earlier = select_key(*connection, "job", key->key, keys_not_before)) {
-          if (earlier->fingerprint != key->fingerprint) return {SubmitStatus::key_reused, {}};
-          if (auto existing = select_job(*connection, earlier->resource_id)) return {SubmitStatus::replayed, *existing};
+        if (auto answer = answer_from_key<SubmitOutcome>(
+                select_key(*connection, "job", key->key, keys_not_before), *key,
+                [&](const std::string& earlier) { return select_job(*connection, earlier); })) {
+          return *answer;
         }
       }
       if (queue_limit > 0) {
         auto count = connection->prepare("SELECT count(*) FROM jobs WHERE state = 'queued'");
         if (count.step() && count.integer(0) >= queue_limit) return {SubmitStatus::queue_full, {}};
       }
-      api::JobInfo created;
+      api::JobInfo created = describe_job(job);
       created.id = unused_id(*connection, "job_", "SELECT 1 FROM jobs WHERE id = ?1");
-      created.kind = job.kind;
-      created.state = api::JobState::queued;
       created.created_at = now_rfc3339();
-      created.request = job.request;
-      created.dataset_id = job.dataset_id;
-      created.robot_id = job.robot_id;
-      created.validation_dataset_id = job.validation_dataset_id;
 
       auto insert = connection->prepare(
           "INSERT INTO jobs (id, kind, state, request, dataset_id, created_at, robot_id, validation_dataset_id) "
@@ -323,9 +286,7 @@ class SqliteStore final : public Store {
   api::Page<api::JobInfo> list_jobs(const api::JobFilter& filter, const api::PageRequest& page) override {
     const int size = effective_page_size(page.page_size);
     // The token is bound to the filter: a token from another filter would skip or repeat jobs.
-    const std::string context = std::string("state=") + (filter.state ? state_text(*filter.state) : "") +
-                                ";kind=" + (filter.kind ? kind_text(*filter.kind) : "") +
-                                ";robot=" + filter.robot_id;
+    const std::string context = job_list_context(filter);
     const std::int64_t before =
         page.page_token.empty() ? INT64_MAX : decode_page_token(page.page_token, "j1", context);
     // Fixed SQL fragments per filter combination (no values in the text), so each variant is

@@ -1,0 +1,23 @@
+// columns.h — the columns every store backend reads whole job, dataset and robot records with, in
+// the order its read_job / read_dataset / read_robot expect (the two schemas name them alike).
+#pragma once
+
+#include <string>
+
+namespace manipid::server::store {
+
+/// Whole job records; seq last (it orders lists and is their page tokens' position).
+inline const std::string kJobColumns =
+    "id, kind, state, created_at, started_at, finished_at, request, dataset_id, evaluations, best_cost, "
+    "cancel_requested, attempts, result, error, robot_id, validation_dataset_id, worker, seq";
+inline constexpr int kJobSeqColumn = 17;
+/// Only a dataset's description: its samples are not read. seq last.
+inline const std::string kDatasetColumns =
+    "id, name, created_at, source_job, joints, samples, dt, has_torque, has_reference, uniform, has_rates, "
+    "has_accelerations, seq";
+inline constexpr int kDatasetSeqColumn = 12;
+/// Only a robot's description: its URDF document is not read. seq last.
+inline const std::string kRobotColumns = "id, name, created_at, base, tip, joints, summary, seq";
+inline constexpr int kRobotSeqColumn = 7;
+
+}  // namespace manipid::server::store
