@@ -387,12 +387,15 @@ IdentificationResult identify(const Model& model, const std::vector<Trajectory>&
   const std::vector<double> ridges = options.ridge >= 0 ? std::vector<double>{options.ridge} : estimation::default_ridges();
   const bool choosing = cutoffs.size() > 1 || ridges.size() > 1 || frictions.size() > 1;
 
-  std::vector<StackedRows> candidate_rows;
-  for (double cutoff : cutoffs) candidate_rows.push_back(rows_at(cutoff));
+  // Each candidate's rows are reduced to their sums by time bin as soon as they are made; only the best
+  // candidate's rows are kept (a run's rows for seven candidates would be most of the job's memory).
   std::size_t chosen_cutoff = 0, chosen_friction = 0;
   double chosen_ridge = ridges.front();
+  StackedRows chosen_rows;
   result.held_out_error = std::numeric_limits<double>::quiet_NaN();
-  if (choosing) {
+  if (!choosing) {
+    chosen_rows = rows_at(cutoffs.front());
+  } else {
     const StackedRows target = rows_at(options.judge.cutoff_hz);
     std::vector<std::pair<double, double>> spans;
     for (std::size_t run = 0; run < runs.size(); ++run) {
@@ -405,31 +408,32 @@ IdentificationResult identify(const Model& model, const std::vector<Trajectory>&
       spans.emplace_back(from, to);
     }
     const estimation::TimeBins bins(spans, kFolds, kBinsPerFold);
-    const Eigen::MatrixXd target_W = select_columns(target.W, full.columns);
-    const estimation::BinnedSums target_sums = estimation::bin_rows(target_W, target.tau, bins_of_rows(target, bins), bins.count());
-    double best = std::numeric_limits<double>::infinity();
-    std::vector<estimation::BinnedSums> sums;
-    for (std::size_t c = 0; c < cutoffs.size(); ++c) {
-      const StackedRows& rows = candidate_rows[c];
-      sums.push_back(estimation::bin_rows(select_columns(rows.W, full.columns), rows.tau, bins_of_rows(rows, bins), bins.count()));
-    }
+    const estimation::BinnedSums target_sums =
+        estimation::bin_rows(select_columns(target.W, full.columns), target.tau, bins_of_rows(target, bins), bins.count());
     const auto guard_for = [&](double cutoff) {
       return 0.5 / cutoff + 0.5 / options.judge.cutoff_hz + filters.differentiation.half_length * dt;
     };
     // The cut-off with the full friction model, then (with friction_auto) the friction models at that cut-off.
+    double best = std::numeric_limits<double>::infinity();
+    estimation::BinnedSums chosen_sums;
     for (std::size_t c = 0; c < cutoffs.size(); ++c) {
-      const estimation::CrossValidation cv = score(sums[c], target_sums, bins, guard_for(cutoffs[c]), full, full, ridges);
+      StackedRows rows = cutoffs[c] == options.judge.cutoff_hz ? target : rows_at(cutoffs[c]);
+      estimation::BinnedSums sums =
+          estimation::bin_rows(select_columns(rows.W, full.columns), rows.tau, bins_of_rows(rows, bins), bins.count());
+      const estimation::CrossValidation cv = score(sums, target_sums, bins, guard_for(cutoffs[c]), full, full, ridges);
       result.candidates.push_back({cutoffs[c], friction_text(full.layout), cv.ridges[static_cast<std::size_t>(cv.best)],
                                    cv.best_relative_error()});
       if (cv.best_relative_error() < best) {
         best = cv.best_relative_error();
         chosen_cutoff = c;
         chosen_ridge = cv.ridges[static_cast<std::size_t>(cv.best)];
+        chosen_rows = std::move(rows);
+        chosen_sums = std::move(sums);
       }
     }
     for (std::size_t f = 1; f < frictions.size(); ++f) {
       const estimation::CrossValidation cv =
-          score(sums[chosen_cutoff], target_sums, bins, guard_for(cutoffs[chosen_cutoff]), frictions[f], full, ridges);
+          score(chosen_sums, target_sums, bins, guard_for(cutoffs[chosen_cutoff]), frictions[f], full, ridges);
       result.candidates.push_back({cutoffs[chosen_cutoff], friction_text(frictions[f].layout),
                                    cv.ridges[static_cast<std::size_t>(cv.best)], cv.best_relative_error()});
       if (cv.best_relative_error() < best) {
@@ -444,7 +448,7 @@ IdentificationResult identify(const Model& model, const std::vector<Trajectory>&
 
   // Step 4: the chosen candidate's rows over its own layout.
   const FrictionCandidate& friction = frictions[chosen_friction];
-  const StackedRows& rows = candidate_rows[chosen_cutoff];
+  const StackedRows& rows = chosen_rows;
   result.layout = friction.layout;
   result.ridge = chosen_ridge;
   filters.comparison_cutoff_hz = cutoffs[chosen_cutoff];
