@@ -157,27 +157,33 @@ FilteredRows filtered_rows(const RegressorSignals& signals, int parameter_count,
   }
   const Eigen::Index R = (last - first) / rows.row_step + 1;
   const Eigen::Index J = static_cast<Eigen::Index>(joints.size());
+  // Where each standard parameter lands in W (−1: not asked for).
+  std::vector<Eigen::Index> position(static_cast<std::size_t>(parameter_count), -1);
+  Eigen::Index width = 0;
+  if (wanted.empty()) {
+    for (int c = 0; c < parameter_count; ++c) position[static_cast<std::size_t>(c)] = width++;
+  } else {
+    for (int c : wanted) position[static_cast<std::size_t>(c)] = width++;
+  }
   rows.t.resize(R);
   for (Eigen::Index r = 0; r < R; ++r) rows.t[r] = signals.t[first + r * rows.row_step];
-  rows.W = Eigen::MatrixXd::Zero(R * J, parameter_count);
+  rows.W = Eigen::MatrixXd::Zero(R * J, width);
   rows.tau = signals.tau.size() ? Eigen::VectorXd(R * J) : Eigen::VectorXd();
   const Eigen::MatrixXd tau = signals.tau.size() ? filtfilt_columns(lowpass, signals.tau) : Eigen::MatrixXd();
   for (Eigen::Index jj = 0; jj < J; ++jj) {
     const auto j = static_cast<std::size_t>(joints[static_cast<std::size_t>(jj)]);
-    // Only the columns asked for: a regressor column costs one low-pass over the whole run.
-    std::vector<Eigen::Index> positions;
-    std::vector<int> columns;
+    std::vector<Eigen::Index> from, to;
     for (std::size_t c = 0; c < signals.columns[j].size(); ++c) {
-      const int column = signals.columns[j][c];
-      if (wanted.empty() || std::binary_search(wanted.begin(), wanted.end(), column)) {
-        positions.push_back(static_cast<Eigen::Index>(c));
-        columns.push_back(column);
+      const Eigen::Index at = position[static_cast<std::size_t>(signals.columns[j][c])];
+      if (at >= 0) {
+        from.push_back(static_cast<Eigen::Index>(c));
+        to.push_back(at);
       }
     }
-    const Eigen::MatrixXd filtered = filtfilt_columns(lowpass, signals.Y[j](Eigen::all, positions));
+    const Eigen::MatrixXd filtered = filtfilt_columns(lowpass, signals.Y[j](Eigen::all, from));
     for (Eigen::Index r = 0; r < R; ++r) {
       const Eigen::Index s = first + r * rows.row_step;
-      for (std::size_t c = 0; c < columns.size(); ++c) rows.W(r * J + jj, columns[c]) = filtered(s, static_cast<Eigen::Index>(c));
+      for (std::size_t c = 0; c < to.size(); ++c) rows.W(r * J + jj, to[c]) = filtered(s, static_cast<Eigen::Index>(c));
       if (tau.size()) rows.tau[r * J + jj] = tau(s, static_cast<Eigen::Index>(j));
     }
   }

@@ -12,6 +12,7 @@
 
 #include <algorithm>
 #include <chrono>
+#include <functional>
 #include <cmath>
 #include <limits>
 #include <numbers>
@@ -90,8 +91,21 @@ struct StackedRows {
   double lowpass_energy = 1.0;
 };
 
-StackedRows stack(const std::vector<FilteredRows>& per_run) {
+StackedRows stack(std::vector<FilteredRows>&& per_run) {
   StackedRows stacked;
+  if (per_run.size() == 1) {  // one run: its rows as they are
+    FilteredRows& rows = per_run.front();
+    const Eigen::Index J = static_cast<Eigen::Index>(rows.joints.size());
+    for (Eigen::Index r = 0; r < rows.W.rows(); ++r) {
+      stacked.run_of_row.push_back(0);
+      stacked.time_of_row.push_back(rows.t[r / J]);
+    }
+    stacked.W = std::move(rows.W);
+    stacked.tau = std::move(rows.tau);
+    stacked.row_step = rows.row_step;
+    stacked.lowpass_energy = rows.lowpass_energy;
+    return stacked;
+  }
   Eigen::Index total = 0;
   for (const FilteredRows& rows : per_run) total += rows.W.rows();
   const Eigen::Index p = per_run.front().W.cols();
@@ -151,15 +165,20 @@ std::string far_from_prior(const BaseParameters& base, const Eigen::VectorXd& es
          "trusting them";
 }
 
-/// Step 1: the runs on one uniform grid.
-std::vector<Trajectory> prepare_runs(const std::vector<Trajectory>& runs, const DataPreparation& preparation,
-                                     std::vector<std::string>& warnings) {
-  std::vector<Trajectory> prepared;
+/// The runs as the identification uses them: each the caller's own when it needs nothing done, else the
+/// prepared copy kept in `storage`.
+using Runs = std::vector<std::reference_wrapper<const Trajectory>>;
+
+/// Step 1: the runs on one uniform grid (copies only of those that need trimming or resampling).
+Runs prepare_runs(const std::vector<Trajectory>& runs, const DataPreparation& preparation,
+                  std::vector<std::optional<Trajectory>>& storage, std::vector<std::string>& warnings) {
+  Runs prepared;
+  storage.resize(runs.size());
   DataPreparation same = preparation;
   for (std::size_t i = 0; i < runs.size(); ++i) {
     std::vector<std::string> run_warnings;
-    prepared.push_back(prepare_data(runs[i], same, &run_warnings));
-    if (i == 0) same.uniform.dt = prepared.front().dt();
+    prepared.push_back(std::cref(prepare_data(runs[i], same, storage[i], &run_warnings)));
+    if (i == 0) same.uniform.dt = prepared.front().get().dt();
     for (std::string& warning : run_warnings) {
       warnings.push_back(runs.size() > 1 ? "run " + std::to_string(i + 1) + ": " + warning : warning);
     }
@@ -168,7 +187,7 @@ std::vector<Trajectory> prepare_runs(const std::vector<Trajectory>& runs, const 
 }
 
 /// Step 1: the joints with a torque measurement.
-std::vector<int> measured_joints(const Model& model, const std::vector<Trajectory>& runs, const std::vector<int>& given,
+std::vector<int> measured_joints(const Model& model, const Runs& runs, const std::vector<int>& given,
                                  std::vector<std::string>& warnings) {
   const int n = model.joint_count();
   if (!given.empty()) {
@@ -326,8 +345,9 @@ IdentificationResult identify(const Model& model, const std::vector<Trajectory>&
   }
 
   // Step 1.
-  const std::vector<Trajectory> runs = prepare_runs(measured, options.preparation, result.warnings);
-  const double dt = runs.front().dt();
+  std::vector<std::optional<Trajectory>> storage;
+  const Runs runs = prepare_runs(measured, options.preparation, storage, result.warnings);
+  const double dt = runs.front().get().dt();
   for (const Trajectory& run : runs) options.judge.validate(dt, run.t[run.samples() - 1] - run.t[0]);
   result.torque_joints = measured_joints(model, runs, options.torque_joints, result.warnings);
   const std::vector<int>& joints = result.torque_joints;
@@ -358,15 +378,15 @@ IdentificationResult identify(const Model& model, const std::vector<Trajectory>&
       return result;
     }
   }
-  // Only the full layout's base columns are filtered: every friction model's base is among them, and the
-  // other columns are combinations of them (W = W_b C).
+  // Only the full layout's base columns are filtered, in the base's order: every friction model's base is
+  // among them, and the other columns are combinations of them (W = W_b C).
   std::vector<int> base_columns;
   const auto rows_at = [&](double cutoff) {
     std::vector<FilteredRows> per_run;
     for (const RegressorSignals& run : signals) {
       per_run.push_back(filtered_rows(run, p, cutoff, filters.trim_seconds, joints, base_columns));
     }
-    return stack(per_run);
+    return stack(std::move(per_run));
   };
 
   // Step 3: the friction models and the candidates.
@@ -383,7 +403,6 @@ IdentificationResult identify(const Model& model, const std::vector<Trajectory>&
   }
   const FrictionCandidate& full = frictions.front();
   base_columns = full.columns;
-  std::sort(base_columns.begin(), base_columns.end());
   const std::vector<double> ridges = options.ridge >= 0 ? std::vector<double>{options.ridge} : estimation::default_ridges();
   const bool choosing = cutoffs.size() > 1 || ridges.size() > 1 || frictions.size() > 1;
 
@@ -409,7 +428,7 @@ IdentificationResult identify(const Model& model, const std::vector<Trajectory>&
     }
     const estimation::TimeBins bins(spans, kFolds, kBinsPerFold);
     const estimation::BinnedSums target_sums =
-        estimation::bin_rows(select_columns(target.W, full.columns), target.tau, bins_of_rows(target, bins), bins.count());
+        estimation::bin_rows(target.W, target.tau, bins_of_rows(target, bins), bins.count());
     const auto guard_for = [&](double cutoff) {
       return 0.5 / cutoff + 0.5 / options.judge.cutoff_hz + filters.differentiation.half_length * dt;
     };
@@ -419,7 +438,7 @@ IdentificationResult identify(const Model& model, const std::vector<Trajectory>&
     for (std::size_t c = 0; c < cutoffs.size(); ++c) {
       StackedRows rows = cutoffs[c] == options.judge.cutoff_hz ? target : rows_at(cutoffs[c]);
       estimation::BinnedSums sums =
-          estimation::bin_rows(select_columns(rows.W, full.columns), rows.tau, bins_of_rows(rows, bins), bins.count());
+          estimation::bin_rows(rows.W, rows.tau, bins_of_rows(rows, bins), bins.count());
       const estimation::CrossValidation cv = score(sums, target_sums, bins, guard_for(cutoffs[c]), full, full, ridges);
       result.candidates.push_back({cutoffs[c], friction_text(full.layout), cv.ridges[static_cast<std::size_t>(cv.best)],
                                    cv.best_relative_error()});
@@ -462,7 +481,12 @@ IdentificationResult identify(const Model& model, const std::vector<Trajectory>&
   for (int i = 0; i < result.layout.size(n); ++i) result.prior[i] = prior[map[static_cast<std::size_t>(i)]];
   for (int index : base.absent) result.unidentifiable.push_back(result.standard_names[static_cast<std::size_t>(index)]);
   result.rows = static_cast<int>(rows.W.rows());
-  const Eigen::MatrixXd W_b = select_columns(rows.W, friction.columns);
+  // The chosen friction model's base columns among the full base's (its friction columns are a subset).
+  std::vector<int> positions;
+  for (int column : friction.columns) {
+    positions.push_back(static_cast<int>(std::find(full.columns.begin(), full.columns.end(), column) - full.columns.begin()));
+  }
+  const Eigen::MatrixXd W_b = select_columns(rows.W, positions);
   const Eigen::VectorXd& beta_prior = friction.beta_prior;
   const Eigen::Index J = static_cast<Eigen::Index>(joints.size());
 

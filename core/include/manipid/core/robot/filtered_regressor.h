@@ -81,7 +81,7 @@ RegressorSignals regressor_signals(const Model& model, const ParameterLayout& la
 struct FilteredRows {
   Eigen::VectorXd t;        ///< R: each row block's time, s
   std::vector<int> joints;  ///< the joints (0-based) whose rows are kept, in order
-  Eigen::MatrixXd W;        ///< (R · joints) × dim π
+  Eigen::MatrixXd W;        ///< (R · joints) × the columns asked for (filtered_rows(); all: dim π)
   Eigen::VectorXd tau;      ///< R · joints: L τ at the same rows
   int row_step = 1;         ///< r: every r-th working sample is a row block
   /// Σ h² of L's (zero-phase) impulse response on the working grid: white noise through L keeps this share.
@@ -89,10 +89,11 @@ struct FilteredRows {
 };
 
 /// L at `cutoff_hz` over `signals` (Y's columns and τ), `trim_seconds` dropped at each end, every
-/// r-th instant (the file comment), the rows of `joints`, the columns `columns` of π (standard indices; empty
-/// = all: a column not asked for stays zero). `parameter_count`: dim π. Throws InputError
-/// ("comparison_cutoff") for a cut-off at or above the working grid's Nyquist frequency, InputError
-/// ("samples") when nothing is left after the trims.
+/// r-th instant (the file comment), the rows of `joints`; W's columns are the standard parameters `columns`
+/// in that order (empty: all of π, `parameter_count` of them) — a regressor column costs one low-pass over
+/// the whole run, so only those asked for are filtered. Throws InputError ("comparison_cutoff") for a cut-off
+/// at or above the working grid's Nyquist frequency, InputError ("samples") when nothing is left after the
+/// trims.
 FilteredRows filtered_rows(const RegressorSignals& signals, int parameter_count, double cutoff_hz, double trim_seconds,
                            const std::vector<int>& joints, const std::vector<int>& columns = {});
 
