@@ -102,10 +102,34 @@ class Solver {
         }
         const Eigen::VectorXd solved = svd.matrixV() * coefficients;
         Eigen::VectorXd x = current.x;
+        std::vector<int> clamped, unclamped;
         for (int b = 0; b < k; ++b) {
           const double d = column_scale[moving[b]] > 0 ? column_scale[moving[b]] : 1.0;
           const int a = moving[b];
-          x[a] = std::clamp(current.x[a] + solved[b] / d, lower_[a], upper_[a]);
+          const double wanted = current.x[a] + solved[b] / d;
+          x[a] = std::clamp(wanted, lower_[a], upper_[a]);
+          (x[a] != wanted ? clamped : unclamped).push_back(b);
+        }
+        if (!clamped.empty() && !unclamped.empty()) {
+          // A step cut off by a bound is no longer the model's minimum for the others: with the cut
+          // parameters where the bound put them, the others' damped step is solved again against the
+          // residual that move leaves (else the cut step fails, the damping grows, and the steps shrink
+          // away from a minimum on the bound).
+          Eigen::VectorXd residual = current.residual;
+          for (int b : clamped) residual += current.jacobian.col(moving[b]) * (x[moving[b]] - current.x[moving[b]]);
+          Eigen::MatrixXd rest(current.jacobian.rows(), static_cast<Eigen::Index>(unclamped.size()));
+          for (std::size_t c = 0; c < unclamped.size(); ++c) rest.col(static_cast<Eigen::Index>(c)) = scaled.col(unclamped[c]);
+          const Eigen::JacobiSVD<Eigen::MatrixXd> again(rest, Eigen::ComputeThinU | Eigen::ComputeThinV);
+          const Eigen::VectorXd& s = again.singularValues();
+          const Eigen::VectorXd u = again.matrixU().transpose() * residual;
+          Eigen::VectorXd c(s.size());
+          for (Eigen::Index i = 0; i < s.size(); ++i) c[i] = -s[i] * u[i] / (s[i] * s[i] + damping);
+          const Eigen::VectorXd resolved = again.matrixV() * c;
+          for (std::size_t i = 0; i < unclamped.size(); ++i) {
+            const int a = moving[unclamped[i]];
+            const double d = column_scale[a] > 0 ? column_scale[a] : 1.0;
+            x[a] = std::clamp(current.x[a] + resolved[static_cast<Eigen::Index>(i)] / d, lower_[a], upper_[a]);
+          }
         }
         const Eigen::VectorXd step = x - current.x;
         const double step_norm = step.norm();

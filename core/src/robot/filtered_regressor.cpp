@@ -49,7 +49,7 @@ FilterPair differentiation_for(double highest_cutoff_hz, double dt, double trim_
   FilterPair filters;
   filters.trim_seconds = trim_seconds;
   filters.comparison_cutoff_hz = highest_cutoff_hz;
-  const double band = std::min(std::numbers::pi / 2.0, 2.0 * std::numbers::pi * 4.0 * highest_cutoff_hz * dt);
+  const double band = std::min(std::numbers::pi / 2.0, 2.0 * std::numbers::pi * 3.0 * highest_cutoff_hz * dt);
   filters.differentiation = FilterSettings{std::max(2, static_cast<int>(std::ceil(6.4 * std::numbers::pi / band))), band, dt};
   filters.working_step = working_step(filters.differentiation);
   return filters;

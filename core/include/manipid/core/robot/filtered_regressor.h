@@ -18,16 +18,17 @@
 //    sharp sign(q̇) edges of Coulomb friction while τ^f has them smoothed, and least squares moves Coulomb
 //    friction into viscous (measured: fv +40 %). Unlike a finite window, L costs no samples at the ends, and
 //    its start-up transients are the same on both sides (it is linear); the rows still leave out
-//    `trim_seconds` at each end (the judge's 0.3 s), where real logs start and stop: with 0 or 0.1 s the
-//    held-out figures of all three real arms were worse (Panda 1.09 and 1.08 % against 1.07 %, KUKA 2.41 and
-//    2.39 % against 2.34 %).
+//    `trim_seconds` at each end (the judge's 0.3 s), where real logs start and stop. Held-out figures of the
+//    real arms (bench/real_arms/compare.py, friction v,c,o) with rows trimmed 0 / 0.1 / 0.3 / 0.5 s: Panda
+//    1.09 / 1.08 / 1.07 / 1.06 %, KUKA 2.39 / 2.35 / 2.33 / 2.35 %, Kinova 9.03 / 7.25 / 6.27 / 7.49 %,
+//    Kinova on two runs 7.36 / 7.53 / 7.14 / 8.72 %.
 //
 // The working grid: D's output holds nothing above Ωg, so the regressor is formed only at every k-th
 // sample, k = max(1, ⌊1 / (4 f_g Δ)⌋) with f_g = Ωg / (2πΔ): four samples per period of D's band edge, so
 // that what the regressor's products of two states hold (up to 2 f_g) stays below the working Nyquist
-// frequency, and what three make (3 f_g) folds back above 2 f_g ≥ 8 f_c, where L removes it; τ goes through
+// frequency, and what three make (3 f_g) folds back above 2 f_g ≥ 6 f_c, where L removes it; τ goes through
 // an anti-aliasing low-pass at a quarter of the working rate before it is sampled there (its gain differs
-// from 1 by < 1e-6 below f_c, as f_g ≥ 4 f_c).
+// from 1 by < 2e-4 below f_c, as f_g ≥ 3 f_c).
 // After L every r-th working sample is a row block, r = max(1, ⌊1 / (5 f_c Δ_w)⌋): above 2.5 f_c the
 // filtered signals hold less than 1e-3 of their power, so no information is lost.
 #pragma once
@@ -55,7 +56,7 @@ struct FilterPair {
   int shortest_data() const;
 };
 
-/// The rule for D given the highest comparison cut-off it must serve: f_g = 4 · highest (at most Ωg = π/2),
+/// The rule for D given the highest comparison cut-off it must serve: f_g = 3 · highest (at most Ωg = π/2),
 /// M = ⌈6.4π/Ωg⌉ (the paper's M = 100, Ωg = 0.2 proportion), and the working step of the file comment.
 FilterPair differentiation_for(double highest_cutoff_hz, double dt, double trim_seconds);
 /// The working step k of the file comment for a differentiation filter D.
