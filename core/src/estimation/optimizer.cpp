@@ -1,4 +1,5 @@
-// optimizer.cpp — NLopt adapter for identification, and the dispatch to least squares (optimizer.h).
+// optimizer.cpp — core's one NLopt adapter (identification, excitation design), and the dispatch to least
+// squares (optimizer.h).
 #include "estimation/optimizer.h"
 
 #include "estimation/least_squares.h"
@@ -87,6 +88,7 @@ struct Context {
   double first_cost = std::numeric_limits<double>::quiet_NaN();
   long evaluations = 0;
   bool cancelled = false;
+  bool stopped = false;
 };
 
 double objective(unsigned dimension, const double* x, double* gradient_out, void* data) {
@@ -94,6 +96,10 @@ double objective(unsigned dimension, const double* x, double* gradient_out, void
   const MinimizeSettings& settings = *context.settings;
   if (settings.cancel && settings.cancel->load(std::memory_order_relaxed)) {
     context.cancelled = true;
+    throw nlopt::forced_stop();
+  }
+  if (settings.stop && settings.stop()) {
+    context.stopped = true;
     throw nlopt::forced_stop();
   }
   for (unsigned i = 0; i < dimension; ++i) context.theta[context.free_index[i]] = x[i] * context.scale[i];
@@ -135,7 +141,7 @@ MinimizeOutcome minimize_nlopt(const CostFunction& cost, const Eigen::VectorXd& 
   std::vector<double> x(dimension), lower(dimension), upper(dimension);
   for (unsigned i = 0; i < dimension; ++i) {
     const int k = context.free_index[i];
-    context.scale[i] = initial[k] != 0.0 ? std::abs(initial[k]) : 1.0;
+    context.scale[i] = settings.scale_by_start && initial[k] != 0.0 ? std::abs(initial[k]) : 1.0;
     x[i] = initial[k] / context.scale[i];
     lower[i] = settings.lower[k] / context.scale[i];
     upper[i] = settings.upper[k] / context.scale[i];
@@ -149,10 +155,20 @@ MinimizeOutcome minimize_nlopt(const CostFunction& cost, const Eigen::VectorXd& 
   optimizer.set_ftol_rel(settings.relative_f_tolerance);
   optimizer.set_maxeval(settings.max_evaluations);
   optimizer.set_maxtime(settings.max_seconds);
+  if (settings.absolute_x_tolerance > 0.0) {
+    std::vector<double> tolerance(dimension);
+    for (unsigned i = 0; i < dimension; ++i) tolerance[i] = settings.absolute_x_tolerance / context.scale[i];
+    optimizer.set_xtol_abs(tolerance);
+  }
+  if (settings.absolute_f_tolerance > 0.0) optimizer.set_ftol_abs(settings.absolute_f_tolerance);
   if (!algorithm.gradient) {
-    // A 1 % first step: the scaled parameters are all near 1.
     std::vector<double> step(dimension);
     for (unsigned i = 0; i < dimension; ++i) {
+      if (settings.initial_step.size() != 0) {
+        step[i] = settings.initial_step[context.free_index[i]] / context.scale[i];
+        continue;
+      }
+      // A 1 % first step: the scaled parameters are all near 1.
       const double room = std::min(upper[i] - x[i], x[i] - lower[i]);
       step[i] = std::isfinite(room) && room > 0 ? std::min(0.01, 0.5 * room) : 0.01;
     }
@@ -168,15 +184,24 @@ MinimizeOutcome minimize_nlopt(const CostFunction& cost, const Eigen::VectorXd& 
   } catch (const nlopt::roundoff_limited&) {
     outcome.stop_reason = "roundoff_limited";  // NLopt: the result is typically still useful
   } catch (const std::exception& error) {
-    outcome.stop_reason = std::string("failure: ") + error.what();
+    outcome.failure = error.what();
+    outcome.stop_reason = "failure: " + *outcome.failure;
   }
   outcome.cancelled = context.cancelled;
+  outcome.stopped = context.stopped;
   if (context.cancelled) outcome.stop_reason = "cancelled";
+  if (context.stopped) outcome.stop_reason = "stopped";
   if (context.evaluations > 0 && !std::isfinite(context.first_cost)) outcome.stop_reason = "non_finite_start";
   // Report the best point evaluated: NLopt's x is not always the best after a forced stop.
   outcome.theta = context.best_theta;
-  outcome.cost = context.evaluations > 0 ? context.best_cost : cost(initial, nullptr);
-  outcome.initial_cost = context.evaluations > 0 ? context.first_cost : outcome.cost;
+  if (context.evaluations > 0) {
+    outcome.cost = context.best_cost;
+    outcome.initial_cost = context.first_cost;
+  } else {
+    // The start's cost, evaluated now; not for a caller that counts every evaluation itself (`stop`).
+    outcome.cost = settings.stop ? std::numeric_limits<double>::quiet_NaN() : cost(initial, nullptr);
+    outcome.initial_cost = outcome.cost;
+  }
   outcome.evaluations = context.evaluations;
   return outcome;
 }

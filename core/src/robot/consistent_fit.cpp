@@ -15,6 +15,9 @@
 // It drops only the chart's own curvature (the terms ∇_π F·∂²π/∂θ²), and the step is taken
 // through π (θ_new = θ(π + Pδ)), where that curvature does not enter. An iteration costs
 // O(p²·10 + p³/3) and never touches the samples.
+//
+// fit_consistent() checks the input (check_problem()) and runs a ConsistentFitMinimizer, a
+// class with one method per step of the fit (its comment lists them).
 #include "manipid/core/robot/consistent_fit.h"
 
 #include "robot/inertia_internal.h"
@@ -32,6 +35,9 @@
 #include <limits>
 #include <optional>
 #include <sstream>
+#include <string>
+#include <utility>
+#include <vector>
 
 namespace manipid::robot {
 namespace {
@@ -359,6 +365,510 @@ Eigen::VectorXd make_consistent(const ParameterStructure& structure, const Eigen
   return result;
 }
 
+// Sizes, emptiness, finiteness, ranges: nothing else reaches a solver.
+void check_problem(const ParameterStructure& structure, const ConsistentFitProblem& problem,
+                   const ConsistentFitOptions& options) {
+  check_structure(structure);
+  const int p = structure.parameter_count;
+  if (problem.R.rows() == 0 || problem.R.cols() != p) {
+    throw InputError("R", "R must have at least one row and " + std::to_string(p) +
+                              " columns (one per parameter), got " + std::to_string(problem.R.rows()) + "×" +
+                              std::to_string(problem.R.cols()));
+  }
+  require_finite(problem.R, "R", "check the regressor for NaN or Inf samples");
+  require_size(problem.z, problem.R.rows(), "z", "one per row of R");
+  require_finite(problem.z, "z", "check the measured torques");
+  if (!std::isfinite(problem.residual_offset) || problem.residual_offset < 0.0) {
+    throw InputError("residual_offset", "the residual outside R's range must be a finite number ≥ 0, got " +
+                                            short_number(problem.residual_offset));
+  }
+  require_size(problem.unconstrained, p, "unconstrained", "the least-squares estimate, one per parameter");
+  require_finite(problem.unconstrained, "unconstrained", "the least-squares estimate");
+  require_size(problem.prior, p, "prior", "one prior value per parameter");
+  require_finite(problem.prior, "prior", "the prior values");
+  if (problem.start.size() != 0) {
+    require_size(problem.start, p, "start", "one per parameter, or none");
+    require_finite(problem.start, "start", "the starting values");
+  }
+  validate_options(options, p);
+  if (problem.R.cwiseAbs().maxCoeff() == 0.0) throw InputError("R", "R is zero: the data determine no parameter");
+}
+
+// The fit, built as Ceres's TrustRegionMinimizer is: one method per step, run in order by
+// minimize() on a checked problem (check_problem()):
+//
+//   reduce()            R to at most p rows; the unconstrained cost
+//   choose_scale()      s and γ = ε σ_max(R S)²
+//   set_margins()       the prior term and each link's margin f
+//   choose_start()      the projection's cost; the start and the barriers' centre
+//   enter_interior()    the start in y, strictly inside the margins; the barriers; the start's costs
+//   barrier_weights()   the continuation μ₀ > … > μ_last
+//   run_stage()         one μ: LM iterations until a stop test (cancel and max_iterations
+//                       before each), each of them
+//     linearise_and_test()    at a new point: g, H, and the tests that need them (exact, gradient)
+//     iterate()               one damped step: damped_step(), fraction_to_boundary(),
+//                             evaluate_candidate(), then accept_step() or reject_step() (which
+//                             hold the cost, step and damping tests)
+//   summarise()         the summary
+// One object per fit: minimize() runs once (it hands the summary over).
+class ConsistentFitMinimizer {
+ public:
+  ConsistentFitMinimizer(const ParameterStructure& structure, const ConsistentFitProblem& problem,
+                         const ConsistentFitOptions& options)
+      : structure_(structure), problem_(problem), options_(options), p_(structure.parameter_count) {}
+
+  ConsistentFitSummary minimize() {
+    reduce();
+    choose_scale();
+    set_margins();
+    choose_start();
+    enter_interior();
+    // Intermediate stages end on any convergence rule (or on rounding) and go on to the next.
+    FitTermination termination = FitTermination::max_iterations;
+    const std::vector<double> weights = barrier_weights();
+    damping_ = options_.initial_damping;
+    for (std::size_t stage = 0; stage < weights.size(); ++stage) {
+      const bool last = stage + 1 == weights.size();
+      termination = run_stage(weights[stage], last);
+      if (termination == FitTermination::cancelled || termination == FitTermination::max_iterations) break;
+      if (!last) termination = FitTermination::max_iterations;
+    }
+    summarise(termination);
+    return std::move(summary_);
+  }
+
+ private:
+  // The stop rules of one stage: the requested ones in the last, kStageTolerance before it.
+  struct Tolerances {
+    double gradient = 0.0, function = 0.0, step = 0.0;
+  };
+
+  double data_cost(const Eigen::VectorXd& pi) const { return (d_.R * pi - d_.z).squaredNorm() + d_.offset; }
+
+  // Reduces R to at most p rows (one QR of [R | z]; the rest of z's norm joins J⊥) and prices
+  // the unconstrained estimate.
+  void reduce() {
+    d_.p = p_;
+    d_.links = structure_.link_offsets;
+    d_.lower = Eigen::VectorXd::Constant(p_, -kInfinity);
+    for (int index : structure_.non_negative) d_.lower[index] = 0.0;
+    d_.offset = problem_.residual_offset;
+    if (problem_.R.rows() > p_) {
+      Eigen::MatrixXd augmented(problem_.R.rows(), p_ + 1);
+      augmented << problem_.R, problem_.z;
+      const Eigen::HouseholderQR<Eigen::MatrixXd> qr(augmented);
+      const Eigen::MatrixXd triangle = qr.matrixQR().topRows(p_ + 1).triangularView<Eigen::Upper>();
+      d_.R = triangle.topLeftCorner(p_, p_);
+      d_.z = triangle.col(p_).head(p_);
+      d_.offset += triangle(p_, p_) * triangle(p_, p_);
+    } else {
+      d_.R = problem_.R;
+      d_.z = problem_.z;
+    }
+    summary_.unconstrained_cost = data_cost(problem_.unconstrained);
+    if (!std::isfinite(summary_.unconstrained_cost)) {
+      throw InputError("R", "the cost at the least-squares estimate overflows: R, z or the estimate are too large");
+    }
+  }
+
+  // The parameter scale s and γ = ε σ_max(R S)².
+  void choose_scale() {
+    sizes_ = link_sizes(structure_, problem_, options_);
+    const Eigen::VectorXd scale = options_.parameter_scale.size() != 0
+                                      ? options_.parameter_scale
+                                      : derived_scale(structure_, problem_, d_.R, sizes_);
+    d_.inv_scale = scale.cwiseInverse();
+    summary_.parameter_scale = scale;
+    const Eigen::MatrixXd scaled = d_.R * scale.asDiagonal();
+    const Eigen::MatrixXd scaled_gram = scaled.transpose() * scaled;
+    if (!scaled_gram.allFinite()) throw InputError("R", "RᵀR overflows: R's entries are too large");
+    largest_ =
+        Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd>(scaled_gram, Eigen::EigenvaluesOnly).eigenvalues().maxCoeff();
+    d_.gamma = options_.regularization * largest_;
+    summary_.regularization_weight = d_.gamma;
+  }
+
+  // The prior term γ‖S⁻¹(π − π₀)‖² (G = RᵀR + γS⁻²), and each link's margin f.
+  void set_margins() {
+    d_.prior = problem_.prior;
+    d_.gram = d_.R.transpose() * d_.R;
+    d_.gram.diagonal() += d_.gamma * d_.inv_scale.cwiseAbs2();
+    for (int k = 0; k < structure_.link_count(); ++k) {
+      const int offset = structure_.link_offsets[k];
+      const double length = sizes_[k].length;
+      // The margin is relative to the prior link's largest scaled eigenvalue (its projection's,
+      // when the prior is not consistent: the prior term still pulls toward the values given).
+      const std::optional<LinkProjection> projection =
+          detail::try_project_link(problem_.prior.segment<10>(offset), length, options_.projection.relative_floor);
+      if (!projection) {
+        throw InputError("prior", structure_.link_names[k] + ": the prior has no positive pseudo-inertia eigenvalue; "
+                                                             "give it a mass and an inertia");
+      }
+      if (projection->changed) summary_.inconsistent_prior_links.push_back(k);
+      const Eigen::Vector4d to_scaled(1.0 / length, 1.0 / length, 1.0 / length, 1.0);
+      const double largest_scaled =
+          Eigen::SelfAdjointEigenSolver<Eigen::Matrix4d>(
+              to_scaled.asDiagonal() * pseudo_inertia(projection->link) * to_scaled.asDiagonal(),
+              Eigen::EigenvaluesOnly)
+              .eigenvalues()[3];
+      floors_.push_back(kFitFloorShare * options_.projection.relative_floor * largest_scaled);  // f_k, in J̃ = D J D
+    }
+  }
+
+  // What projecting π_LS alone achieves (the figure the fit must not be worse than); the start,
+  // `start` or the regularised least-squares point made consistent; the barriers' centre.
+  void choose_start() {
+    summary_.projection_cost = data_cost(
+        make_consistent(structure_, problem_.unconstrained, problem_.prior, sizes_, options_, nullptr, nullptr));
+    Eigen::VectorXd base = problem_.start;
+    if (base.size() == 0) {
+      // π_LS + G⁻¹(Rᵀ(z − Rπ_LS) + γS⁻²(π₀ − π_LS)), the minimiser of data and prior terms without
+      // the constraints: π_LS along what the data determine, the prior along what they do not —
+      // where the caller's π_LS is arbitrary (minimum-norm, basic) and projecting it would start
+      // the fit from a degenerate link far from the answer. With γ = 0 and R rank-deficient G is
+      // singular and π_LS is used as it is.
+      base = problem_.unconstrained;
+      const Eigen::LLT<Eigen::MatrixXd> cholesky(d_.gram);
+      if (d_.gamma > 0.0 && cholesky.info() == Eigen::Success) {
+        const Eigen::VectorXd correction =
+            cholesky.solve(d_.R.transpose() * (d_.z - d_.R * base) +
+                           d_.gamma * d_.inv_scale.cwiseAbs2().cwiseProduct(d_.prior - base));
+        if (correction.allFinite()) base += correction;
+      }
+    }
+    // The iterates start from that point made consistent at the centred start's floor (1e-2).
+    // The barriers' centre: that point itself for the links it has consistent (the ordinary
+    // projection leaves them alone), the start for the others (their answer lies elsewhere
+    // anyway, and a centre next to the margin would make the barrier needlessly stiff).
+    ConsistentFitOptions centred = options_;
+    centred.projection.relative_floor = std::max(kStartFloor, options_.projection.relative_floor);
+    start_ = make_consistent(structure_, base, problem_.prior, sizes_, centred, nullptr, nullptr);
+    centre_ = make_consistent(structure_, base, problem_.prior, sizes_, options_, &summary_.projected_links,
+                              &summary_.clipped_entries);
+    for (int k : summary_.projected_links) {
+      centre_.segment<10>(structure_.link_offsets[k]) = start_.segment<10>(structure_.link_offsets[k]);
+    }
+  }
+
+  // The starting point in y, strictly inside the margin, the barriers, and the start's costs.
+  void enter_interior() {
+    current_.y = start_;
+    for (int k = 0; k < structure_.link_count(); ++k) {
+      const int offset = structure_.link_offsets[k];
+      const double length = sizes_[k].length;
+      const double floor = floors_[k];
+      // The projections' floors are relative to the link's own largest eigenvalue, the margin to
+      // the prior's: a link much lighter than the prior can fall below the latter. Lift its
+      // spectrum by the difference (J̃ + (2f − λ_min)E) — rare, and any point inside will do.
+      const Eigen::Vector4d to_scaled(1.0 / length, 1.0 / length, 1.0 / length, 1.0);
+      for (Eigen::VectorXd* point : {&start_, &centre_}) {
+        Eigen::Matrix4d scaled =
+            to_scaled.asDiagonal() * pseudo_inertia(point->segment<10>(offset)) * to_scaled.asDiagonal();
+        const double smallest =
+            Eigen::SelfAdjointEigenSolver<Eigen::Matrix4d>(scaled, Eigen::EigenvaluesOnly).eigenvalues()[0];
+        if (smallest < 2.0 * floor) {
+          scaled.diagonal().array() += 2.0 * floor - smallest;
+          const Eigen::Vector4d from_scaled = to_scaled.cwiseInverse();
+          point->segment<10>(offset) =
+              standard_from_pseudo_inertia(from_scaled.asDiagonal() * scaled * from_scaled.asDiagonal());
+        }
+      }
+      Vector10d theta;
+      if (detail::try_log_cholesky(start_.segment<10>(offset), theta) != detail::LogCholeskyStatus::ok) {
+        // Unreachable after the projection (every eigenvalue of J̃ is above the floor), kept as a guard.
+        theta = log_cholesky_from_standard(start_.segment<10>(offset), "start");
+      }
+      current_.y.segment<10>(offset) = theta;
+
+      // The barrier is a device of the solver, not a prior: it is centred (see above) on the
+      // regularised least-squares point, which has the data's values where the data see and the
+      // prior's where they do not. Where that point is consistent, the minimum is that point and
+      // the barrier, having no gradient there, moves nothing; centred on the prior instead, its
+      // pull (relative changes, r⁻⁴ times stiffer along a link's thin direction than the prior
+      // term) would drag the directions the data cannot see away from the prior wherever the
+      // data move a link, and centred on the fattened start it would pull thin links fatter.
+      LinkBarrier barrier;
+      barrier.floor = Eigen::Vector4d(floor * length * length, floor * length * length, floor * length * length, floor)
+                          .asDiagonal();
+      const Eigen::LLT<Eigen::Matrix4d> cholesky(pseudo_inertia(centre_.segment<10>(offset)) - barrier.floor);
+      if (cholesky.info() != Eigen::Success) {
+        throw InputError("prior",
+                         structure_.link_names[k] + ": the estimate's pseudo-inertia is too close to singular");
+      }
+      const Eigen::Matrix4d inverse_factor = cholesky.matrixL().solve(Eigen::Matrix4d::Identity());
+      barrier.inverse = inverse_factor.transpose() * inverse_factor;
+      barrier.log_det = 2.0 * cholesky.matrixLLT().diagonal().array().log().sum();
+      d_.barriers.push_back(barrier);
+    }
+
+    // The start's costs (the barrier weight is not set yet: it does not enter these).
+    evaluate(d_, current_);
+    if (!current_.finite()) {
+      throw InputError("R", "the cost at the start overflows: R, z or the parameters are too large");
+    }
+    summary_.start = current_.pi;
+    summary_.initial_cost = current_.data + d_.offset;
+    z_norm_ = d_.z.norm();
+  }
+
+  // The continuation on the barrier weight μ.
+  //
+  // The barrier's Newton model holds only for steps short against the distance to the
+  // boundary, and a thin link turns its thin axis only slowly near it: from a start far from
+  // the answer, damped steps would crawl. So, as interior-point methods do, the fit follows the
+  // path of minima from a larger μ₀ (further inside) down by factors of 10, each stage
+  // warm-started from the last and solved loosely (relative tolerances 1e-4: looser centring
+  // was seen to cost the last stage more than it saves), the last one to the requested
+  // tolerances. The last weight, 0.1·γ (1e-14·σ_max(R S)² when γ = 0), leaves the barrier's
+  // pull a tenth of the prior's where links are well inside: lower, the last stage only crawls
+  // — its whole possible gain is about ν·μ, a few 1e-9 of the cost — in a system too
+  // ill-conditioned near the margin for Cholesky (seen: 1e-4·γ took up to 900 iterations).
+  //
+  // μ₀ from the start's gap, as interior-point methods choose it: at the minimum for μ the
+  // objective is within about ν·μ of the constrained minimum (ν = 4 per link, the barrier's
+  // parameter), so μ₀ = (start's data cost − π_LS's)/ν puts the start on the path's scale — a
+  // poor start (a link far outside, turned the wrong way) begins fat, where it can turn
+  // cheaply, and a good one skips the stages it does not need. Capped at 1e-2·σ_max(R S)².
+  std::vector<double> barrier_weights() const {
+    const double last_weight = d_.gamma > 0.0 ? kLastStageShare * d_.gamma : kLastStageFloor * largest_;
+    std::vector<double> weights;
+    const double nu = 4.0 * static_cast<double>(d_.links.size());
+    const double gap = std::max(0.0, summary_.initial_cost - summary_.unconstrained_cost);
+    const double first = nu > 0.0 ? std::min(kFirstStageCap * largest_, gap / nu) : 0.0;
+    for (double weight = first; weight > 1.5 * last_weight; weight *= 0.1) weights.push_back(weight);
+    weights.push_back(last_weight);
+    return weights;
+  }
+
+  // One stage of the continuation: Levenberg–Marquardt with bounds (projection and an active
+  // set) and the π retraction at barrier weight μ, warm-started from the last stage's point,
+  // until a stop rule holds.
+  FitTermination run_stage(double weight, bool last) {
+    const Tolerances tolerances =
+        last ? Tolerances{options_.gradient_tolerance, options_.function_tolerance, options_.step_tolerance}
+             : Tolerances{kStageTolerance, kStageTolerance, kStageTolerance};
+    d_.barrier_weight = weight;
+    evaluate(d_, current_);
+    linearised_ = false;
+    damping_ = std::min(damping_, options_.initial_damping);
+    growth_ = 2.0;
+    for (;;) {
+      if (options_.cancel && options_.cancel->load()) return FitTermination::cancelled;
+      if (!linearised_) {
+        if (const std::optional<FitTermination> stop = linearise_and_test(last, tolerances)) return *stop;
+      }
+      if (summary_.iterations >= options_.max_iterations) return FitTermination::max_iterations;
+      if (const std::optional<FitTermination> stop = iterate(tolerances)) return *stop;
+    }
+  }
+
+  // g, H and the free variables at a new point, and the stop tests that need them.
+  std::optional<FitTermination> linearise_and_test(bool last, const Tolerances& tolerances) {
+    linearise(d_, current_, g_, curvature_, gp_, h_);
+    linearised_ = true;
+    if (!g_.allFinite() || !h_.allFinite()) return FitTermination::rounding_limited;  // never NaN into Cholesky
+    const double objective_root = std::sqrt(current_.objective());
+    // An exact fit: the residual is rounding (a few ε of ‖z‖) and cannot shrink further.
+    if (last && objective_root <= 32.0 * kEpsilon * z_norm_) return FitTermination::converged_exact;
+    // Free variables: all but those on their bound that the gradient pushes outward (the
+    // KKT conditions hold for those; they stay put this iteration).
+    free_variables_.clear();
+    double cosine = 0.0;
+    for (int i = 0; i < p_; ++i) {
+      if (current_.y[i] <= d_.lower[i] && g_[i] > 0.0) continue;
+      free_variables_.push_back(i);
+      if (h_(i, i) > 0.0) cosine = std::max(cosine, std::abs(g_[i]) / (std::sqrt(h_(i, i)) * objective_root));
+    }
+    if (free_variables_.empty() || cosine <= tolerances.gradient) return FitTermination::converged_gradient;
+    return std::nullopt;
+  }
+
+  // One iteration: the damped step, cut to the boundary, its candidate point, and the verdict.
+  std::optional<FitTermination> iterate(const Tolerances& tolerances) {
+    ++summary_.iterations;
+    std::optional<Eigen::VectorXd> step = damped_step();
+    if (step) {
+      *step *= fraction_to_boundary(*step);
+      Eigen::VectorXd taken;
+      const bool inside = evaluate_candidate(*step, taken);
+      // The model's decrease of ½F for the step taken: −(gᵀδ + ½ δᵀHδ).
+      const double predicted = -(g_.dot(taken) + 0.5 * taken.dot(h_ * taken));
+      if (inside && trial_.finite() && predicted > 0.0) {
+        const double actual = 0.5 * (current_.objective() - trial_.objective());
+        const double ratio = actual / predicted;
+        if (ratio > kMinRelativeDecrease) return accept_step(ratio, tolerances);
+      }
+    }
+    return reject_step();
+  }
+
+  // (H_FF + λ D_FF) δ_F = −g_F with Marquardt's D = diag(H) (so the damping is invariant to the
+  // units of every variable), floored at 1e-12 of its largest so no direction is undamped; δ
+  // is 0 outside F. nullopt when Cholesky fails.
+  std::optional<Eigen::VectorXd> damped_step() const {
+    const int n = static_cast<int>(free_variables_.size());
+    const double diagonal_floor = 1e-12 * std::max(h_.diagonal().maxCoeff(), std::numeric_limits<double>::min());
+    Eigen::MatrixXd system(n, n);
+    Eigen::VectorXd rhs(n);
+    for (int a = 0; a < n; ++a) {
+      for (int b = 0; b < n; ++b) system(a, b) = h_(free_variables_[a], free_variables_[b]);
+      system(a, a) += damping_ * std::max(h_(free_variables_[a], free_variables_[a]), diagonal_floor);
+      rhs[a] = -g_[free_variables_[a]];
+    }
+    const Eigen::LLT<Eigen::MatrixXd> cholesky(system);
+    if (cholesky.info() != Eigen::Success) return std::nullopt;
+    const Eigen::VectorXd solution = cholesky.solve(rhs);
+    Eigen::VectorXd step = Eigen::VectorXd::Zero(p_);
+    for (int a = 0; a < n; ++a) step[free_variables_[a]] = solution[a];
+    return step;
+  }
+
+  // Fraction to the boundary: A_k + t ΔJ_k ≻ 0 for t < 1/λ_max(−L⁻¹ΔJ_kL⁻ᵀ) (A_k = L Lᵀ),
+  // ΔJ_k the pseudo-inertia of P_k δ_k. The step goes at most 95 % of the way there.
+  double fraction_to_boundary(const Eigen::VectorXd& step) const {
+    double fraction = 1.0;
+    for (std::size_t k = 0; k < d_.links.size(); ++k) {
+      const Vector10d change = current_.jacobians[k] * step.segment<10>(d_.links[k]);
+      const Eigen::Matrix4d inverse_factor =
+          current_.shifted[k].triangularView<Eigen::Lower>().solve(Eigen::Matrix4d::Identity());
+      const Eigen::Matrix4d toward = -(inverse_factor * pseudo_inertia(change) * inverse_factor.transpose());
+      if (!toward.allFinite()) continue;  // never hand NaN to the eigensolver; the step is refused later
+      const double largest_eigenvalue =
+          Eigen::SelfAdjointEigenSolver<Eigen::Matrix4d>(toward, Eigen::EigenvaluesOnly).eigenvalues()[3];
+      if (largest_eigenvalue > 0.0) fraction = std::min(fraction, kFractionToBoundary / largest_eigenvalue);
+    }
+    return fraction;
+  }
+
+  // The candidate point for `step` in trial_, evaluated when inside; `taken` is the step as
+  // taken in y (the bounded entries projected). False when a link lands outside.
+  bool evaluate_candidate(const Eigen::VectorXd& step, Eigen::VectorXd& taken) {
+    // The bounded entries: y + δ projected onto x ≥ 0.
+    trial_.y = (current_.y + step).cwiseMax(d_.lower);
+    taken = trial_.y - current_.y;
+    // The links: through π. The model is Newton's in π, so the step goes to π + P_k δ_k and
+    // θ is taken from there (θ_new = θ(π + P δ), which agrees with θ + δ to first order):
+    // the model then describes the move exactly for the data term and to third order for
+    // the barrier. The chart step θ + δ would bend away from it, by far on thin links
+    // where the log-Cholesky map curves most (the fit crawls there), and a long chart step
+    // can carry a link next to the boundary in one go. A point outside (only by rounding,
+    // after the fraction to the boundary) has an infinite barrier and refuses the step.
+    bool inside = true;
+    for (std::size_t k = 0; k < d_.links.size() && inside; ++k) {
+      const int offset = d_.links[k];
+      const Vector10d moved = current_.pi.segment<10>(offset) + current_.jacobians[k] * step.segment<10>(offset);
+      Vector10d theta;
+      inside = moved.allFinite() && detail::try_log_cholesky(moved, theta) == detail::LogCholeskyStatus::ok;
+      if (inside) trial_.y.segment<10>(offset) = theta;
+    }
+    if (inside) evaluate(d_, trial_);
+    return inside;
+  }
+
+  // The candidate becomes the current point; Nielsen's damping update; the cost and step tests.
+  std::optional<FitTermination> accept_step(double ratio, const Tolerances& tolerances) {
+    const double before = current_.objective();
+    const double decrease = before - trial_.objective();
+    const double moved = ((trial_.pi - current_.pi).cwiseProduct(d_.inv_scale)).cwiseAbs().maxCoeff();
+    std::swap(current_, trial_);
+    linearised_ = false;
+    ++summary_.accepted_steps;
+    damping_ = std::max(kMinDamping, damping_ * std::max(1.0 / 3.0, 1.0 - std::pow(2.0 * ratio - 1.0, 3)));
+    growth_ = 2.0;
+    notify(true);
+    if (decrease <= tolerances.function * before) return FitTermination::converged_cost;
+    if (moved <= tolerances.step) return FitTermination::converged_step;
+    return std::nullopt;
+  }
+
+  // More damping (Nielsen: by a factor that doubles with each refusal in a row); past
+  // kMaxDamping nothing more can be gained in double precision.
+  std::optional<FitTermination> reject_step() {
+    damping_ *= growth_;
+    growth_ *= 2.0;
+    notify(false);
+    if (damping_ > kMaxDamping) return FitTermination::rounding_limited;
+    return std::nullopt;
+  }
+
+  void notify(bool accepted) const {
+    if (!options_.on_iteration) return;
+    FitIteration iteration;
+    iteration.iteration = summary_.iterations;
+    iteration.step_accepted = accepted;
+    iteration.data_cost = current_.data + d_.offset;
+    iteration.regularization_cost = current_.prior;
+    iteration.barrier_cost = current_.barrier;
+    iteration.barrier_weight = d_.barrier_weight;
+    iteration.damping = damping_;
+    iteration.estimate = &current_.pi;
+    options_.on_iteration(iteration);
+  }
+
+  void summarise(FitTermination termination) {
+    summary_.estimate = current_.pi;
+    summary_.termination = termination;
+    summary_.final_cost = current_.data + d_.offset;
+    summary_.regularization_cost = current_.prior;
+    summary_.cost_increase = summary_.final_cost - summary_.unconstrained_cost;
+    summary_.relative_cost_increase =
+        summary_.unconstrained_cost > 0.0 ? summary_.cost_increase / summary_.unconstrained_cost : kNaN;
+    summary_.regularization_ratio =
+        summary_.final_cost > 0.0 ? summary_.regularization_cost / summary_.final_cost : kNaN;
+    switch (termination) {
+      case FitTermination::converged_gradient:
+        summary_.message = "the gradient is orthogonal to every direction the parameters can still move in (cosine ≤ " +
+                           short_number(options_.gradient_tolerance) + ")";
+        break;
+      case FitTermination::converged_cost:
+        summary_.message = "the last step decreased the cost by less than " +
+                           short_number(options_.function_tolerance) + " of its value";
+        break;
+      case FitTermination::converged_step:
+        summary_.message = "the last step moved no parameter by more than " + short_number(options_.step_tolerance) +
+                           " of its scale";
+        break;
+      case FitTermination::converged_exact:
+        summary_.message = "the parameters fit the data and the prior exactly, to rounding";
+        break;
+      case FitTermination::rounding_limited:
+        summary_.message = "no step decreases the cost any more in double precision";
+        break;
+      case FitTermination::max_iterations:
+        summary_.message = "stopped after " + std::to_string(summary_.iterations) +
+                           " iterations (max_iterations) before converging; the estimate is consistent but may not "
+                           "be the minimum";
+        break;
+      case FitTermination::cancelled:
+        summary_.message = "cancelled after " + std::to_string(summary_.iterations) +
+                           " iterations; the estimate is the best consistent one so far";
+        break;
+    }
+    summary_.report = check_consistency(structure_, summary_.estimate);
+  }
+
+  const ParameterStructure& structure_;
+  const ConsistentFitProblem& problem_;
+  const ConsistentFitOptions& options_;
+  const int p_;
+  ConsistentFitSummary summary_;
+  FitData d_;                        // the reduced data and what every iteration needs
+  std::vector<LinkSize> sizes_;      // each link's mass and length scale
+  double largest_ = 0.0;             // σ_max(R S)²
+  std::vector<double> floors_;       // f_k, in J̃ = D J D (D = diag(1/L, 1/L, 1/L, 1))
+  Eigen::VectorXd start_, centre_;   // π: the start, the barriers' centre
+  double z_norm_ = 0.0;              // ‖z‖ (reduced), for the exact-fit test
+  Point current_, trial_;
+  // The iteration's state: the model at current_ (valid while linearised_), its free
+  // variables, and Nielsen's damping λ and growth ν.
+  Eigen::VectorXd g_;
+  Eigen::MatrixXd curvature_, gp_, h_;
+  std::vector<int> free_variables_;
+  bool linearised_ = false;
+  double damping_ = 0.0;
+  double growth_ = 2.0;
+};
+
 }  // namespace
 
 const char* to_string(FitTermination termination) {
@@ -395,417 +905,11 @@ std::string ConsistentFitSummary::brief_report() const {
   return text.str();
 }
 
+
 ConsistentFitSummary fit_consistent(const ParameterStructure& structure, const ConsistentFitProblem& problem,
                                     const ConsistentFitOptions& options) {
-  // ---- Validation: sizes, emptiness, finiteness, ranges. Nothing else reaches a solver. ----
-  check_structure(structure);
-  const int p = structure.parameter_count;
-  if (problem.R.rows() == 0 || problem.R.cols() != p) {
-    throw InputError("R", "R must have at least one row and " + std::to_string(p) +
-                              " columns (one per parameter), got " + std::to_string(problem.R.rows()) + "×" +
-                              std::to_string(problem.R.cols()));
-  }
-  require_finite(problem.R, "R", "check the regressor for NaN or Inf samples");
-  require_size(problem.z, problem.R.rows(), "z", "one per row of R");
-  require_finite(problem.z, "z", "check the measured torques");
-  if (!std::isfinite(problem.residual_offset) || problem.residual_offset < 0.0) {
-    throw InputError("residual_offset", "the residual outside R's range must be a finite number ≥ 0, got " +
-                                            short_number(problem.residual_offset));
-  }
-  require_size(problem.unconstrained, p, "unconstrained", "the least-squares estimate, one per parameter");
-  require_finite(problem.unconstrained, "unconstrained", "the least-squares estimate");
-  require_size(problem.prior, p, "prior", "one prior value per parameter");
-  require_finite(problem.prior, "prior", "the prior values");
-  if (problem.start.size() != 0) {
-    require_size(problem.start, p, "start", "one per parameter, or none");
-    require_finite(problem.start, "start", "the starting values");
-  }
-  validate_options(options, p);
-  if (problem.R.cwiseAbs().maxCoeff() == 0.0) throw InputError("R", "R is zero: the data determine no parameter");
-
-  FitData d;
-  d.p = p;
-  d.links = structure.link_offsets;
-  d.lower = Eigen::VectorXd::Constant(p, -kInfinity);
-  for (int index : structure.non_negative) d.lower[index] = 0.0;
-  d.offset = problem.residual_offset;
-
-  // ---- Reduce R to at most p rows: one QR of [R | z]; the rest of z's norm joins J⊥. ----
-  if (problem.R.rows() > p) {
-    Eigen::MatrixXd augmented(problem.R.rows(), p + 1);
-    augmented << problem.R, problem.z;
-    const Eigen::HouseholderQR<Eigen::MatrixXd> qr(augmented);
-    const Eigen::MatrixXd triangle = qr.matrixQR().topRows(p + 1).triangularView<Eigen::Upper>();
-    d.R = triangle.topLeftCorner(p, p);
-    d.z = triangle.col(p).head(p);
-    d.offset += triangle(p, p) * triangle(p, p);
-  } else {
-    d.R = problem.R;
-    d.z = problem.z;
-  }
-  auto data_cost = [&](const Eigen::VectorXd& pi) { return (d.R * pi - d.z).squaredNorm() + d.offset; };
-
-  ConsistentFitSummary summary;
-  summary.unconstrained_cost = data_cost(problem.unconstrained);
-  if (!std::isfinite(summary.unconstrained_cost)) {
-    throw InputError("R", "the cost at the least-squares estimate overflows: R, z or the estimate are too large");
-  }
-
-  // ---- Parameter scale s, γ = ε σ_max(R S)². ----
-  const std::vector<LinkSize> sizes = link_sizes(structure, problem, options);
-  const Eigen::VectorXd scale =
-      options.parameter_scale.size() != 0 ? options.parameter_scale : derived_scale(structure, problem, d.R, sizes);
-  d.inv_scale = scale.cwiseInverse();
-  summary.parameter_scale = scale;
-  const Eigen::MatrixXd scaled = d.R * scale.asDiagonal();
-  const Eigen::MatrixXd scaled_gram = scaled.transpose() * scaled;
-  if (!scaled_gram.allFinite()) throw InputError("R", "RᵀR overflows: R's entries are too large");
-  const double largest =
-      Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd>(scaled_gram, Eigen::EigenvaluesOnly).eigenvalues().maxCoeff();
-  d.gamma = options.regularization * largest;
-  summary.regularization_weight = d.gamma;
-
-  // ---- The prior term γ‖S⁻¹(π − π₀)‖² (G = RᵀR + γS⁻²), and each link's margin f. ----
-  d.prior = problem.prior;
-  d.gram = d.R.transpose() * d.R;
-  d.gram.diagonal() += d.gamma * d.inv_scale.cwiseAbs2();
-  std::vector<double> floors;  // f_k, in J̃ = D J D (D = diag(1/L, 1/L, 1/L, 1))
-  for (int k = 0; k < structure.link_count(); ++k) {
-    const int offset = structure.link_offsets[k];
-    const double length = sizes[k].length;
-    // The margin is relative to the prior link's largest scaled eigenvalue (its projection's,
-    // when the prior is not consistent: the prior term still pulls toward the values given).
-    const std::optional<LinkProjection> projection =
-        detail::try_project_link(problem.prior.segment<10>(offset), length, options.projection.relative_floor);
-    if (!projection) {
-      throw InputError("prior", structure.link_names[k] + ": the prior has no positive pseudo-inertia eigenvalue; "
-                                                          "give it a mass and an inertia");
-    }
-    if (projection->changed) summary.inconsistent_prior_links.push_back(k);
-    const Eigen::Vector4d to_scaled(1.0 / length, 1.0 / length, 1.0 / length, 1.0);
-    const double largest_scaled =
-        Eigen::SelfAdjointEigenSolver<Eigen::Matrix4d>(
-            to_scaled.asDiagonal() * pseudo_inertia(projection->link) * to_scaled.asDiagonal(), Eigen::EigenvaluesOnly)
-            .eigenvalues()[3];
-    floors.push_back(kFitFloorShare * options.projection.relative_floor * largest_scaled);
-  }
-
-  // ---- What projecting π_LS alone achieves: the figure the fit must not be worse than. ----
-  summary.projection_cost =
-      data_cost(make_consistent(structure, problem.unconstrained, problem.prior, sizes, options, nullptr, nullptr));
-
-  // ---- Start: `start`, or the regularised least-squares point, made consistent. ----
-  Eigen::VectorXd base = problem.start;
-  if (base.size() == 0) {
-    // π_LS + G⁻¹(Rᵀ(z − Rπ_LS) + γS⁻²(π₀ − π_LS)), the minimiser of data and prior terms without
-    // the constraints: π_LS along what the data determine, the prior along what they do not —
-    // where the caller's π_LS is arbitrary (minimum-norm, basic) and projecting it would start
-    // the fit from a degenerate link far from the answer. With γ = 0 and R rank-deficient G is
-    // singular and π_LS is used as it is.
-    base = problem.unconstrained;
-    const Eigen::LLT<Eigen::MatrixXd> cholesky(d.gram);
-    if (d.gamma > 0.0 && cholesky.info() == Eigen::Success) {
-      const Eigen::VectorXd correction = cholesky.solve(
-          d.R.transpose() * (d.z - d.R * base) + d.gamma * d.inv_scale.cwiseAbs2().cwiseProduct(d.prior - base));
-      if (correction.allFinite()) base += correction;
-    }
-  }
-  // The iterates start from that point made consistent at the centred start's floor (1e-2).
-  // The barriers' centre: that point itself for the links it has consistent (the ordinary
-  // projection leaves them alone), the start for the others (their answer lies elsewhere
-  // anyway, and a centre next to the margin would make the barrier needlessly stiff).
-  ConsistentFitOptions centred = options;
-  centred.projection.relative_floor = std::max(kStartFloor, options.projection.relative_floor);
-  Eigen::VectorXd start = make_consistent(structure, base, problem.prior, sizes, centred, nullptr, nullptr);
-  Eigen::VectorXd centre = make_consistent(structure, base, problem.prior, sizes, options, &summary.projected_links,
-                                           &summary.clipped_entries);
-  for (int k : summary.projected_links) {
-    centre.segment<10>(structure.link_offsets[k]) = start.segment<10>(structure.link_offsets[k]);
-  }
-
-  // ---- The starting point in y, strictly inside the margin, and the barriers. ----
-  Point current;
-  current.y = start;
-  for (int k = 0; k < structure.link_count(); ++k) {
-    const int offset = structure.link_offsets[k];
-    const double length = sizes[k].length;
-    const double floor = floors[k];
-    // The projections' floors are relative to the link's own largest eigenvalue, the margin to
-    // the prior's: a link much lighter than the prior can fall below the latter. Lift its
-    // spectrum by the difference (J̃ + (2f − λ_min)E) — rare, and any point inside will do.
-    const Eigen::Vector4d to_scaled(1.0 / length, 1.0 / length, 1.0 / length, 1.0);
-    for (Eigen::VectorXd* point : {&start, &centre}) {
-      Eigen::Matrix4d scaled =
-          to_scaled.asDiagonal() * pseudo_inertia(point->segment<10>(offset)) * to_scaled.asDiagonal();
-      const double smallest =
-          Eigen::SelfAdjointEigenSolver<Eigen::Matrix4d>(scaled, Eigen::EigenvaluesOnly).eigenvalues()[0];
-      if (smallest < 2.0 * floor) {
-        scaled.diagonal().array() += 2.0 * floor - smallest;
-        const Eigen::Vector4d from_scaled = to_scaled.cwiseInverse();
-        point->segment<10>(offset) =
-            standard_from_pseudo_inertia(from_scaled.asDiagonal() * scaled * from_scaled.asDiagonal());
-      }
-    }
-    Vector10d theta;
-    if (detail::try_log_cholesky(start.segment<10>(offset), theta) != detail::LogCholeskyStatus::ok) {
-      // Unreachable after the projection (every eigenvalue of J̃ is above the floor), kept as a guard.
-      theta = log_cholesky_from_standard(start.segment<10>(offset), "start");
-    }
-    current.y.segment<10>(offset) = theta;
-
-    // The barrier is a device of the solver, not a prior: it is centred (see above) on the
-    // regularised least-squares point, which has the data's values where the data see and the
-    // prior's where they do not. Where that point is consistent, the minimum is that point and
-    // the barrier, having no gradient there, moves nothing; centred on the prior instead, its
-    // pull (relative changes, r⁻⁴ times stiffer along a link's thin direction than the prior
-    // term) would drag the directions the data cannot see away from the prior wherever the
-    // data move a link, and centred on the fattened start it would pull thin links fatter.
-    LinkBarrier barrier;
-    barrier.floor =
-        Eigen::Vector4d(floor * length * length, floor * length * length, floor * length * length, floor).asDiagonal();
-    const Eigen::LLT<Eigen::Matrix4d> cholesky(pseudo_inertia(centre.segment<10>(offset)) - barrier.floor);
-    if (cholesky.info() != Eigen::Success) {
-      throw InputError("prior", structure.link_names[k] + ": the estimate's pseudo-inertia is too close to singular");
-    }
-    const Eigen::Matrix4d inverse_factor = cholesky.matrixL().solve(Eigen::Matrix4d::Identity());
-    barrier.inverse = inverse_factor.transpose() * inverse_factor;
-    barrier.log_det = 2.0 * cholesky.matrixLLT().diagonal().array().log().sum();
-    d.barriers.push_back(barrier);
-  }
-
-  // The start's costs (the barrier weight is not set yet: it does not enter these).
-  evaluate(d, current);
-  if (!current.finite()) throw InputError("R", "the cost at the start overflows: R, z or the parameters are too large");
-  summary.start = current.pi;
-  summary.initial_cost = current.data + d.offset;
-
-  // ---- Levenberg–Marquardt with bounds (projection and an active set) and the π retraction,
-  // inside a continuation on the barrier weight μ. ----
-  //
-  // The barrier's Newton model holds only for steps short against the distance to the
-  // boundary, and a thin link turns its thin axis only slowly near it: from a start far from
-  // the answer, damped steps would crawl. So, as interior-point methods do, the fit follows the
-  // path of minima from a larger μ₀ (further inside) down by factors of 10, each stage
-  // warm-started from the last and solved loosely (relative tolerances 1e-4: looser centring
-  // was seen to cost the last stage more than it saves), the last one to the requested
-  // tolerances. The last weight, 0.1·γ (1e-14·σ_max(R S)² when γ = 0), leaves the barrier's
-  // pull a tenth of the prior's where links are well inside: lower, the last stage only crawls
-  // — its whole possible gain is about ν·μ, a few 1e-9 of the cost — in a system too
-  // ill-conditioned near the margin for Cholesky (seen: 1e-4·γ took up to 900 iterations).
-  Eigen::VectorXd g;
-  Eigen::MatrixXd curvature, gp, h;
-  double damping = options.initial_damping;
-  double growth = 2.0;  // Nielsen's ν
-  std::vector<int> free_variables;
-  Point trial;
-  const double z_norm = d.z.norm();
-  FitTermination termination = FitTermination::max_iterations;
-
-  auto notify = [&](bool accepted) {
-    if (!options.on_iteration) return;
-    FitIteration iteration;
-    iteration.iteration = summary.iterations;
-    iteration.step_accepted = accepted;
-    iteration.data_cost = current.data + d.offset;
-    iteration.regularization_cost = current.prior;
-    iteration.barrier_cost = current.barrier;
-    iteration.barrier_weight = d.barrier_weight;
-    iteration.damping = damping;
-    iteration.estimate = &current.pi;
-    options.on_iteration(iteration);
-  };
-
-  // μ₀ from the start's gap, as interior-point methods choose it: at the minimum for μ the
-  // objective is within about ν·μ of the constrained minimum (ν = 4 per link, the barrier's
-  // parameter), so μ₀ = (start's data cost − π_LS's)/ν puts the start on the path's scale — a
-  // poor start (a link far outside, turned the wrong way) begins fat, where it can turn
-  // cheaply, and a good one skips the stages it does not need. Capped at 1e-2·σ_max(R S)².
-  const double last_weight = d.gamma > 0.0 ? kLastStageShare * d.gamma : kLastStageFloor * largest;
-  std::vector<double> weights;
-  const double nu = 4.0 * static_cast<double>(d.links.size());
-  const double gap = std::max(0.0, summary.initial_cost - summary.unconstrained_cost);
-  const double first = nu > 0.0 ? std::min(kFirstStageCap * largest, gap / nu) : 0.0;
-  for (double weight = first; weight > 1.5 * last_weight; weight *= 0.1) weights.push_back(weight);
-  weights.push_back(last_weight);
-  for (std::size_t stage = 0; stage < weights.size(); ++stage) {
-    const bool last = stage + 1 == weights.size();
-    const double gradient_tolerance = last ? options.gradient_tolerance : kStageTolerance;
-    const double function_tolerance = last ? options.function_tolerance : kStageTolerance;
-    const double step_tolerance = last ? options.step_tolerance : kStageTolerance;
-    d.barrier_weight = weights[stage];
-    evaluate(d, current);
-    bool linearised = false;
-    damping = std::min(damping, options.initial_damping);
-    growth = 2.0;
-    for (;;) {
-      if (options.cancel && options.cancel->load()) {
-        termination = FitTermination::cancelled;
-        break;
-      }
-      if (!linearised) {
-        linearise(d, current, g, curvature, gp, h);
-        linearised = true;
-        if (!g.allFinite() || !h.allFinite()) {  // guard: never hand NaN to the factorisation
-          termination = FitTermination::rounding_limited;
-          break;
-        }
-        const double objective_root = std::sqrt(current.objective());
-        // An exact fit: the residual is rounding (a few ε of ‖z‖) and cannot shrink further.
-        if (last && objective_root <= 32.0 * kEpsilon * z_norm) {
-          termination = FitTermination::converged_exact;
-          break;
-        }
-        // Free variables: all but those on their bound that the gradient pushes outward (the
-        // KKT conditions hold for those; they stay put this iteration).
-        free_variables.clear();
-        double cosine = 0.0;
-        for (int i = 0; i < p; ++i) {
-          if (current.y[i] <= d.lower[i] && g[i] > 0.0) continue;
-          free_variables.push_back(i);
-          if (h(i, i) > 0.0) cosine = std::max(cosine, std::abs(g[i]) / (std::sqrt(h(i, i)) * objective_root));
-        }
-        if (free_variables.empty() || cosine <= gradient_tolerance) {
-          termination = FitTermination::converged_gradient;
-          break;
-        }
-      }
-      if (summary.iterations >= options.max_iterations) {
-        termination = FitTermination::max_iterations;
-        break;
-      }
-      ++summary.iterations;
-      // (H_FF + λ D_FF) δ_F = −g_F with Marquardt's D = diag(H) (so the damping is invariant to
-      // the units of every variable), floored at 1e-12 of its largest so no direction is undamped.
-      const int n = static_cast<int>(free_variables.size());
-      const double diagonal_floor = 1e-12 * std::max(h.diagonal().maxCoeff(), std::numeric_limits<double>::min());
-      Eigen::MatrixXd system(n, n);
-      Eigen::VectorXd rhs(n);
-      for (int a = 0; a < n; ++a) {
-        for (int b = 0; b < n; ++b) system(a, b) = h(free_variables[a], free_variables[b]);
-        system(a, a) += damping * std::max(h(free_variables[a], free_variables[a]), diagonal_floor);
-        rhs[a] = -g[free_variables[a]];
-      }
-      const Eigen::LLT<Eigen::MatrixXd> cholesky(system);
-      bool accepted = false;
-      if (cholesky.info() == Eigen::Success) {
-        const Eigen::VectorXd solution = cholesky.solve(rhs);
-        Eigen::VectorXd step = Eigen::VectorXd::Zero(p);
-        for (int a = 0; a < n; ++a) step[free_variables[a]] = solution[a];
-        // Fraction to the boundary: A_k + t ΔJ_k ≻ 0 for t < 1/λ_max(−L⁻¹ΔJ_kL⁻ᵀ) (A_k = L Lᵀ),
-        // ΔJ_k the pseudo-inertia of P_k δ_k. The step goes at most 95 % of the way there.
-        double fraction = 1.0;
-        for (std::size_t k = 0; k < d.links.size(); ++k) {
-          const Vector10d change = current.jacobians[k] * step.segment<10>(d.links[k]);
-          const Eigen::Matrix4d inverse_factor =
-              current.shifted[k].triangularView<Eigen::Lower>().solve(Eigen::Matrix4d::Identity());
-          const Eigen::Matrix4d toward = -(inverse_factor * pseudo_inertia(change) * inverse_factor.transpose());
-          if (!toward.allFinite()) continue;  // never hand NaN to the eigensolver; the step is refused below
-          const double largest_eigenvalue =
-              Eigen::SelfAdjointEigenSolver<Eigen::Matrix4d>(toward, Eigen::EigenvaluesOnly).eigenvalues()[3];
-          if (largest_eigenvalue > 0.0) fraction = std::min(fraction, kFractionToBoundary / largest_eigenvalue);
-        }
-        step *= fraction;
-        // The bounded entries: y + δ projected onto x ≥ 0.
-        trial.y = (current.y + step).cwiseMax(d.lower);
-        Eigen::VectorXd taken = trial.y - current.y;
-        // The links: through π. The model is Newton's in π, so the step goes to π + P_k δ_k and
-        // θ is taken from there (θ_new = θ(π + P δ), which agrees with θ + δ to first order):
-        // the model then describes the move exactly for the data term and to third order for
-        // the barrier. The chart step θ + δ would bend away from it, by far on thin links
-        // where the log-Cholesky map curves most (the fit crawls there), and a long chart step
-        // can carry a link next to the boundary in one go. A point outside (only by rounding,
-        // after the fraction to the boundary) has an infinite barrier and refuses the step.
-        bool inside = true;
-        for (std::size_t k = 0; k < d.links.size() && inside; ++k) {
-          const int offset = d.links[k];
-          const Vector10d moved = current.pi.segment<10>(offset) + current.jacobians[k] * step.segment<10>(offset);
-          Vector10d theta;
-          inside = moved.allFinite() && detail::try_log_cholesky(moved, theta) == detail::LogCholeskyStatus::ok;
-          if (inside) trial.y.segment<10>(offset) = theta;
-        }
-        // The model's decrease of ½F for the step taken: −(gᵀδ + ½ δᵀHδ).
-        const double predicted = -(g.dot(taken) + 0.5 * taken.dot(h * taken));
-        if (inside) evaluate(d, trial);
-        if (inside && trial.finite() && predicted > 0.0) {
-          const double actual = 0.5 * (current.objective() - trial.objective());
-          const double ratio = actual / predicted;
-          if (ratio > kMinRelativeDecrease) {
-            accepted = true;
-            const double before = current.objective();
-            const double decrease = before - trial.objective();
-            const double moved = ((trial.pi - current.pi).cwiseProduct(d.inv_scale)).cwiseAbs().maxCoeff();
-            std::swap(current, trial);
-            linearised = false;
-            ++summary.accepted_steps;
-            damping = std::max(kMinDamping, damping * std::max(1.0 / 3.0, 1.0 - std::pow(2.0 * ratio - 1.0, 3)));
-            growth = 2.0;
-            notify(true);
-            if (decrease <= function_tolerance * before) {
-              termination = FitTermination::converged_cost;
-              break;
-            }
-            if (moved <= step_tolerance) {
-              termination = FitTermination::converged_step;
-              break;
-            }
-          }
-        }
-      }
-      if (!accepted) {
-        damping *= growth;
-        growth *= 2.0;
-        notify(false);
-        if (damping > kMaxDamping) {
-          termination = FitTermination::rounding_limited;
-          break;
-        }
-      }
-    }
-    // Intermediate stages end on any convergence rule (or on rounding) and go on to the next.
-    if (termination == FitTermination::cancelled || termination == FitTermination::max_iterations) break;
-    if (!last) termination = FitTermination::max_iterations;
-  }
-
-  // ---- Summary. ----
-  summary.estimate = current.pi;
-  summary.termination = termination;
-  summary.final_cost = current.data + d.offset;
-  summary.regularization_cost = current.prior;
-  summary.cost_increase = summary.final_cost - summary.unconstrained_cost;
-  summary.relative_cost_increase =
-      summary.unconstrained_cost > 0.0 ? summary.cost_increase / summary.unconstrained_cost : kNaN;
-  summary.regularization_ratio = summary.final_cost > 0.0 ? summary.regularization_cost / summary.final_cost : kNaN;
-  switch (termination) {
-    case FitTermination::converged_gradient:
-      summary.message = "the gradient is orthogonal to every direction the parameters can still move in (cosine ≤ " +
-                        short_number(options.gradient_tolerance) + ")";
-      break;
-    case FitTermination::converged_cost:
-      summary.message = "the last step decreased the cost by less than " + short_number(options.function_tolerance) +
-                        " of its value";
-      break;
-    case FitTermination::converged_step:
-      summary.message = "the last step moved no parameter by more than " + short_number(options.step_tolerance) +
-                        " of its scale";
-      break;
-    case FitTermination::converged_exact:
-      summary.message = "the parameters fit the data and the prior exactly, to rounding";
-      break;
-    case FitTermination::rounding_limited:
-      summary.message = "no step decreases the cost any more in double precision";
-      break;
-    case FitTermination::max_iterations:
-      summary.message = "stopped after " + std::to_string(summary.iterations) +
-                        " iterations (max_iterations) before converging; the estimate is consistent but may not be "
-                        "the minimum";
-      break;
-    case FitTermination::cancelled:
-      summary.message = "cancelled after " + std::to_string(summary.iterations) +
-                        " iterations; the estimate is the best consistent one so far";
-      break;
-  }
-  summary.report = check_consistency(structure, summary.estimate);
-  return summary;
+  check_problem(structure, problem, options);
+  return ConsistentFitMinimizer(structure, problem, options).minimize();
 }
 
 }  // namespace manipid::robot
