@@ -8,7 +8,7 @@
 #include "manipid/core/paper/output_error.h"
 #include "estimation/optimizer.h"
 #include "paper/output_error_fit.h"
-#include "estimation/uncertainty.h"
+#include "paper/uncertainty.h"
 #include "manipid/core/estimation/rules.h"
 
 #include <Eigen/Eigenvalues>

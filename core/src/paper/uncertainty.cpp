@@ -4,7 +4,7 @@
 // D = diag(|θ|). Its eigenvectors with (near) zero eigenvalues are parameter combinations
 // the data cannot see; the covariance σ² H_s⁺ is the pseudo-inverse restricted to what the
 // data do see, so the standard errors of the other parameters stay meaningful.
-#include "estimation/uncertainty.h"
+#include "paper/uncertainty.h"
 
 #include <Eigen/Eigenvalues>
 

@@ -1,5 +1,6 @@
-// uncertainty.h — internal: standard errors, correlations and identifiability from the
-// Gauss–Newton information matrix J_rᵀJ_r of any least-squares identification.
+// uncertainty.h — internal: standard errors, correlations and identifiability of the paper's (m, l)
+// parameters from the Gauss–Newton information matrix J_rᵀJ_r of any of its identification methods, with the
+// identifiable products named (m1*l1^2). The rank rule is estimation/rules.h's, shared with robot/.
 #pragma once
 
 #include "manipid/core/estimation/rules.h"
