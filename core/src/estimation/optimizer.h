@@ -10,7 +10,8 @@
 // m look alike to the optimiser (unless the caller's coordinates are alike already: scale_by_start).
 #pragma once
 
-#include "manipid/core/paper/identification.h"
+#include "manipid/core/errors.h"
+#include "manipid/core/estimation/history.h"
 
 #include <Eigen/Core>
 
@@ -21,6 +22,8 @@
 #include <vector>
 
 namespace manipid::detail {
+
+using estimation::HistoryRecord;
 
 /// Keeps a bounded history: every stride-th record, plus the first, the best and the last.
 class HistoryRecorder {

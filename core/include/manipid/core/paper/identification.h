@@ -19,6 +19,7 @@
 #pragma once
 
 #include "manipid/core/errors.h"
+#include "manipid/core/estimation/history.h"
 #include "manipid/core/estimation/joint_weighting.h"
 #include "manipid/core/paper/controller_gains.h"
 #include "manipid/core/signal/filters.h"
@@ -130,11 +131,8 @@ struct IdentificationOptions {
   const std::atomic<bool>* cancel = nullptr;
 };
 
-struct HistoryRecord {
-  long index = 0;
-  double cost = 0.0;
-  Eigen::VectorXd theta;  ///< all 2n parameters
-};
+/// One evaluation of the cost history (estimation/history.h); theta holds all 2n parameters.
+using estimation::HistoryRecord;
 
 /// A combination of parameters the data determines although its factors are not.
 struct IdentifiableCombination {
