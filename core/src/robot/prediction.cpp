@@ -5,10 +5,27 @@
 #include "manipid/core/robot/data.h"
 #include "manipid/core/robot/rnea.h"
 
-#include <limits>
 #include <string>
+#include <utility>
 
 namespace manipid::robot {
+
+namespace {
+
+TorquePrediction prediction_of(const JudgeOptions& judge, const std::vector<int>& joints, TorqueScore score) {
+  TorquePrediction prediction;
+  prediction.judge = judge;
+  prediction.joints = joints;
+  prediction.t = std::move(score.t);
+  prediction.measured = std::move(score.measured);
+  prediction.model = std::move(score.predicted);
+  prediction.rms_error = std::move(score.rms_error);
+  prediction.relative_error = std::move(score.relative_error);
+  prediction.overall_relative_error = score.overall_relative_error;
+  return prediction;
+}
+
+}  // namespace
 
 TorquePrediction predict_torque(const Model& model, const ParameterLayout& layout, const Eigen::VectorXd& pi,
                                 const Trajectory& data, const JudgeOptions& judge, const std::vector<int>& joints) {
@@ -31,53 +48,32 @@ TorquePrediction predict_torque(const Model& model, const ParameterLayout& layou
                      states.qdd.row(s).transpose(), tau);
     predicted.row(s) = tau.transpose();
   }
-  TorqueScore score = judge_torque(data.t, data.tau, predicted, joints, judge);
-  TorquePrediction prediction;
-  prediction.judge = judge;
-  if (joints.empty()) {
-    for (int k = 0; k < n; ++k) prediction.joints.push_back(k);
-  } else {
-    prediction.joints = joints;
+  std::vector<int> judged = joints;
+  if (judged.empty()) {
+    for (int k = 0; k < n; ++k) judged.push_back(k);
   }
-  prediction.t = std::move(score.t);
-  prediction.measured = std::move(score.measured);
-  prediction.model = std::move(score.predicted);
-  prediction.rms_error = std::move(score.rms_error);
-  prediction.relative_error = std::move(score.relative_error);
-  prediction.overall_relative_error = score.overall_relative_error;
-  return prediction;
+  return prediction_of(judge, judged, judge_torque(data.t, data.tau, predicted, judged, judge));
 }
+
 
 TorquePrediction combine(const std::vector<TorquePrediction>& predictions) {
   if (predictions.size() == 1) return predictions.front();
-  TorquePrediction combined;
-  if (predictions.empty()) return combined;
-  combined.judge = predictions.front().judge;
-  combined.joints = predictions.front().joints;
+  if (predictions.empty()) return {};
   Eigen::Index instants = 0;
   for (const TorquePrediction& prediction : predictions) instants += prediction.t.size();
   const Eigen::Index J = predictions.front().measured.cols();
-  combined.t.resize(instants);
-  combined.measured.resize(instants, J);
-  combined.model.resize(instants, J);
+  Eigen::VectorXd t(instants);
+  Eigen::MatrixXd measured(instants, J), model(instants, J);
   Eigen::Index at = 0;
   for (const TorquePrediction& prediction : predictions) {
     const Eigen::Index count = prediction.t.size();
-    combined.t.segment(at, count) = prediction.t;
-    combined.measured.middleRows(at, count) = prediction.measured;
-    combined.model.middleRows(at, count) = prediction.model;
+    t.segment(at, count) = prediction.t;
+    measured.middleRows(at, count) = prediction.measured;
+    model.middleRows(at, count) = prediction.model;
     at += count;
   }
-  const Eigen::MatrixXd error = combined.model - combined.measured;
-  combined.rms_error = (error.colwise().squaredNorm() / static_cast<double>(std::max<Eigen::Index>(instants, 1))).cwiseSqrt().transpose();
-  combined.relative_error.resize(J);
-  for (Eigen::Index j = 0; j < J; ++j) {
-    const double norm = combined.measured.col(j).norm();
-    combined.relative_error[j] = norm > 0 ? error.col(j).norm() / norm : std::numeric_limits<double>::quiet_NaN();
-  }
-  const double total = combined.measured.norm();
-  combined.overall_relative_error = total > 0 ? error.norm() / total : std::numeric_limits<double>::quiet_NaN();
-  return combined;
+  return prediction_of(predictions.front().judge, predictions.front().joints,
+                       score_judged(std::move(t), std::move(measured), std::move(model)));
 }
 
 }  // namespace manipid::robot

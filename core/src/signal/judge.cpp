@@ -83,12 +83,18 @@ TorqueScore judge_torque(const Eigen::Ref<const Eigen::VectorXd>& t, const Eigen
     p.col(j) = predicted.col(columns[static_cast<std::size_t>(j)]);
   }
   const JudgedSpan span = judged_span(t, options);
+  return score_judged(t.segment(span.first, span.size()), judge_lowpass(m, dt, options).middleRows(span.first, span.size()),
+                      judge_lowpass(p, dt, options).middleRows(span.first, span.size()));
+}
+
+TorqueScore score_judged(Eigen::VectorXd t, Eigen::MatrixXd measured, Eigen::MatrixXd predicted) {
   TorqueScore score;
-  score.t = t.segment(span.first, span.size());
-  score.measured = judge_lowpass(m, dt, options).middleRows(span.first, span.size());
-  score.predicted = judge_lowpass(p, dt, options).middleRows(span.first, span.size());
+  score.t = std::move(t);
+  score.measured = std::move(measured);
+  score.predicted = std::move(predicted);
   const Eigen::MatrixXd error = score.predicted - score.measured;
-  const double count = static_cast<double>(std::max<Eigen::Index>(span.size(), 1));
+  const Eigen::Index J = error.cols();
+  const double count = static_cast<double>(std::max<Eigen::Index>(error.rows(), 1));
   score.rms_error = (error.colwise().squaredNorm() / count).cwiseSqrt().transpose();
   score.relative_error.resize(J);
   for (Eigen::Index j = 0; j < J; ++j) {

@@ -2,7 +2,7 @@
 // toward the prior against its closed form, and the covariance.
 #include "manipid/core/estimation/linear_least_squares.h"
 
-#include "manipid/core/errors.h"
+#include "../input_error_field.h"
 #include "manipid/core/estimation/rules.h"
 
 #include <Eigen/Cholesky>
@@ -119,14 +119,7 @@ TEST(LinearLeastSquares, TheCovarianceIsTheInverseGramMatrixWithoutRidge) {
 }
 
 TEST(LinearLeastSquares, RefusesWhatItCannotSolve) {
-  const auto field_of = [](auto&& call) -> std::string {
-    try {
-      call();
-    } catch (const InputError& error) {
-      return error.field();
-    }
-    return "no error";
-  };
+  const auto field_of = [](auto&& call) { return testing::input_error_field(call); };
   const Eigen::MatrixXd A = Eigen::MatrixXd::Identity(3, 2);
   EXPECT_EQ(field_of([&] { solve_linear(A, Eigen::VectorXd::Ones(2)); }), "rows");
   LinearSolveOptions options;

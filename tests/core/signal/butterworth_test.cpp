@@ -2,7 +2,7 @@
 // filtfilt() (reference values printed by scipy 1.10), and their invariants.
 #include "manipid/core/signal/butterworth.h"
 
-#include "manipid/core/errors.h"
+#include "../input_error_field.h"
 
 #include <gtest/gtest.h>
 
@@ -78,14 +78,7 @@ TEST(Butterworth, ZeroPhaseUnitDcAndHalfPowerAtTheCutOff) {
 }
 
 TEST(Butterworth, RefusesWhatItCannotDesign) {
-  const auto field_of = [](auto&& call) -> std::string {
-    try {
-      call();
-    } catch (const InputError& error) {
-      return error.field();
-    }
-    return "no error";
-  };
+  const auto field_of = [](auto&& call) { return testing::input_error_field(call); };
   EXPECT_EQ(field_of([] { butterworth_lowpass(4, 500.0, 1e-3); }), "cutoff_hz");  // at Nyquist
   EXPECT_EQ(field_of([] { butterworth_lowpass(4, 0.0, 1e-3); }), "cutoff_hz");
   EXPECT_EQ(field_of([] { butterworth_lowpass(4, 5.0, 0.0); }), "dt");

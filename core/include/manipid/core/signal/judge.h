@@ -56,6 +56,10 @@ struct TorqueScore {
   double overall_relative_error = 0.0;  ///< ‖τ̂ − τ‖_F / ‖τ‖_F over the judged joints
 };
 
+/// The figures of a prediction already through the judge's low-pass and trimmed (instants × joints, and their
+/// times): each joint's relative and RMS error, the overall relative error.
+TorqueScore score_judged(Eigen::VectorXd t, Eigen::MatrixXd measured, Eigen::MatrixXd predicted);
+
 /// Judges `predicted` against `measured` (samples × joints, both unfiltered, on the uniform times `t`) over
 /// the columns `joints` (0-based; empty = all).
 TorqueScore judge_torque(const Eigen::Ref<const Eigen::VectorXd>& t, const Eigen::Ref<const Eigen::MatrixXd>& measured,
