@@ -70,10 +70,10 @@ RegressorSignals regressor_signals(const Model& model, const ParameterLayout& la
   if (data.samples() < filters.shortest_data()) {
     throw InputError("samples", "the filters (differentiation half-length M = " +
                                     std::to_string(filters.differentiation.half_length) + ", " +
-                                    detail::message_number(filters.trim_seconds) + " s trimmed at each end) need at least " +
+                                    manipid::detail::message_number(filters.trim_seconds) + " s trimmed at each end) need at least " +
                                     std::to_string(filters.shortest_data()) + " samples; the data has " +
                                     std::to_string(data.samples()) + " (" +
-                                    detail::message_number(data.t[data.samples() - 1] - data.t[0]) + " s)");
+                                    manipid::detail::message_number(data.t[data.samples() - 1] - data.t[0]) + " s)");
   }
   const auto differentiation = cached_filter(filters.differentiation);
   const int M = filters.differentiation.half_length;
@@ -140,8 +140,8 @@ FilteredRows filtered_rows(const RegressorSignals& signals, int parameter_count,
                            const std::vector<int>& joints, const std::vector<int>& wanted) {
   const double nyquist = 0.5 / signals.dt;
   if (!(cutoff_hz > 0.0 && cutoff_hz < nyquist)) {
-    throw InputError("comparison_cutoff", "the comparison low-pass's cut-off must lie between 0 and " + detail::message_number(nyquist) +
-                                              " Hz (the working grid's Nyquist frequency), not " + detail::message_number(cutoff_hz) + " Hz");
+    throw InputError("comparison_cutoff", "the comparison low-pass's cut-off must lie between 0 and " + manipid::detail::message_number(nyquist) +
+                                              " Hz (the working grid's Nyquist frequency), not " + manipid::detail::message_number(cutoff_hz) + " Hz");
   }
   const IirFilter lowpass = butterworth_lowpass(kLowpassOrder, cutoff_hz, signals.dt);
   FilteredRows rows;
@@ -153,7 +153,7 @@ FilteredRows filtered_rows(const RegressorSignals& signals, int parameter_count,
   while (first < N && signals.t[first] < signals.t[0] + trim_seconds) ++first;
   while (last >= 0 && signals.t[last] > signals.t[N - 1] - trim_seconds) --last;
   if (last < first) {
-    throw InputError("samples", "nothing is left of the data after trimming " + detail::message_number(trim_seconds) + " s at each end");
+    throw InputError("samples", "nothing is left of the data after trimming " + manipid::detail::message_number(trim_seconds) + " s at each end");
   }
   const Eigen::Index R = (last - first) / rows.row_step + 1;
   const Eigen::Index J = static_cast<Eigen::Index>(joints.size());
