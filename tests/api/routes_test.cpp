@@ -309,6 +309,20 @@ TEST_F(Routes, DatasetUploadAsJsonAnswers201WithLocation) {
   EXPECT_FALSE(fake_.uploads()[0].key);
 }
 
+TEST_F(Routes, CurlsSlipsGetTheCommandThatWorks) {
+  // `curl --data-binary @run.csv` without a Content-Type: labelled form-urlencoded, which cpp-httplib reads
+  // only up to 8 KiB. A 12 KB CSV is not too large (--max-body): its label is wrong, and the answer says so.
+  std::string csv = "t,q1,tau1\n";
+  for (int i = 0; csv.size() < 12'000; ++i) csv += std::to_string(0.001 * i) + ",0.123456789012,1.234567890123\n";
+  const Json form = expect_problem(post("/v1/datasets", csv, "application/x-www-form-urlencoded"), 415, "UNSUPPORTED_MEDIA", "");
+  EXPECT_NE(form["detail"].get<std::string>().find("-H 'Content-Type: text/csv'"), std::string::npos) << form;
+  EXPECT_EQ(post("/v1/datasets", csv, "text/csv")->status, 201);
+  // `curl -d @run.csv` drops the line ends: one line, whatever else is wrong with it.
+  const Json one_line = expect_problem(post("/v1/datasets", "t,q1,tau10,0,10.001,0.1,1", "application/x-www-form-urlencoded"),
+                                       422, "INVALID_FIELD", "body");
+  EXPECT_NE(one_line["detail"].get<std::string>().find("curl -d @file drops the file's line ends"), std::string::npos) << one_line;
+}
+
 TEST_F(Routes, DatasetUploadAsCsvTakesItsNameFromTheQuery) {
   const std::string csv = "t,q1,tau1\n0,0,1\n0.001,0.1,1\n0.002,0.2,1\n";
   auto result = post("/v1/datasets?name=bench%20run", csv, "text/csv");

@@ -260,7 +260,22 @@ httplib::Server::HandlerResponse on_error(const RouteState& state, const httplib
       }
       break;
     case 405: kind = ProblemKind::method_not_allowed; detail = "method " + request.method + " not allowed here"; break;
-    case 413: kind = ProblemKind::payload_too_large; detail = "the body is larger than this server accepts (--max-body)"; break;
+    case 413:
+      if (request.get_header_value("Content-Type").rfind("application/x-www-form-urlencoded", 0) == 0 &&
+          request.get_header_value<uint64_t>("Content-Length") <= state.options.max_body) {
+        // cpp-httplib reads a form-urlencoded body only up to 8 KiB: the label curl puts on `--data-binary
+        // @file` and `-d @file` unless told otherwise. The body is not too large; its label is wrong.
+        kind = ProblemKind::unsupported_media;
+        detail = "the body came as application/x-www-form-urlencoded, as curl labels --data-binary and -d unless told "
+                 "otherwise, and is read that way only up to 8 KiB: send it with its type, e.g. "
+                 "curl --data-binary @run.csv -H 'Content-Type: text/csv' (application/json for JSON, "
+                 "application/xml for a URDF); use --data-binary, not -d, which drops the file's line ends";
+        response.status = status_of(kind);
+      } else {
+        kind = ProblemKind::payload_too_large;
+        detail = "the body is larger than this server accepts (--max-body " + std::to_string(state.options.max_body) + " bytes)";
+      }
+      break;
     case 414: kind = ProblemKind::uri_too_long; detail = "the request target is longer than this server reads"; break;
     case 400: kind = ProblemKind::malformed_body; detail = "the request could not be read"; break;
     default:
@@ -278,7 +293,9 @@ httplib::Server::HandlerResponse on_error(const RouteState& state, const httplib
   response.status = status;  // keep what cpp-httplib decided, with our body
   // A request httplib could not read (400, 414) or refused by its length (413) may have left
   // bytes on the connection that are not the start of a request: close it after the answer.
-  if (status == 400 || status == 413 || status == 414) HttpServer::close_after_answer(response);
+  if (status == 400 || status == 413 || status == 414 || kind == ProblemKind::unsupported_media) {
+    HttpServer::close_after_answer(response);
+  }
   return httplib::Server::HandlerResponse::Handled;
 }
 

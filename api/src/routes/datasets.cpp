@@ -136,7 +136,14 @@ void create_dataset(RouteState& state, const httplib::Request& request, httplib:
   const bool unlabelled = type.empty() || type == "application/x-www-form-urlencoded";
   DatasetUpload upload;
   if (type == "text/csv" || (unlabelled && !looks_like_json(request.body))) {
-    upload = dataset_from_csv(request.body);
+    try {
+      upload = dataset_from_csv(request.body);
+    } catch (const InputError& error) {
+      // `curl -d @run.csv` sends the file without its line ends: the whole table as one line.
+      if (!unlabelled || request.body.find('\n') != std::string::npos) throw;
+      throw InputError("body", "the body is one line (" + std::string(error.what()) + "): curl -d @file drops the file's "
+                               "line ends; send it with curl --data-binary @run.csv -H 'Content-Type: text/csv'");
+    }
     upload.name = request.get_param_value("name");  // CSV has no room for it: ?name=
     if (upload.name.size() > 200) throw ApiError(ProblemKind::invalid_field, "name is longer than 200 bytes", "name");
   } else {
