@@ -9,6 +9,8 @@
 // error that names the line and column.
 #include "manipid/api/csv.h"
 
+#include "manipid/api/log_format.h"
+
 #include <algorithm>
 #include <cassert>
 #include <charconv>
@@ -78,8 +80,17 @@ class LineReader {
   std::size_t line_number_ = 0;
 };
 
-std::size_t count_fields(std::string_view line) {
-  return static_cast<std::size_t>(std::count(line.begin(), line.end(), ',')) + 1;
+std::size_t count_fields(std::string_view line, char separator) {
+  return static_cast<std::size_t>(std::count(line.begin(), line.end(), separator)) + 1;
+}
+
+/// The header's separator: ',' unless the header has none and has ';' (spreadsheets in locales with
+/// decimal commas) or tabs.
+char detect_separator(std::string_view header) {
+  if (header.find(',') != std::string_view::npos) return ',';
+  if (header.find(';') != std::string_view::npos) return ';';
+  if (header.find('\t') != std::string_view::npos) return '\t';
+  return ',';
 }
 
 /// Parses one trimmed field as a finite double, or explains why it is not one.
@@ -111,7 +122,7 @@ std::string parse_number(std::string_view field, double& value) {
 
 /// The common case: every field a plain finite number. Returns false on anything else
 /// (including a '+' sign or NaN), leaving the verdict to parse_row_careful.
-bool parse_row_fast(std::string_view line, double* out, std::size_t column_count) {
+bool parse_row_fast(std::string_view line, double* out, std::size_t column_count, char separator) {
   const char* position = line.data();
   const char* const end = position + line.size();
   for (std::size_t column = 0; column < column_count; ++column) {
@@ -121,7 +132,7 @@ bool parse_row_fast(std::string_view line, double* out, std::size_t column_count
     position = stop;
     while (position != end && is_blank_character(*position)) ++position;
     if (column + 1 < column_count) {
-      if (position == end || *position != ',') return false;
+      if (position == end || *position != separator) return false;
       ++position;
     }
   }
@@ -131,9 +142,9 @@ bool parse_row_fast(std::string_view line, double* out, std::size_t column_count
 /// Parses a row field by field with full checks; throws the InputError that describes the
 /// first problem (wrong field count first, then the leftmost bad field).
 void parse_row_careful(std::string_view line, std::size_t line_number,
-                       const std::vector<std::string>& columns, double* out) {
+                       const std::vector<std::string>& columns, double* out, char separator) {
   const std::size_t column_count = columns.size();
-  const std::size_t field_count = count_fields(line);
+  const std::size_t field_count = count_fields(line, separator);
   if (field_count != column_count) {
     throw InputError(std::string(structure_field),
                      line_prefix(line_number) + ": expected " + std::to_string(column_count) +
@@ -141,12 +152,16 @@ void parse_row_careful(std::string_view line, std::size_t line_number,
   }
   std::size_t start = 0;
   for (std::size_t column = 0; column < column_count; ++column) {
-    const std::size_t comma = line.find(',', start);
+    const std::size_t comma = line.find(separator, start);
     const std::size_t stop = comma == std::string_view::npos ? line.size() : comma;
-    const std::string problem = parse_number(trim(line.substr(start, stop - start)), out[column]);
+    const std::string_view field = trim(line.substr(start, stop - start));
+    const std::string problem = parse_number(field, out[column]);
     if (!problem.empty()) {
+      // Fields separated by ';' with commas inside: a spreadsheet's decimal commas.
+      const bool decimal_comma = separator != ',' && field.find(',') != std::string_view::npos;
       throw InputError(columns[column],
-                       line_prefix(line_number) + ", column " + columns[column] + ": " + problem);
+                       line_prefix(line_number) + ", column " + columns[column] + ": " + problem +
+                           (decimal_comma ? " (a decimal comma: write numbers with a decimal point)" : ""));
     }
     start = stop + 1;
   }
@@ -169,8 +184,8 @@ void check_column_name(std::string_view name, std::size_t column, std::size_t li
 }
 
 std::vector<std::string> parse_header(std::string_view line, std::size_t line_number,
-                                      const CsvLimits& limits) {
-  const std::size_t field_count = count_fields(line);
+                                      const CsvLimits& limits, char separator) {
+  const std::size_t field_count = count_fields(line, separator);
   if (field_count > limits.max_columns) {
     throw InputError(std::string(structure_field),
                      line_prefix(line_number) + ": " + std::to_string(field_count) +
@@ -181,7 +196,7 @@ std::vector<std::string> parse_header(std::string_view line, std::size_t line_nu
   std::unordered_set<std::string_view> seen;
   std::size_t start = 0;
   for (std::size_t column = 0; column < field_count; ++column) {
-    const std::size_t comma = line.find(',', start);
+    const std::size_t comma = line.find(separator, start);
     const std::size_t stop = comma == std::string_view::npos ? line.size() : comma;
     std::string_view name = trim(line.substr(start, stop - start));
     // Some tools (R's write.csv) quote header names; accept a plain "name".
@@ -227,7 +242,8 @@ CsvTable parse_csv(std::string_view text, const CsvLimits& limits) {
   // ...nor is one after leading blank lines; a header of nothing but the mark is empty.
   if (!marked && line.substr(0, 3) == "\xEF\xBB\xBF") line.remove_prefix(3);
   CsvTable table;
-  table.columns = parse_header(line, line_number, limits);
+  table.separator = detect_separator(line);
+  table.columns = parse_header(line, line_number, limits, table.separator);
   const std::size_t column_count = table.columns.size();
 
   // Column-major, as the table holds it, with room for as many rows as the text can hold: one
@@ -255,7 +271,9 @@ CsvTable parse_csv(std::string_view text, const CsvLimits& limits) {
                        line_prefix(line_number) + ": more than " + std::to_string(max_rows) + " data rows (the limit" +
                            (max_rows < limits.max_rows ? " for " + std::to_string(column_count) + " columns" : "") + ")");
     }
-    if (!parse_row_fast(line, row.data(), column_count)) parse_row_careful(line, line_number, table.columns, row.data());
+    if (!parse_row_fast(line, row.data(), column_count, table.separator)) {
+      parse_row_careful(line, line_number, table.columns, row.data(), table.separator);
+    }
     assert(row_count < room);  // a row of c numbers is a line of at least 2c − 1 bytes
     for (std::size_t column = 0; column < column_count; ++column) {
       table.data(static_cast<Eigen::Index>(row_count), static_cast<Eigen::Index>(column)) = row[column];
@@ -376,9 +394,9 @@ Eigen::MatrixXd gather(const CsvTable& table, std::string_view prefix, int count
 }  // namespace
 
 Trajectory trajectory_from_csv(const CsvTable& table, bool require_torque) {
-  if (table.column_index("t") < 0) throw InputError("t", "missing column t");
+  if (table.column_index("t") < 0) throw InputError("t", "missing column t: " + column_hint(table));
   const int joint_count = numbered_group(table, "q", 0);
-  if (joint_count == 0) throw InputError("q1", "missing column q1 (joint angles q1..qn)");
+  if (joint_count == 0) throw InputError("q1", "missing column q1 (joint angles q1..qn): " + column_hint(table));
   limits::check_joints(joint_count, numbered("q", limits::max_joints + 1), "the CSV");
   const int torque_count = numbered_group(table, "tau", joint_count);
   if (require_torque && torque_count == 0) {

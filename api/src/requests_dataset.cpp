@@ -475,9 +475,9 @@ DatasetUpload dataset_from_json_text(std::string_view text) {
   return dataset_from_members(reader.members());
 }
 
-DatasetUpload dataset_from_csv(std::string_view text) {
+DatasetUpload dataset_from_csv(std::string_view text, const LogFormat& format) {
   DatasetUpload upload;
-  upload.trajectory = trajectory_from_csv(parse_csv(text));
+  upload.trajectory = trajectory_from_csv(format.empty() ? parse_csv(text) : apply_log_format(parse_csv(text), format));
   return upload;
 }
 

@@ -2,6 +2,7 @@
 #pragma once
 
 #include "cli/common.h"
+#include "manipid/api/log_format.h"
 
 #include <CLI/CLI.hpp>
 
@@ -14,6 +15,7 @@ namespace manipid::server::cli {
 
 struct IdentifyOptions {
   std::vector<std::string> inputs;   ///< one run; with --robot, one or more
+  api::LogFormat log;                ///< --columns, --time-unit, --angle-unit: how the CSVs name and scale things
   std::string preset = "cedro2009";
   std::string kinetic_energy = "complete";
   std::vector<std::string> free;     ///< comma lists of names

@@ -38,11 +38,11 @@ std::vector<int> joint_list(const std::string& text, int n, const std::string& o
   return joints;
 }
 
-Trajectory read_trajectory(const std::string& path) {
+Trajectory read_trajectory(const std::string& path, const api::LogFormat& log) {
   try {
-    return api::trajectory_from_csv(read_table(path), true);
+    return api::trajectory_from_csv(api::apply_log_format(read_table(path), log), true);
   } catch (const InputError& error) {
-    rethrow_with_source(error, input_name(path));
+    rethrow_with_source(error, error.field() == "columns" ? "--columns: " + input_name(path) : input_name(path));
   }
 }
 
@@ -193,8 +193,10 @@ int run_identify_robot(const IdentifyOptions& options) {
     identification.torque_joints = joint_list(options.torque_joints, model.joint_count(), "--torque-joints");
   }
 
+  api::LogFormat log = options.log;
+  for (const robot::Joint& joint : model.joints) log.joint_names.push_back(joint.name);  // what {joint} matches
   std::vector<Trajectory> runs;
-  for (const std::string& path : options.inputs) runs.push_back(read_trajectory(path));
+  for (const std::string& path : options.inputs) runs.push_back(read_trajectory(path, log));
   robot::IdentificationResult result;
   try {
     result = robot::identify(model, runs, identification);
@@ -210,7 +212,7 @@ int run_identify_robot(const IdentifyOptions& options) {
   std::optional<robot::ValidationReport> validation;
   if (!options.validate.empty()) {
     std::vector<Trajectory> held_out;
-    for (const std::string& path : options.validate) held_out.push_back(read_trajectory(path));
+    for (const std::string& path : options.validate) held_out.push_back(read_trajectory(path, log));
     try {
       validation = robot::validate(model, result, held_out, identification.preparation);
     } catch (const InputError& error) {

@@ -25,6 +25,7 @@
 #include <chrono>
 #include <cmath>
 #include <mutex>
+#include <numbers>
 #include <string>
 #include <thread>
 #include <vector>
@@ -1185,6 +1186,33 @@ TEST_F(Routes, ARobotUploadsAsXmlOrJsonAndComesBackByteForByte) {
   const Json list = json_of(get("/v1/robots"));
   EXPECT_EQ(list["items"].size(), 2u);
   EXPECT_EQ(json_of(get("/v1/robots/rb_2"))["base_link"], "base");
+}
+
+TEST_F(Routes, ALabsLogIsReadWithItsColumnMapAndUnits) {
+  const std::string log = "stamp;j2/pos;j1/pos;j1/eff;j2/eff\n"
+                          "1700000000000000000;90;0;1;2\n1700000000001000000;91;1;1;2\n1700000000002000000;92;2;1;2\n";
+  // Without the map: the columns it has and the map that would read them.
+  const Json missing = expect_problem(post("/v1/datasets", log, "text/csv"), 422, "INVALID_FIELD", "t");
+  EXPECT_NE(missing["detail"].get<std::string>().find("stamp, j2/pos"), std::string::npos) << missing;
+
+  ASSERT_EQ(post("/v1/robots?name=arm", kTwoJointUrdf, "application/xml")->status, 201);
+  const std::string query = "/v1/datasets?robot_id=rb_1&time_unit=ns&angle_unit=deg&columns=" +
+                            httplib::detail::encode_query_param("stamp=t,{joint}/pos=q{j},{joint}/eff=tau{j}");
+  const auto result = post(query, log, "text/csv");
+  ASSERT_TRUE(result);
+  EXPECT_EQ(result->status, 201) << result->body;
+  const auto uploads = fake_.uploads();
+  ASSERT_EQ(uploads.size(), 1u);
+  const Trajectory& run = uploads[0].upload.trajectory;
+  EXPECT_NEAR(run.t[2], 0.002, 256e-9);  // from the first stamp, in seconds
+  EXPECT_DOUBLE_EQ(run.q(1, 1), 91.0 * std::numbers::pi / 180.0);  // j2 is joint 2 wherever its column is
+  EXPECT_DOUBLE_EQ(run.tau(0, 1), 2.0);
+
+  expect_problem(post("/v1/datasets?columns=" + httplib::detail::encode_query_param("stamp=t,{joint}/pos=q{j}"), log,
+                      "text/csv"),
+                 422, "INVALID_FIELD", "columns");
+  expect_problem(post("/v1/datasets?time_unit=h", log, "text/csv"), 422, "INVALID_FIELD", "time_unit");
+  expect_problem(post("/v1/datasets?robot_id=rb_9&columns=stamp%3Dt", log, "text/csv"), 422, "INVALID_FIELD", "robot_id");
 }
 
 TEST_F(Routes, BadRobotsAreRefusedNamingTheFieldAndNothingIsStored) {

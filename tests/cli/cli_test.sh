@@ -475,6 +475,48 @@ expect_error "identify: several runs are for a URDF robot" 2 "several runs (2 gi
   "$manipid" identify paper.csv paper.csv
 expect_error "identify --robot: the former comparison filter option" 2 "--comparison-half-length no longer exists: the comparison low-pass is a zero-phase Butterworth filter, set by --comparison-cutoff" \
   "$manipid" identify robot_run.csv --robot "$robots/ur5_like.urdf" --comparison-half-length 100
+# The same run as a lab logs it: ';' between fields, time in ms, angles in degrees, columns named by joint.
+python3 - <<'PY'
+import csv, math
+rows = list(csv.reader(open("robot_run.csv")))
+header = rows[0]
+names = ["shoulder_pan_joint", "shoulder_lift_joint", "elbow_joint", "wrist_1_joint", "wrist_2_joint", "wrist_3_joint"]
+keep = ["t"] + [f"q{j}" for j in range(1, 7)] + [f"tau{j}" for j in range(1, 7)]
+index = [header.index(name) for name in keep]
+with open("lab_log.csv", "w") as out:
+    out.write(";".join(["time_ms"] + [f"{n}.position" for n in names] + [f"{n}.effort" for n in names]) + "\n")
+    for row in rows[1:]:
+        values = [float(row[i]) for i in index]
+        values[0] *= 1000.0
+        values[1:7] = [v * 180.0 / math.pi for v in values[1:7]]
+        out.write(";".join(repr(v) for v in values) + "\n")
+with open("ns_log.csv", "w") as out:
+    out.write(",".join(keep) + "\n")
+    for row in rows[1:]:
+        out.write(",".join([str(round(float(row[0]) * 1e9) + 1700000000000000000)] + [row[i] for i in index[1:]]) + "\n")
+PY
+expect_error "identify --robot: a log's own columns answered with a map that reads them" 2 \
+  "the file's columns are time_ms, shoulder_pan_joint.position" \
+  "$manipid" identify lab_log.csv --robot "$robots/ur5_like.urdf"
+expect_error "identify --robot: nanosecond stamps named" 2 "if t is in nanoseconds (as ROS logs stamp them)" \
+  "$manipid" identify ns_log.csv --robot "$robots/ur5_like.urdf"
+"$manipid" identify lab_log.csv --robot "$robots/ur5_like.urdf" --columns 'time_ms=t,{joint}.position=q{j},{joint}.effort=tau{j}' \
+  --time-unit ms >lab_degrees.txt 2>lab_degrees.err
+check "identify --robot: angles in degrees are named with --angle-unit" \
+  grep -q "^warning: the angles look like degrees.*--angle-unit deg" lab_degrees.txt
+"$manipid" identify lab_log.csv --robot "$robots/ur5_like.urdf" --columns 'time_ms=t,{joint}.position=q{j},{joint}.effort=tau{j}' \
+  --time-unit ms --angle-unit deg --json >lab.json 2>/dev/null
+"$manipid" identify robot_run.csv --robot "$robots/ur5_like.urdf" --json >plain.json 2>/dev/null
+check "identify --robot --columns --time-unit ms --angle-unit deg: the estimate of the run in manipid's columns" python3 -c '
+import json, sys
+a, b = json.load(open("lab.json")), json.load(open("plain.json"))
+pa, pb = a["point"], b["point"]
+sys.exit(not (a["fit"]["overall_relative_error"] < 0.01 and
+              all(abs(pa[k] - pb[k]) <= 1e-6 * (1 + abs(pb[k])) for k in pb)))'
+expect_error "identify --robot: a column map rule that matches nothing" 2 "'speed_{j}=qd{j}' matches no column" \
+  "$manipid" identify lab_log.csv --robot "$robots/ur5_like.urdf" --columns 'time_ms=t,speed_{j}=qd{j}'
+expect_error "identify --robot: an unknown time unit" 2 "--time-unit" \
+  "$manipid" identify lab_log.csv --robot "$robots/ur5_like.urdf" --time-unit h
 "$manipid" identify robot_run.csv --robot "$robots/ur5_like.urdf" --json >robot.json 2>/dev/null
 check "identify --robot --json: base parameters by name" grep -q '"base_parameters"' robot.json
 check "identify --robot --json: the point has every standard parameter" grep -q '"Izz6":' robot.json

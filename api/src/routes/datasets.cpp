@@ -136,8 +136,18 @@ void create_dataset(RouteState& state, const httplib::Request& request, httplib:
   const bool unlabelled = type.empty() || type == "application/x-www-form-urlencoded";
   DatasetUpload upload;
   if (type == "text/csv" || (unlabelled && !looks_like_json(request.body))) {
+    // A lab's own log: its column map and units from the query (and a robot's joint names for {joint}).
+    LogFormat format;
+    format.columns = request.get_param_value("columns");
+    if (request.has_param("time_unit")) format.time_unit = request.get_param_value("time_unit");
+    if (request.has_param("angle_unit")) format.angle_unit = request.get_param_value("angle_unit");
+    if (request.has_param("robot_id")) {
+      for (const robot::Joint& joint : stored_robot(state, request.get_param_value("robot_id"), "robot_id").model.joints) {
+        format.joint_names.push_back(joint.name);
+      }
+    }
     try {
-      upload = dataset_from_csv(request.body);
+      upload = dataset_from_csv(request.body, format);
     } catch (const InputError& error) {
       // `curl -d @run.csv` sends the file without its line ends: the whole table as one line.
       if (!unlabelled || request.body.find('\n') != std::string::npos) throw;

@@ -9,6 +9,7 @@
 
 #include "manipid/api/records.h"
 #include "manipid/api/requests.h"
+#include "manipid/api/robot_requests.h"
 
 #include <nlohmann/json.hpp>
 
@@ -42,6 +43,9 @@ void list_robots(RouteState& state, const httplib::Request& request, httplib::Re
 void get_robot(RouteState& state, const httplib::Request& request, httplib::Response& response);
 void delete_robot(RouteState& state, const httplib::Request& request, httplib::Response& response);
 void submit_excitation(RouteState& state, const httplib::Request& request, httplib::Response& response);
+/// A stored robot parsed again (as a job does), for requests checked against it; InputError-like
+/// ApiError (422, `field`) when there is no such robot.
+ParsedRobot stored_robot(RouteState& state, const std::string& id, const std::string& field);
 /// /v1/identifications with a robot_id (submissions.cpp hands those over): checked against the stored
 /// robot and datasets, then queued.
 void submit_robot_identification(RouteState& state, const nlohmann::json& body, const std::optional<IdempotencyKey>& key,

@@ -10,17 +10,13 @@
 #include "routes/handlers.h"
 
 namespace manipid::api::http {
-namespace {
 
-/// The stored robot parsed again (as a job does), for requests that check against it.
 ParsedRobot stored_robot(RouteState& state, const std::string& id, const std::string& field) {
   const auto robot = state.service.robot(id);
   const auto urdf = state.service.robot_urdf(id);
   if (!robot || !urdf) throw ApiError(ProblemKind::invalid_field, "no robot " + id, field);
   return parse_robot({robot->name, *urdf, robot->base, robot->tip});
 }
-
-}  // namespace
 
 void create_robot(RouteState& state, const httplib::Request& request, httplib::Response& response) {
   const auto key = idempotency_key(request);

@@ -333,7 +333,9 @@ class Client:
 
     # --- datasets ----------------------------------------------------------------------
     def upload_dataset(self, path_or_arrays: Union[PathLike, Mapping[str, Any]], name: Optional[str] = None,
-                       idempotency_key: Optional[str] = None) -> Dataset:
+                       idempotency_key: Optional[str] = None, columns: Optional[str] = None,
+                       time_unit: Optional[str] = None, angle_unit: Optional[str] = None,
+                       robot: Union["Robot", str, None] = None) -> Dataset:
         """Stores a trajectory and returns its Dataset.
 
         path_or_arrays is either
@@ -348,6 +350,9 @@ class Client:
         identification resamples them (Dataset.uniform is then False).
         name: stored with the dataset. idempotency_key: a retry with the same key returns the
         first dataset.
+        A CSV log with its own column names and units (CSV paths only): columns, a column map
+        such as "time=t,position_{j}=q{j},effort_{j}=tau{j}" ({j} a joint number, {joint} one of
+        `robot`'s joint names); time_unit "s", "ms", "us" or "ns"; angle_unit "rad" or "deg".
         """
         query: Dict[str, Any] = {}
         if isinstance(path_or_arrays, (str, os.PathLike)):
@@ -356,6 +361,13 @@ class Client:
             content_type = "text/csv"
             if name is not None:
                 query["name"] = name
+            for key, value in (("columns", columns), ("time_unit", time_unit), ("angle_unit", angle_unit)):
+                if value is not None:
+                    query[key] = value
+            if robot is not None:
+                query["robot_id"] = robot if isinstance(robot, str) else robot.id
+        elif columns is not None or time_unit is not None or angle_unit is not None or robot is not None:
+            raise TypeError("columns, time_unit, angle_unit and robot describe a CSV log: give a CSV path")
         elif isinstance(path_or_arrays, Mapping):
             body, content_type = _arrays_to_json(path_or_arrays), "application/json"
             if name is not None:

@@ -10,6 +10,7 @@ second excitation for validation.
 from __future__ import annotations
 
 import contextlib
+import math
 import os
 import re
 import shutil
@@ -159,6 +160,40 @@ class RobotsAgainstServer(unittest.TestCase):
         resampled = [warning for warning in self.result.warnings if warning.startswith("time steps are not uniform")]
         self.assertEqual(len(resampled), 1, self.result.warnings)
         self.assertIn(f"{self.runs['jitter_repeats']} repeated rows dropped", resampled[0])
+
+    def test_a_labs_log_is_read_with_its_column_map_and_units(self) -> None:
+        # The check run as a lab logs it: ';' between fields, time in ms, degrees, columns named by joint.
+        with open(self.runs["check"]) as stream:
+            rows = [line.strip().split(",") for line in stream if line.strip()]
+        header = rows[0]
+        keep = ["t"] + [f"q{k}" for k in range(1, 8)] + [f"tau{k}" for k in range(1, 8)]
+        index = [header.index(name) for name in keep]
+        log = os.path.join(self.directory, "lab_log.csv")
+        with open(log, "w") as out:
+            out.write(";".join(["time_ms"] + [f"{name}.pos" for name in PANDA_JOINTS] +
+                               [f"{name}.eff" for name in PANDA_JOINTS]) + "\n")
+            for row in rows[1:]:
+                values = [float(row[i]) for i in index]
+                values[0] *= 1000.0
+                values[1:8] = [math.degrees(v) for v in values[1:8]]
+                out.write(";".join(repr(v) for v in values) + "\n")
+        with self.assertRaises(ManipidError) as missing:
+            self.client.upload_dataset(log)
+        self.assertEqual((missing.exception.code, missing.exception.field), ("INVALID_FIELD", "t"))
+        self.assertIn("time_ms", str(missing.exception))
+        dataset = self.client.upload_dataset(log, columns="time_ms=t,{joint}.pos=q{j},{joint}.eff=tau{j}",
+                                             time_unit="ms", angle_unit="deg", robot=self.arm)
+        self.assertEqual((dataset.samples, dataset.joints), (self.check.samples, 7))
+        stored = [line.split(",") for line in dataset.csv().splitlines()]
+        original = [line.split(",") for line in self.check.csv().splitlines()]
+        q7, tau7 = stored[0].index("q7"), stored[0].index("tau7")
+        for a, b in zip(stored[1:], original[1:]):
+            self.assertAlmostEqual(float(a[0]), float(b[0]), delta=1e-12)
+            self.assertAlmostEqual(float(a[q7]), float(b[original[0].index("q7")]), delta=1e-12)
+            self.assertEqual(float(a[tau7]), float(b[original[0].index("tau7")]))
+        with self.assertRaises(TypeError):
+            self.client.upload_dataset({"dt": 0.001, "q": [[0.0, 0.1]]}, time_unit="ms")
+        dataset.delete()
 
     def test_identify_sends_a_robot_request(self) -> None:
         request = self.job.data["request"]

@@ -226,6 +226,69 @@ std::vector<int> measured_joints(const Model& model, const Runs& runs, const std
   return joints;
 }
 
+/// Step 1: the runs against the URDF's limits — a position beyond a joint's range (by more than 1 % of it
+/// and 0.01), a speed above its velocity limit by 10 % — named joint by joint, with the likely cause: angles
+/// logged in degrees (they would fit once converted: one warning for all such joints) or a log of another arm.
+std::vector<std::string> limit_warnings(const Model& model, const Runs& runs) {
+  std::vector<std::string> warnings;
+  std::vector<std::string> in_degrees;  // "q1 (name) reaches -70.5 rad against -2.9 rad"
+  const int n = model.joint_count();
+  for (int k = 0; k < n; ++k) {
+    const Joint& joint = model.joints[static_cast<std::size_t>(k)];
+    double low = std::numeric_limits<double>::infinity(), high = -low, fastest = 0.0;
+    for (const Trajectory& run : runs) {
+      const auto q = run.q.col(k);
+      low = std::min(low, q.minCoeff());
+      high = std::max(high, q.maxCoeff());
+      // Speeds over ±5 samples: the noise of single steps stays small against any limit.
+      const Eigen::Index span = 5;
+      for (Eigen::Index s = span; s + span < q.size(); ++s) {
+        fastest = std::max(fastest, std::abs(q[s + span] - q[s - span]) / (run.t[s + span] - run.t[s - span]));
+      }
+    }
+    const JointLimits& limits = joint.limits;
+    const char* unit = joint.type == JointType::prismatic ? "m" : "rad";
+    std::ostringstream text;
+    text.precision(3);
+    // lower == upper: the URDF parser has already said the joint has no range.
+    if (std::isfinite(limits.lower) && std::isfinite(limits.upper) && limits.lower < limits.upper) {
+      const double margin = 0.01 * (limits.upper - limits.lower) + 0.01;
+      if (low < limits.lower - margin || high > limits.upper + margin) {
+        const bool below = low < limits.lower - margin;
+        text << "q" << k + 1 << " (" << joint.name << ") reaches " << (below ? low : high) << " " << unit;
+        const double to_radians = std::numbers::pi / 180.0;
+        // Degrees when no arm could have moved so in radians (wider than the joint's range, or beyond a turn)
+        // and the converted angles fit.
+        const bool impossible = high - low > limits.upper - limits.lower || std::max(-low, high) > 2 * std::numbers::pi;
+        if (joint.type != JointType::prismatic && impossible && low * to_radians >= limits.lower - margin &&
+            high * to_radians <= limits.upper + margin) {
+          text << " against " << (below ? limits.lower : limits.upper);
+          in_degrees.push_back(text.str());
+        } else {
+          text << ", beyond the URDF's limit " << (below ? limits.lower : limits.upper) << " " << unit
+               << ": is this the log of this arm, with its joints in the URDF's order?";
+          warnings.push_back(text.str());
+        }
+        continue;
+      }
+    }
+    // A velocity limit of 0 is urdfdom's value for a missing attribute, not a limit.
+    if (std::isfinite(limits.velocity) && limits.velocity > 0.0 && fastest > 1.1 * limits.velocity) {
+      text << "q" << k + 1 << " (" << joint.name << ") moves at up to " << fastest << " " << unit << "/s, above the URDF's "
+           << "velocity limit " << limits.velocity << " " << unit << "/s: check the units of q and t";
+      warnings.push_back(text.str());
+    }
+  }
+  if (!in_degrees.empty()) {
+    std::string text = "the angles look like degrees: ";
+    for (std::size_t i = 0; i < in_degrees.size(); ++i) text += (i > 0 ? ", " : "") + in_degrees[i];
+    text += " (the URDF's limit); converted from degrees they lie within the limits: give the angle unit "
+            "(--angle-unit deg, angle_unit=deg in the API)";
+    warnings.insert(warnings.begin(), text);
+  }
+  return warnings;
+}
+
 /// One friction model tried by step 3.
 struct FrictionCandidate {
   ParameterLayout layout;
@@ -350,6 +413,7 @@ IdentificationResult identify(const Model& model, const std::vector<Trajectory>&
   const double dt = runs.front().get().dt();
   for (const Trajectory& run : runs) options.judge.validate(dt, run.t[run.samples() - 1] - run.t[0]);
   result.torque_joints = measured_joints(model, runs, options.torque_joints, result.warnings);
+  for (std::string& warning : limit_warnings(model, runs)) result.warnings.push_back(std::move(warning));
   const std::vector<int>& joints = result.torque_joints;
 
   // Step 2: the candidates' cut-offs, D for the highest of them (and the judge's), the regressor signals.

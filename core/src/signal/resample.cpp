@@ -160,7 +160,7 @@ Trajectory make_uniform(const Trajectory& data, const UniformOptions& options, T
   found.dt = options.dt > 0.0 ? options.dt : found.median_step;
   if (!(found.dt >= kShortestSamplePeriod && found.dt <= kLongestSamplePeriod)) {
     throw InputError("t", "the median step of t without repeated rows is " + seconds(found.dt) +
-                              ", outside the periods manipid works with");
+                              ", outside the periods manipid works with" + time_unit_hint(found.dt));
   }
 
   // 2. Gaps no interpolation can fill.

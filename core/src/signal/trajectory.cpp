@@ -7,6 +7,7 @@
 #include <algorithm>
 #include <cmath>
 #include <sstream>
+#include <tuple>
 #include <string>
 
 namespace manipid {
@@ -102,7 +103,7 @@ void Trajectory::validate() const {
   if (!(period >= kShortestSamplePeriod && period <= kLongestSamplePeriod)) {
     std::ostringstream text;
     text << "the sample period (the median step of t) is " << period << " s, outside the range manipid works with, "
-         << kShortestSamplePeriod << " to " << kLongestSamplePeriod << " s";
+         << kShortestSamplePeriod << " to " << kLongestSamplePeriod << " s" << time_unit_hint(period);
     throw InputError("t", text.str());
   }
   check_finite("q", q, t);
@@ -110,6 +111,21 @@ void Trajectory::validate() const {
   check_finite("ref", ref, t);
   check_finite("qd", qd, t);
   check_finite("qdd", qdd, t);
+}
+
+std::string time_unit_hint(double median_step) {
+  if (!(median_step > kLongestSamplePeriod) || !std::isfinite(median_step)) return {};
+  for (const auto& [scale, unit, name] : {std::tuple{1e9, "ns", "nanoseconds (as ROS logs stamp them)"},
+                                          {1e6, "us", "microseconds"}, {1e3, "ms", "milliseconds"}}) {
+    const double period = median_step / scale;
+    if (period >= kShortestSamplePeriod && period <= kLongestSamplePeriod) {
+      std::ostringstream text;
+      text << "; if t is in " << name << ", that is a period of " << period << " s: give the time unit ("
+           << "--time-unit " << unit << ", or time_unit=" << unit << " in the API)";
+      return text.str();
+    }
+  }
+  return {};
 }
 
 }  // namespace manipid

@@ -480,6 +480,51 @@ TEST(RobotIdentification, AMotionlessJointLeavesItsParametersAtThePriorWithAWarn
   }
 }
 
+/// Every warning identify gives for `data`, one per line.
+std::string identification_warnings(const Model& model, const Trajectory& data) {
+  IdentificationOptions options;
+  options.layout = with_offset();
+  std::string text;
+  for (const std::string& warning : identify(model, data, options).warnings) text += warning + "\n";
+  return text;
+}
+
+TEST(RobotIdentification, RunsBeyondTheURDFsLimitsAreNamedWithTheLikelyCause) {
+  const Model ur5 = example("ur5_like.urdf");
+  std::mt19937_64 engine(29);
+  const Eigen::VectorXd truth = perturbed_truth(ur5, with_offset(), engine);
+  const Trajectory clean = measure(ur5, with_offset(), truth, Fourier::random(6, 5, engine), uniform_times(10.0, 2e-3));
+  const std::string none = identification_warnings(ur5, clean);
+  EXPECT_EQ(none.find("beyond"), std::string::npos) << none;
+  EXPECT_EQ(none.find("degrees"), std::string::npos) << none;
+  EXPECT_EQ(none.find("moves at"), std::string::npos) << none;
+
+  // The same run logged in degrees: one warning naming the joints and the option.
+  Trajectory degrees = clean;
+  degrees.q *= 180.0 / std::numbers::pi;
+  const std::string in_degrees = identification_warnings(ur5, degrees);
+  EXPECT_NE(in_degrees.find("the angles look like degrees"), std::string::npos) << in_degrees;
+  EXPECT_NE(in_degrees.find("--angle-unit deg"), std::string::npos) << in_degrees;
+
+  // Time logged in tenths: ten times the speed, above the 3.14 rad/s velocity limit.
+  Trajectory fast = clean;
+  fast.t /= 10.0;
+  const std::string too_fast = identification_warnings(ur5, fast);
+  EXPECT_NE(too_fast.find("moves at up to"), std::string::npos) << too_fast;
+  EXPECT_NE(too_fast.find("velocity limit 3.14"), std::string::npos) << too_fast;
+
+  // Another arm's log: the Panda's joint 4 (limit −3.07 to −0.07 rad) at +1 rad.
+  const Model panda = example("panda_like.urdf");
+  const Eigen::VectorXd panda_truth = perturbed_truth(panda, with_offset(), engine);
+  Fourier motion = Fourier::random(7, 5, engine, 0.1);
+  Trajectory other = measure(panda, with_offset(), panda_truth, motion, uniform_times(10.0, 2e-3));
+  other.q.col(3).array() += 1.0;
+  const std::string other_arm = identification_warnings(panda, other);
+  EXPECT_NE(other_arm.find("q4 (panda_joint4) reaches"), std::string::npos) << other_arm;
+  EXPECT_NE(other_arm.find("is this the log of this arm"), std::string::npos) << other_arm;
+  EXPECT_EQ(other_arm.find("degrees"), std::string::npos) << other_arm;
+}
+
 TEST(RobotIdentification, RefusesDataItCannotUseNamingTheProblem) {
   const Model model = example("ur5_like.urdf");
   std::mt19937_64 engine(19);

@@ -32,6 +32,7 @@ struct CsvLimits {
 struct CsvTable {
   std::vector<std::string> columns;
   Eigen::MatrixXd data;  ///< rows × columns
+  char separator = ',';  ///< what parse_csv found between the fields (',', or ';' or a tab: see parse_csv)
 
   int rows() const { return static_cast<int>(data.rows()); }
   /// Index of a column, or -1.
@@ -42,7 +43,9 @@ struct CsvTable {
 
 /// Parses CSV text: header of unique, non-empty names; every row the same number of fields;
 /// every field a finite number (NaN and Inf are rejected). Blank lines and a trailing
-/// newline are ignored; CRLF line ends are accepted.
+/// newline are ignored; CRLF line ends are accepted. Fields are separated by commas, or — when the
+/// header has none — by semicolons or tabs (spreadsheets in locales that write decimal commas
+/// save with ';'; a decimal comma is refused naming it).
 CsvTable parse_csv(std::string_view text, const CsvLimits& limits = {});
 /// Formats with the shortest representation that reads back to the same double.
 std::string format_csv(const CsvTable& table);

@@ -9,6 +9,8 @@
 // The exact shapes are documented in api/openapi.yaml.
 #pragma once
 
+#include "manipid/api/log_format.h"
+
 #include "manipid/core/paper/identification.h"
 #include "manipid/core/paper/presets.h"
 #include "manipid/core/paper/simulation.h"
@@ -38,8 +40,9 @@ DatasetUpload dataset_from_json(const nlohmann::json& body);
 /// twice are ApiError/InputError as for any request body, every other error as above.
 DatasetUpload dataset_from_json_text(std::string_view text);
 /// CSV body: header t,q1..qn[,tau1..taun][,ref1..refn][,qd1..qdn][,qdd1..qddn] (what `manipid simulate`
-/// and `manipid excitation` write).
-DatasetUpload dataset_from_csv(std::string_view text);
+/// and `manipid excitation` write), or a lab's log read through `format` (log_format.h: a column map,
+/// the time and angle units).
+DatasetUpload dataset_from_csv(std::string_view text, const LogFormat& format = {});
 
 // ---- Simulations -----------------------------------------------------------------------
 

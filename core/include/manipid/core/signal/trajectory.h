@@ -5,6 +5,8 @@
 
 #include <Eigen/Core>
 
+#include <string>
+
 namespace manipid {
 
 /// The sample periods a trajectory may have, s: a megahertz logger to one sample in ten
@@ -45,5 +47,9 @@ struct Trajectory {
   /// the median step lies in [kShortestSamplePeriod, kLongestSamplePeriod].
   void validate() const;
 };
+
+/// For a median step of t outside [kShortestSamplePeriod, kLongestSamplePeriod]: the sentence that says
+/// which time unit would make it a usable period (t in ns, µs or ms: ROS logs stamp nanoseconds), or "".
+std::string time_unit_hint(double median_step);
 
 }  // namespace manipid
