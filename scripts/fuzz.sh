@@ -1,5 +1,5 @@
 #!/usr/bin/env bash
-# Builds the libFuzzer targets of tests/fuzz/ (JSON and CSV request parsers of api/; raw HTTP
+# Builds the libFuzzer targets of tests/fuzz/ (JSON, CSV and ROS 2 bag parsers of api/; raw HTTP
 # bytes into the server's route layer, http_fuzz) with clang, ASan and UBSan into build/fuzz,
 # and fuzzes each on a copy of its seed corpus
 # (build/fuzz/corpus-<target>; the repository's corpus is never modified), together with the
@@ -16,8 +16,8 @@
 #                                    scripts/test.sh runs; coverage figures still vary a little
 #                                    between machines, and more for http_fuzz, whose server
 #                                    threads interleave differently from run to run)
-# FUZZ_TARGETS (environment) names the targets to build and run, default all three; the test
-# command (scripts/test.sh) fuzzes the parsers only ("json_fuzz csv_fuzz": building http_fuzz
+# FUZZ_TARGETS (environment) names the targets to build and run, default all four; the test
+# command (scripts/test.sh) fuzzes the parsers only ("json_fuzz csv_fuzz bag_fuzz": building http_fuzz
 # costs 5 minutes of CPU) and replays http_fuzz's saved inputs in the main build instead (ctest
 # http_fuzz_replay).
 # Installs nothing: run scripts/setup.sh first (needs the Debian packages clang and
@@ -51,7 +51,7 @@ build=build/fuzz
 jobs=$(nproc)
 started=$SECONDS
 CC=clang CXX=clang++ cmake -S tests/fuzz -B "$build" >/dev/null
-selected=${FUZZ_TARGETS:-json_fuzz csv_fuzz http_fuzz}
+selected=${FUZZ_TARGETS:-json_fuzz csv_fuzz bag_fuzz http_fuzz}
 # shellcheck disable=SC2086  # one target per word
 cmake --build "$build" -j "$jobs" --target $selected
 if $build_only; then
@@ -64,7 +64,7 @@ echo "== fuzz: built in $((SECONDS - started)) s; fuzzing: $describe"
 # an http_fuzz input is a connection to a server thread, several times a parser call's cost
 # (its longest input holds a request line over cpp-httplib's 8192-byte limit).
 targets=()
-for entry in "json_fuzz json 4096 1" "csv_fuzz csv 4096 1" "http_fuzz http 10000 4"; do
+for entry in "json_fuzz json 4096 1" "csv_fuzz csv 4096 1" "bag_fuzz bag 16384 1" "http_fuzz http 10000 4"; do
   [[ " $selected " == *" ${entry%% *} "* ]] && targets+=("$entry")
 done
 

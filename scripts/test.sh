@@ -4,8 +4,8 @@
 # service end to end (the real binary on port 0 with a real SQLite file), the Python and
 # MATLAB/Octave clients, the curl batch script and the packaging checks, and the HTTP fuzz
 # target's saved inputs (the parsers' fuzz targets build meanwhile, at the lowest priority) —
-# then fuzzes the JSON and CSV request parsers on a fixed count of generated inputs from a fixed
-# seed (scripts/fuzz.sh --runs; open-ended random fuzzing of all three targets, the HTTP route
+# then fuzzes the JSON, CSV and ROS 2 bag parsers on a fixed count of generated inputs from a fixed
+# seed (scripts/fuzz.sh --runs; open-ended random fuzzing of all four targets, the HTTP route
 # layer too, is `scripts/fuzz.sh SECONDS`).
 # Installs missing Debian packages first. Usage: bash scripts/test.sh [FUZZ_INPUTS_PER_TARGET]
 set -euo pipefail
@@ -17,7 +17,7 @@ cmake --build --preset debug -j "$(( $(nproc) + 1 ))"
 # The fuzz targets are built while the tests run, at the lowest priority: many tests wait on
 # servers, browsers and timers, and the build takes only the processor time they leave.
 mkdir -p build
-export FUZZ_TARGETS="json_fuzz csv_fuzz"
+export FUZZ_TARGETS="json_fuzz csv_fuzz bag_fuzz"
 nice -n 19 bash scripts/fuzz.sh --build-only >build/fuzz-build.log 2>&1 &
 fuzz_build=$!
 tests=0

@@ -18,7 +18,7 @@ constexpr std::string_view kJointName = "{joint}";
 const char* const kAccepted = "FILE=MANIPID rules, e.g. time=t,position_{j}=q{j},effort_{j}=tau{j} ({j} a joint number, "
                               "{joint} a joint name; manipid's names: t, q{j}, qd{j}, qdd{j}, tau{j}, ref{j})";
 
-std::string trim(std::string_view text) {
+std::string trim_spaces(std::string_view text) {
   while (!text.empty() && std::isspace(static_cast<unsigned char>(text.front()))) text.remove_prefix(1);
   while (!text.empty() && std::isspace(static_cast<unsigned char>(text.back()))) text.remove_suffix(1);
   return std::string(text);
@@ -40,8 +40,8 @@ Rule parse_rule(const std::string& text) {
   }
   Rule rule;
   rule.text = text;
-  const std::string file = trim(std::string_view(text).substr(0, equals));
-  rule.target = trim(std::string_view(text).substr(equals + 1));
+  const std::string file = trim_spaces(std::string_view(text).substr(0, equals));
+  rule.target = trim_spaces(std::string_view(text).substr(equals + 1));
   if (file.empty() || rule.target.empty()) throw InputError("columns", "column map rule '" + text + "' has an empty side");
   for (std::string_view placeholder : {kJointName, kJointNumber}) {
     const auto at = file.find(placeholder);
@@ -117,7 +117,7 @@ std::vector<Rule> parse_rules(const std::string& spec) {
   std::size_t start = 0;
   while (start <= spec.size()) {
     const auto comma = spec.find(',', start);
-    const std::string part = trim(std::string_view(spec).substr(start, comma == std::string::npos ? std::string::npos : comma - start));
+    const std::string part = trim_spaces(std::string_view(spec).substr(start, comma == std::string::npos ? std::string::npos : comma - start));
     if (!part.empty()) rules.push_back(parse_rule(part));
     if (comma == std::string::npos) break;
     start = comma + 1;

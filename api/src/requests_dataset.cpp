@@ -481,4 +481,10 @@ DatasetUpload dataset_from_csv(std::string_view text, const LogFormat& format) {
   return upload;
 }
 
+DatasetUpload dataset_from_bag(std::string_view bytes, const BagOptions& options) {
+  DatasetUpload upload;
+  upload.trajectory = trajectory_from_csv(read_joint_states({bytes}, options).table);
+  return upload;
+}
+
 }  // namespace manipid::api

@@ -3,9 +3,12 @@
 // --preset/--param/--kinetic-energy into a robot model with parameters.
 #include "cli/common.h"
 
+#include "manipid/api/ros2_bag.h"
+
 #include "manipid/api/robot_json.h"
 #include "manipid/core/robot/urdf.h"
 
+#include <algorithm>
 #include <cerrno>
 #include <charconv>
 #include <cmath>
@@ -180,6 +183,50 @@ api::CsvTable read_table(const std::string& path) {
     return api::parse_csv(text);
   } catch (const InputError& error) {
     rethrow_with_source(error, input_name(path));
+  }
+}
+
+api::CsvTable read_run_table(const std::string& path, const api::LogFormat& log, const std::string& topic) {
+  std::vector<std::string> contents;
+  std::error_code error;
+  if (path != "-" && std::filesystem::is_directory(path, error)) {
+    // A bag's directory (metadata.yaml and name_0.db3, name_1.db3, … when split): its .db3 files in order.
+    std::vector<std::filesystem::path> files;
+    for (const auto& entry : std::filesystem::directory_iterator(path, error)) {
+      if (entry.path().extension() == ".db3") files.push_back(entry.path());
+    }
+    if (files.empty()) throw UsageError(path + " is a directory without .db3 files (a ROS 2 bag in the sqlite3 storage)");
+    // name_2.db3 before name_10.db3: by length, then by name.
+    std::sort(files.begin(), files.end(), [](const auto& a, const auto& b) {
+      const std::string x = a.filename().string(), y = b.filename().string();
+      return x.size() != y.size() ? x.size() < y.size() : x < y;
+    });
+    for (const auto& file : files) contents.push_back(read_text(file.string()));
+  } else {
+    contents.push_back(read_text(path));
+    if (!api::is_sqlite_database(contents.front())) {
+      if (!topic.empty()) throw UsageError("--topic is for ROS 2 bags; " + input_name(path) + " is not one");
+      try {
+        return api::apply_log_format(api::parse_csv(contents.front()), log);
+      } catch (const InputError& failure) {
+        rethrow_with_source(failure, failure.field() == "columns" ? "--columns: " + input_name(path) : input_name(path));
+      }
+    }
+  }
+  if (!log.columns.empty() || log.time_unit != "s" || log.angle_unit != "rad") {
+    throw UsageError(input_name(path) + " is a ROS 2 bag: its JointState messages name their joints and are in SI "
+                     "units, so --columns, --time-unit and --angle-unit (for CSV logs) do not apply");
+  }
+  try {
+    std::vector<std::string_view> files(contents.begin(), contents.end());
+    api::BagOptions options;
+    options.topic = topic;
+    options.joint_names = log.joint_names;
+    api::BagRead read = api::read_joint_states(files, options);
+    std::fprintf(stderr, "manipid: note: %s: %s\n", input_name(path).c_str(), read.summary().c_str());
+    return std::move(read.table);
+  } catch (const InputError& failure) {
+    rethrow_with_source(failure, failure.field() == "topic" ? "--topic: " + input_name(path) : input_name(path));
   }
 }
 

@@ -7,6 +7,7 @@
 #pragma once
 
 #include "manipid/api/csv.h"
+#include "manipid/api/log_format.h"
 #include "manipid/core/paper/model.h"
 #include "manipid/core/paper/presets.h"
 #include "manipid/core/robot/model.h"
@@ -59,6 +60,12 @@ void write_text(const std::string& path, std::string_view text);
 /// "run.csv line 12: expected 13 fields, got 12", "states.csv: missing column qd3".
 api::CsvTable read_table(const std::string& path);
 void write_table(const std::string& path, const api::CsvTable& table);
+
+/// A run as a table: a CSV log read through `log` (its column map and units), or a ROS 2 bag — a .db3
+/// file, or a bag's directory of them — whose JointState messages on `topic` (empty: the only such topic)
+/// give t, q, qd and tau, the joints matched by `log.joint_names` (a URDF's; empty: the bag's order).
+/// A bag's summary goes to stderr as a note. Errors as read_table's, the source in front.
+api::CsvTable read_run_table(const std::string& path, const api::LogFormat& log, const std::string& topic);
 
 /// Rethrows an InputError about `source` (a file name or option) with `source` in front.
 [[noreturn]] void rethrow_with_source(const InputError& error, const std::string& source);

@@ -111,8 +111,8 @@ CLI::App* add_identify_command(CLI::App& app, IdentifyOptions& options) {
       "Estimate a robot's parameters from a trajectory CSV (t,q1..qn,tau1..taun[,ref1..refn]) with "
       "the input-error method (default), output-error, or the two-stage method.");
   command->add_option("data", options.inputs,
-                      "Trajectory CSV file, '-' for stdin; with --robot, one or more runs (each filtered alone, then "
-                      "fitted together)")
+                      "Trajectory CSV file, '-' for stdin, or a ROS 2 bag of sensor_msgs/JointState (a .db3 file or a "
+                      "bag's directory); with --robot, one or more runs (each filtered alone, then fitted together)")
       ->required();
   command->add_option("--columns", options.log.columns,
                       "The log's own column names mapped onto manipid's: FILE=MANIPID rules, e.g. "
@@ -124,6 +124,9 @@ CLI::App* add_identify_command(CLI::App& app, IdentifyOptions& options) {
   command->add_option("--angle-unit", options.log.angle_unit, "The angles' unit (q, qd, qdd, ref): rad or deg")
       ->check(CLI::IsMember({"rad", "deg"}))
       ->capture_default_str();
+  command->add_option("--topic", options.topic,
+                      "For a ROS 2 bag (a .db3 file or a bag's directory): its sensor_msgs/JointState topic, when it has "
+                      "several");
   command->add_option("--preset", options.preset, "Robot model")->capture_default_str();
   command->add_option("--kinetic-energy", options.kinetic_energy,
                       "complete (default) or paper (the paper's simplified model)")
@@ -240,8 +243,9 @@ int run_identify(const IdentifyOptions& options) {
   const Preset preset = find_preset(options.preset, energy);
   const int n = preset.model.joint_count();
   Trajectory data;
+  const api::CsvTable table = read_run_table(input, options.log, options.topic);
   try {
-    data = api::trajectory_from_csv(api::apply_log_format(read_table(input), options.log));
+    data = api::trajectory_from_csv(table);
   } catch (const InputError& error) {
     rethrow_with_source(error, input_name(input));
   }

@@ -16,6 +16,7 @@ namespace manipid::server::cli {
 struct IdentifyOptions {
   std::vector<std::string> inputs;   ///< one run; with --robot, one or more
   api::LogFormat log;                ///< --columns, --time-unit, --angle-unit: how the CSVs name and scale things
+  std::string topic;                 ///< --topic: a ROS 2 bag's JointState topic (empty: its only one)
   std::string preset = "cedro2009";
   std::string kinetic_energy = "complete";
   std::vector<std::string> free;     ///< comma lists of names

@@ -38,11 +38,12 @@ std::vector<int> joint_list(const std::string& text, int n, const std::string& o
   return joints;
 }
 
-Trajectory read_trajectory(const std::string& path, const api::LogFormat& log) {
+Trajectory read_trajectory(const std::string& path, const api::LogFormat& log, const std::string& topic) {
+  const api::CsvTable table = read_run_table(path, log, topic);
   try {
-    return api::trajectory_from_csv(api::apply_log_format(read_table(path), log), true);
+    return api::trajectory_from_csv(table, true);
   } catch (const InputError& error) {
-    rethrow_with_source(error, error.field() == "columns" ? "--columns: " + input_name(path) : input_name(path));
+    rethrow_with_source(error, input_name(path));
   }
 }
 
@@ -196,7 +197,7 @@ int run_identify_robot(const IdentifyOptions& options) {
   api::LogFormat log = options.log;
   for (const robot::Joint& joint : model.joints) log.joint_names.push_back(joint.name);  // what {joint} matches
   std::vector<Trajectory> runs;
-  for (const std::string& path : options.inputs) runs.push_back(read_trajectory(path, log));
+  for (const std::string& path : options.inputs) runs.push_back(read_trajectory(path, log, options.topic));
   robot::IdentificationResult result;
   try {
     result = robot::identify(model, runs, identification);
@@ -212,7 +213,7 @@ int run_identify_robot(const IdentifyOptions& options) {
   std::optional<robot::ValidationReport> validation;
   if (!options.validate.empty()) {
     std::vector<Trajectory> held_out;
-    for (const std::string& path : options.validate) held_out.push_back(read_trajectory(path, log));
+    for (const std::string& path : options.validate) held_out.push_back(read_trajectory(path, log, options.topic));
     try {
       validation = robot::validate(model, result, held_out, identification.preparation);
     } catch (const InputError& error) {

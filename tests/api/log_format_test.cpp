@@ -24,7 +24,7 @@ InputError format_error(const CsvTable& table, const LogFormat& format) {
   return InputError("", "");
 }
 
-InputError trajectory_error(std::string_view text) {
+InputError log_read_error(std::string_view text) {
   try {
     trajectory_from_csv(parse_csv(text), true);
   } catch (const InputError& error) {
@@ -121,19 +121,19 @@ TEST(LogFormat, BadMapsAndUnitsNameWhatIsWrong) {
 }
 
 TEST(LogFormat, ALogReadWithoutAMapGetsTheMapThatFits) {
-  const InputError error = trajectory_error(kRosLog);
+  const InputError error = log_read_error(kRosLog);
   EXPECT_EQ(error.field(), "t");
   EXPECT_TRUE(contains(error.what(), "the file's columns are time, position_1"));
   EXPECT_TRUE(contains(error.what(), "time=t,position_{j}=q{j},effort_{j}=tau{j}"));
 
   // Names that look like nothing known: the columns and how a map is written.
-  const InputError other = trajectory_error("a,b\n0,1\n1,2\n");
+  const InputError other = log_read_error("a,b\n0,1\n1,2\n");
   EXPECT_TRUE(contains(other.what(), "the file's columns are a, b"));
   EXPECT_TRUE(contains(other.what(), "--columns"));
 }
 
 TEST(LogFormat, NanosecondStampsReadAsSecondsGetAHint) {
-  const InputError error = trajectory_error(
+  const InputError error = log_read_error(
       "t,q1,tau1\n"
       "1700000000000000000,0,0\n1700000000001000000,0,0\n1700000000002000000,0,0\n");
   EXPECT_EQ(error.field(), "t");

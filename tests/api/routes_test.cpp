@@ -2,6 +2,7 @@
 // (fake_service.h) behind a real cpp-httplib server on port 0: each route's answer, every
 // problem+json the routes and the cpp-httplib 0.11.4 guards produce, and what reached the
 // service (nothing, for a refused request). No SQLite, no workers, no timing asserts.
+#include "bag_writer.h"
 #include "fake_service.h"
 
 #include "manipid/api/dashboard.h"
@@ -1213,6 +1214,41 @@ TEST_F(Routes, ALabsLogIsReadWithItsColumnMapAndUnits) {
                  422, "INVALID_FIELD", "columns");
   expect_problem(post("/v1/datasets?time_unit=h", log, "text/csv"), 422, "INVALID_FIELD", "time_unit");
   expect_problem(post("/v1/datasets?robot_id=rb_9&columns=stamp%3Dt", log, "text/csv"), 422, "INVALID_FIELD", "robot_id");
+}
+
+TEST_F(Routes, AROS2BagIsADatasetItsJointsMatchedByTheRobotsNames) {
+  test_support::BagWriter writer;
+  const int topic = writer.topic("/joint_states", "sensor_msgs/msg/JointState");
+  for (int k = 0; k < 20; ++k) {
+    test_support::Message message;
+    message.sec = 1'700'000'000;
+    message.nanosec = static_cast<std::uint32_t>(k * 2'000'000);
+    message.name = {"j2", "j1"};
+    message.position = {0.02 * k, 0.01 * k};
+    message.effort = {2.0, 1.0};
+    writer.message(topic, k, test_support::serialise(message));
+  }
+  const std::string bag = writer.bytes();
+  ASSERT_EQ(post("/v1/robots?name=arm", kTwoJointUrdf, "application/xml")->status, 201);
+  const auto result = post("/v1/datasets?robot_id=rb_1&name=bagged", bag, "application/vnd.sqlite3");
+  ASSERT_TRUE(result);
+  EXPECT_EQ(result->status, 201) << result->body;
+  // curl --data-binary's label: the SQLite header decides.
+  EXPECT_EQ(post("/v1/datasets", bag, "application/x-www-form-urlencoded")->status, 201);
+  const auto uploads = fake_.uploads();
+  ASSERT_EQ(uploads.size(), 2u);
+  EXPECT_EQ(uploads[0].upload.name, "bagged");
+  const Trajectory& run = uploads[0].upload.trajectory;
+  ASSERT_LT(bag.size(), 8192u);  // cpp-httplib reads a form-urlencoded body up to 8 KiB
+  EXPECT_EQ(run.samples(), 20);
+  EXPECT_EQ(run.t[19], 0.038);
+  EXPECT_EQ(run.q(10, 0), 0.1);  // j1, the robot's first joint
+  EXPECT_EQ(run.tau(10, 1), 2.0);
+  EXPECT_EQ(uploads[1].upload.trajectory.q(10, 0), 0.2);  // no robot: the bag's order
+
+  const Json other = expect_problem(post("/v1/datasets?topic=/tf", bag, "application/vnd.sqlite3"), 422, "INVALID_FIELD", "topic");
+  EXPECT_NE(other["detail"].get<std::string>().find("no topic /tf in the bag"), std::string::npos) << other;
+  expect_problem(post("/v1/datasets", "t,q1\n0,1\n", "application/vnd.sqlite3"), 422, "INVALID_FIELD", "bag");
 }
 
 TEST_F(Routes, BadRobotsAreRefusedNamingTheFieldAndNothingIsStored) {

@@ -513,6 +513,74 @@ a, b = json.load(open("lab.json")), json.load(open("plain.json"))
 pa, pb = a["point"], b["point"]
 sys.exit(not (a["fit"]["overall_relative_error"] < 0.01 and
               all(abs(pa[k] - pb[k]) <= 1e-6 * (1 + abs(pb[k])) for k in pb)))'
+# The same run as a ROS 2 bag (rosbag2's sqlite3 storage, CDR JointState), its joints in another order,
+# beside a gripper's own JointState on the same topic and a /tf topic.
+python3 - <<'PY'
+import csv, sqlite3, struct
+rows = list(csv.reader(open("robot_run.csv")))
+header = rows[0]
+names = ["shoulder_pan_joint", "shoulder_lift_joint", "elbow_joint", "wrist_1_joint", "wrist_2_joint", "wrist_3_joint"]
+order = [5, 0, 4, 1, 3, 2]  # the driver's order
+def cdr(sec, nanosec, joint_names, position, velocity, effort):
+    body = bytearray()
+    def align(n):
+        while len(body) % n:
+            body.append(0)
+    def u32(v):
+        align(4); body.extend(struct.pack("<I", v))
+    def string(text):
+        u32(len(text) + 1); body.extend(text.encode() + b"\0")
+    def doubles(values):  # CDR aligns an empty sequence's (absent) elements not at all
+        u32(len(values))
+        if values:
+            align(8); body.extend(struct.pack(f"<{len(values)}d", *values))
+    u32(sec); u32(nanosec); string("base_link")
+    u32(len(joint_names))
+    for name in joint_names:
+        string(name)
+    doubles(position); doubles(velocity); doubles(effort)
+    return b"\0\1\0\0" + bytes(body)
+db = sqlite3.connect("robot_run.db3")
+db.executescript("""
+CREATE TABLE topics(id INTEGER PRIMARY KEY, name TEXT NOT NULL, type TEXT NOT NULL, serialization_format TEXT NOT NULL,
+                    offered_qos_profiles TEXT NOT NULL);
+CREATE TABLE messages(id INTEGER PRIMARY KEY, topic_id INTEGER NOT NULL, timestamp INTEGER NOT NULL, data BLOB NOT NULL);
+INSERT INTO topics VALUES (1, '/tf', 'tf2_msgs/msg/TFMessage', 'cdr', ''), (2, '/joint_states', 'sensor_msgs/msg/JointState', 'cdr', '');
+""")
+q = [header.index(f"q{j}") for j in range(1, 7)]
+qd = [header.index(f"qd{j}") for j in range(1, 7)]
+tau = [header.index(f"tau{j}") for j in range(1, 7)]
+for row in rows[1:]:
+    ns = 1700000000 * 10**9 + round(float(row[0]) * 1e9)
+    pick = lambda columns: [float(row[columns[k]]) for k in order]
+    data = cdr(ns // 10**9, ns % 10**9, [names[k] for k in order], pick(q), pick(qd), pick(tau))
+    db.execute("INSERT INTO messages(topic_id, timestamp, data) VALUES (2, ?, ?)", (ns + 150000, data))
+    db.execute("INSERT INTO messages(topic_id, timestamp, data) VALUES (2, ?, ?)",
+               (ns + 200000, cdr(ns // 10**9, ns % 10**9, ["finger"], [0.01], [], [])))
+    db.execute("INSERT INTO messages(topic_id, timestamp, data) VALUES (1, ?, ?)", (ns, b"\0\1\0\0"))
+db.commit()
+db.close()
+PY
+"$manipid" identify robot_run.db3 --robot "$robots/ur5_like.urdf" --json >bag.json 2>bag.err
+check "identify --robot: a ROS 2 bag, its joints matched by name: the estimate of the CSV" python3 -c '
+import json, sys
+a, b = json.load(open("bag.json")), json.load(open("plain.json"))
+pa, pb = a["point"], b["point"]
+sys.exit(not all(abs(pa[k] - pb[k]) <= 1e-6 * (1 + abs(pb[k])) for k in pb))'
+check "identify --robot: the bag's summary names the topic and the skipped gripper messages" \
+  grep -q "robot_run.db3: topic /joint_states: .* messages, 6 joints (shoulder_pan_joint, .*messages without every joint skipped" bag.err
+mkdir -p bag_directory && cp robot_run.db3 bag_directory/robot_run_0.db3 && echo "rosbag2_bagfile_information: {}" >bag_directory/metadata.yaml
+"$manipid" identify bag_directory --robot "$robots/ur5_like.urdf" --topic /joint_states --json >bag_directory.json 2>/dev/null
+check "identify --robot: a bag's directory, its topic named" cmp -s <(python3 -c 'import json; print(json.load(open("bag.json"))["point"])') \
+  <(python3 -c 'import json; print(json.load(open("bag_directory.json"))["point"])')
+expect_error "identify --robot: a bag's topic that is not a JointState" 2 "--topic: robot_run.db3: topic /tf in the bag holds tf2_msgs/msg/TFMessage" \
+  "$manipid" identify robot_run.db3 --robot "$robots/ur5_like.urdf" --topic /tf
+expect_error "identify --robot: a bag of another arm" 2 "no message on /joint_states names every joint of the robot (panda_joint1" \
+  "$manipid" identify robot_run.db3 --robot "$robots/panda_like.urdf"
+expect_error "identify --robot: a column map for a bag" 2 "is a ROS 2 bag: its JointState messages name their joints" \
+  "$manipid" identify robot_run.db3 --robot "$robots/ur5_like.urdf" --time-unit ns
+expect_error "identify --robot: --topic for a CSV" 2 "--topic is for ROS 2 bags; robot_run.csv is not one" \
+  "$manipid" identify robot_run.csv --robot "$robots/ur5_like.urdf" --topic /joint_states
 expect_error "identify --robot: a column map rule that matches nothing" 2 "'speed_{j}=qd{j}' matches no column" \
   "$manipid" identify lab_log.csv --robot "$robots/ur5_like.urdf" --columns 'time_ms=t,speed_{j}=qd{j}'
 expect_error "identify --robot: an unknown time unit" 2 "--time-unit" \

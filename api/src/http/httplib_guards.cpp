@@ -269,7 +269,8 @@ httplib::Server::HandlerResponse on_error(const RouteState& state, const httplib
         detail = "the body came as application/x-www-form-urlencoded, as curl labels --data-binary and -d unless told "
                  "otherwise, and is read that way only up to 8 KiB: send it with its type, e.g. "
                  "curl --data-binary @run.csv -H 'Content-Type: text/csv' (application/json for JSON, "
-                 "application/xml for a URDF); use --data-binary, not -d, which drops the file's line ends";
+                 "application/xml for a URDF, application/vnd.sqlite3 for a ROS 2 bag); use --data-binary, not -d, which "
+                 "drops the file's line ends";
         response.status = status_of(kind);
       } else {
         kind = ProblemKind::payload_too_large;

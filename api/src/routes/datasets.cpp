@@ -135,7 +135,20 @@ void create_dataset(RouteState& state, const httplib::Request& request, httplib:
   // unlabelled body is JSON when it looks like JSON, else CSV.
   const bool unlabelled = type.empty() || type == "application/x-www-form-urlencoded";
   DatasetUpload upload;
-  if (type == "text/csv" || (unlabelled && !looks_like_json(request.body))) {
+  const bool bag_type = type == "application/vnd.sqlite3" || type == "application/x-sqlite3";
+  if (bag_type || ((unlabelled || type == "application/octet-stream") && is_sqlite_database(request.body))) {
+    // A ROS 2 bag (sqlite3 storage) of JointState: its topic from the query, its joints by the robot's names.
+    BagOptions options;
+    options.topic = request.get_param_value("topic");
+    if (request.has_param("robot_id")) {
+      for (const robot::Joint& joint : stored_robot(state, request.get_param_value("robot_id"), "robot_id").model.joints) {
+        options.joint_names.push_back(joint.name);
+      }
+    }
+    upload = dataset_from_bag(request.body, options);
+    upload.name = request.get_param_value("name");
+    if (upload.name.size() > 200) throw ApiError(ProblemKind::invalid_field, "name is longer than 200 bytes", "name");
+  } else if (type == "text/csv" || (unlabelled && !looks_like_json(request.body))) {
     // A lab's own log: its column map and units from the query (and a robot's joint names for {joint}).
     LogFormat format;
     format.columns = request.get_param_value("columns");

@@ -335,7 +335,7 @@ class Client:
     def upload_dataset(self, path_or_arrays: Union[PathLike, Mapping[str, Any]], name: Optional[str] = None,
                        idempotency_key: Optional[str] = None, columns: Optional[str] = None,
                        time_unit: Optional[str] = None, angle_unit: Optional[str] = None,
-                       robot: Union["Robot", str, None] = None) -> Dataset:
+                       robot: Union["Robot", str, None] = None, topic: Optional[str] = None) -> Dataset:
         """Stores a trajectory and returns its Dataset.
 
         path_or_arrays is either
@@ -353,21 +353,24 @@ class Client:
         A CSV log with its own column names and units (CSV paths only): columns, a column map
         such as "time=t,position_{j}=q{j},effort_{j}=tau{j}" ({j} a joint number, {joint} one of
         `robot`'s joint names); time_unit "s", "ms", "us" or "ns"; angle_unit "rad" or "deg".
+        A ROS 2 bag file (.db3, sensor_msgs/JointState) is sent as one: its joints matched by
+        `robot`'s names, `topic` when it has several JointState topics.
         """
         query: Dict[str, Any] = {}
         if isinstance(path_or_arrays, (str, os.PathLike)):
             with open(path_or_arrays, "rb") as stream:
                 body: Union[bytes, dict] = stream.read()
-            content_type = "text/csv"
+            content_type = "application/vnd.sqlite3" if body.startswith(b"SQLite format 3\0") else "text/csv"
             if name is not None:
                 query["name"] = name
-            for key, value in (("columns", columns), ("time_unit", time_unit), ("angle_unit", angle_unit)):
+            for key, value in (("columns", columns), ("time_unit", time_unit), ("angle_unit", angle_unit),
+                               ("topic", topic)):
                 if value is not None:
                     query[key] = value
             if robot is not None:
                 query["robot_id"] = robot if isinstance(robot, str) else robot.id
-        elif columns is not None or time_unit is not None or angle_unit is not None or robot is not None:
-            raise TypeError("columns, time_unit, angle_unit and robot describe a CSV log: give a CSV path")
+        elif any(value is not None for value in (columns, time_unit, angle_unit, robot, topic)):
+            raise TypeError("columns, time_unit, angle_unit, robot and topic describe a log file: give its path")
         elif isinstance(path_or_arrays, Mapping):
             body, content_type = _arrays_to_json(path_or_arrays), "application/json"
             if name is not None:

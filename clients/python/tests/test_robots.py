@@ -14,6 +14,8 @@ import math
 import os
 import re
 import shutil
+import sqlite3
+import struct
 import subprocess
 import sys
 import tempfile
@@ -193,6 +195,65 @@ class RobotsAgainstServer(unittest.TestCase):
             self.assertEqual(float(a[tau7]), float(b[original[0].index("tau7")]))
         with self.assertRaises(TypeError):
             self.client.upload_dataset({"dt": 0.001, "q": [[0.0, 0.1]]}, time_unit="ms")
+        dataset.delete()
+
+    def test_a_ros2_bag_is_read_with_its_joints_matched_by_name(self) -> None:
+        # The check run as a ROS 2 bag (sqlite3 storage, CDR JointState), the joints in reverse order.
+        with open(self.runs["check"]) as stream:
+            rows = [line.strip().split(",") for line in stream if line.strip()]
+        header = rows[0]
+
+        def cdr(ns: int, names: list, position: list, effort: list) -> bytes:
+            body = bytearray()
+
+            def u32(value: int) -> None:
+                body.extend(b"\0" * (-len(body) % 4) + struct.pack("<I", value))
+
+            def text(value: str) -> None:
+                u32(len(value) + 1)
+                body.extend(value.encode() + b"\0")
+
+            def doubles(values: list) -> None:  # CDR aligns an empty sequence's (absent) elements not at all
+                u32(len(values))
+                if values:
+                    body.extend(b"\0" * (-len(body) % 8) + struct.pack(f"<{len(values)}d", *values))
+
+            u32(ns // 10**9)
+            u32(ns % 10**9)
+            text("world")
+            u32(len(names))
+            for name in names:
+                text(name)
+            doubles(position)
+            doubles([])
+            doubles(effort)
+            return b"\0\1\0\0" + bytes(body)
+
+        path = os.path.join(self.directory, "check_0.db3")
+        bag = sqlite3.connect(path)
+        bag.executescript("CREATE TABLE topics(id INTEGER PRIMARY KEY, name TEXT, type TEXT, serialization_format TEXT, "
+                          "offered_qos_profiles TEXT); CREATE TABLE messages(id INTEGER PRIMARY KEY, topic_id INTEGER, "
+                          "timestamp INTEGER, data BLOB); INSERT INTO topics VALUES "
+                          "(1, '/joint_states', 'sensor_msgs/msg/JointState', 'cdr', '')")
+        joints = list(reversed(range(7)))
+        for row in rows[1:]:
+            ns = 1_700_000_000 * 10**9 + round(float(row[0]) * 1e9)
+            data = cdr(ns, [PANDA_JOINTS[k] for k in joints], [float(row[header.index(f"q{k + 1}")]) for k in joints],
+                       [float(row[header.index(f"tau{k + 1}")]) for k in joints])
+            bag.execute("INSERT INTO messages(topic_id, timestamp, data) VALUES (1, ?, ?)", (ns, data))
+        bag.commit()
+        bag.close()
+        dataset = self.client.upload_dataset(path, robot=self.arm, name="bagged")
+        self.assertEqual((dataset.samples, dataset.joints, dataset.data["name"]), (self.check.samples, 7, "bagged"))
+        stored = [line.split(",") for line in dataset.csv().splitlines()]
+        original = [line.split(",") for line in self.check.csv().splitlines()]
+        for column in ("t", "q1", "q7", "tau2"):
+            a, b = stored[0].index(column), original[0].index(column)
+            for mine, theirs in zip(stored[1:], original[1:]):
+                self.assertAlmostEqual(float(mine[a]), float(theirs[b]), delta=1e-12, msg=column)
+        with self.assertRaises(ManipidError) as other:
+            self.client.upload_dataset(path, topic="/tf")
+        self.assertEqual((other.exception.code, other.exception.field), ("INVALID_FIELD", "topic"))
         dataset.delete()
 
     def test_identify_sends_a_robot_request(self) -> None:

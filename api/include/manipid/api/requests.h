@@ -10,6 +10,7 @@
 #pragma once
 
 #include "manipid/api/log_format.h"
+#include "manipid/api/ros2_bag.h"
 
 #include "manipid/core/paper/identification.h"
 #include "manipid/core/paper/presets.h"
@@ -43,6 +44,9 @@ DatasetUpload dataset_from_json_text(std::string_view text);
 /// and `manipid excitation` write), or a lab's log read through `format` (log_format.h: a column map,
 /// the time and angle units).
 DatasetUpload dataset_from_csv(std::string_view text, const LogFormat& format = {});
+/// A ROS 2 bag (sqlite3 storage) of sensor_msgs/JointState (ros2_bag.h): t, q, and qd and tau when every
+/// message has them.
+DatasetUpload dataset_from_bag(std::string_view bytes, const BagOptions& options);
 
 // ---- Simulations -----------------------------------------------------------------------
 
