@@ -35,7 +35,10 @@ mkdirSync(artifacts, { recursive: true });
 
 // Two noisy runs of one excitation: the identification's and the validation's.
 const run = (...args) => execFileSync(binary, args, { cwd: workdir, stdio: ["ignore", "ignore", "pipe"] });
-run("excitation", "--robot", URDF, "--period", "10", "--harmonics", "5", "--duration", "20", "--max-seconds", "2", "--out", "exc.csv");
+// A budget of evaluations, not seconds: the same excitation (and a physically consistent estimate, whose
+// URDF the page downloads) on every machine, loaded or not.
+run("excitation", "--robot", URDF, "--period", "10", "--harmonics", "5", "--duration", "20", "--max-evaluations", "400",
+    "--max-seconds", "600", "--out", "exc.csv");
 for (const seed of [1, 2]) {
   run("torque", "--robot", URDF, "--in", "exc.csv", "--with-states", "--noise-tau-relative", "0.01", "--seed", String(seed),
       "--out", `run${seed}.csv`);

@@ -42,6 +42,37 @@ function record(container, data) {
 }
 
 /**
+ * The y ticks of a log axis: 1, 2, …, 9 or 1, 2, 5 times each power of ten when a decade is
+ * tall enough, else every `step`th power of ten, so that ticks stay LOG_TICK_SPACE CSS pixels
+ * apart or more; bounded by the axis's height whatever the range. Not uPlot's own log splits:
+ * in uPlot 1.6.32 they never end once the scale reaches below about 1e-25 (9e-26 + 1e-26 is
+ * 1.0000000000000002e-25, not in its table of increments, so it is rounded to 0 decimals,
+ * i.e. to 0, and the loop pushes 0 until the array is too long: "RangeError: Invalid array
+ * length"). An output-error cost on noise-free data converges to about 1e-27.
+ */
+const LOG_TICK_SPACE = 30;  // CSS pixels; uPlot's default space between y ticks
+function logSplits(u, axisIdx, min, max) {
+  if (!(min > 0) || !(max >= min) || max === Infinity) return [];
+  const scale = u.axes[axisIdx].scale;
+  const low = Math.floor(Math.log10(min)), high = Math.floor(Math.log10(max));
+  const decadePx = Math.abs(u.valToPos(Number(`1e${low}`), scale) - u.valToPos(Number(`1e${low + 1}`), scale));
+  const fits = (fraction) => Number.isFinite(decadePx) && fraction * decadePx >= LOG_TICK_SPACE;
+  // The closest ticks of each set are log10(10/9), log10(2) (and log10(2.5)) decades apart.
+  const mantissas = fits(Math.log10(10 / 9)) ? [1, 2, 3, 4, 5, 6, 7, 8, 9] : fits(Math.log10(2)) ? [1, 2, 5] : [1];
+  const step = mantissas.length > 1 || !(decadePx > 0 && decadePx < Infinity)
+    ? 1 : Math.max(1, Math.ceil(LOG_TICK_SPACE / decadePx));
+  if ((high - low) / step > 1000) return [];  // cannot happen with finite doubles; a bound all the same
+  const splits = [];
+  for (let exponent = Math.floor(low / step) * step; exponent <= high; exponent += step) {
+    for (const mantissa of mantissas) {
+      const value = Number(`${mantissa}e${exponent}`);
+      if (value >= min && value <= max) splits.push(value);
+    }
+  }
+  return splits;
+}
+
+/**
  * A line chart in `container`. `series`: [{label, color?, dash?, width?, show?}], `data`: [x, y1, y2, ...].
  * Options: xLabel, yLabel, logY, height, sync (charts with the same key share the cursor: small
  * multiples over the same time axis), legend (false: none, for small multiples with one key).
@@ -59,7 +90,8 @@ export function lineChart(container, { title, xLabel, yLabel, series, data, logY
     axes: [
       { label: xLabel, stroke: "#333", grid: { stroke: "#e5e5e5" } },
       { label: yLabel, stroke: "#333", grid: { stroke: "#e5e5e5" }, size: 70,
-        values: logY ? (_, splits) => splits.map((v) => (v == null ? "" : v.toExponential(0))) : undefined },
+        ...(logY ? { splits: logSplits, filter: (_, splits) => splits,
+                     values: (_, splits) => splits.map((v) => (v == null ? "" : v.toExponential(0))) } : {}) },
     ],
     series: [
       { label: xLabel },
@@ -92,7 +124,11 @@ export function lineChart(container, { title, xLabel, yLabel, series, data, logY
   };
 }
 
-/** Positive values only, for a log axis: anything else becomes a gap. */
+/**
+ * Positive values only, for a log axis: anything else becomes a gap — and so do subnormal
+ * numbers and infinities, whose decade (10 ** floor(log10 v)) is 0 or Infinity and would
+ * leave the log scale without a finite, positive range.
+ */
 export function positive(values) {
-  return values.map((v) => (typeof v === "number" && v > 0 ? v : null));
+  return values.map((v) => (typeof v === "number" && v >= 1e-300 && v < Infinity ? v : null));
 }
