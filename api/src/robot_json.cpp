@@ -5,11 +5,13 @@
 #include "manipid/core/errors.h"
 #include "manipid/core/robot/base_parameters.h"
 #include "manipid/core/robot/excitation.h"
+#include "manipid/core/robot/link_table.h"
 
 #include <algorithm>
 #include <cmath>
 #include <numbers>
 #include <set>
+#include <sstream>
 
 namespace manipid::api {
 namespace {
@@ -200,6 +202,23 @@ nlohmann::ordered_json robot_result_to_json(const robot::Model& model, const rob
                           {"principal_moments", numbers(link.principal_moments)},
                           {"findings", findings}});
   }
+  // The links as a URDF holds them, and what the data determine of each (robot/link_table.h).
+  Json table = Json::array();
+  for (const robot::LinkRow& row : robot::link_table(model, result)) {
+    const Eigen::Matrix3d& I = row.inertia_about_com;
+    table.push_back({{"link", row.link},
+                     {"mass", number(row.mass)},
+                     {"centre_of_mass", numbers(row.centre_of_mass)},
+                     {"inertia_about_com",
+                      {{"ixx", number(I(0, 0))}, {"ixy", number(I(0, 1))}, {"ixz", number(I(0, 2))},
+                       {"iyy", number(I(1, 1))}, {"iyz", number(I(1, 2))}, {"izz", number(I(2, 2))}}},
+                     {"consistent", row.consistent},
+                     {"determined",
+                      {{"mass", row.mass_determined()},
+                       {"centre_of_mass", row.centre_of_mass_determined()},
+                       {"inertia_about_com", row.inertia_determined()}}}});
+  }
+  json["links"] = table;
   json["consistency"] = {{"consistent", result.consistency.consistent()},
                          {"links", links_json},
                          {"findings", result.consistency.findings}};
@@ -228,6 +247,62 @@ nlohmann::ordered_json robot_result_to_json(const robot::Model& model, const rob
   json["warnings"] = warnings;
   json["wall_seconds"] = result.wall_seconds;
   return json;
+}
+
+std::string identified_urdf_note(const nlohmann::json& result, const std::string& sources) {
+  const auto count = [](const nlohmann::json& array) { return array.is_array() ? array.size() : std::size_t{0}; };
+  const auto percent_of = [](const nlohmann::json& value) {
+    if (!value.is_number()) return std::string("-");
+    std::ostringstream text;
+    text.precision(3);
+    text << 100.0 * value.get<double>() << " %";
+    return text.str();
+  };
+  std::ostringstream note;
+  const int runs = result.value("runs", 1);
+  note << "Identified by manipid (" << result.value("method", std::string("input-error")) << ", "
+       << (result.contains("physical") ? "constrained to physically consistent links" : "unconstrained") << ") from "
+       << runs << (runs == 1 ? " run" : " runs") << (sources.empty() ? "" : " (" + sources + ")") << ".\n";
+  const nlohmann::json& base = result.contains("base_parameters") ? result.at("base_parameters") : nlohmann::json::array();
+  std::size_t seen = 0, mostly_data = 0;
+  for (const auto& parameter : base) {
+    seen += parameter.contains("std_error") && parameter.at("std_error").is_number() ? 1 : 0;
+    mostly_data += parameter.value("data_share", 0.0) >= 0.5 ? 1 : 0;
+  }
+  note << "The data see " << seen << " of " << count(base) << " base parameters (combinations of the standard ones, "
+       << "listed in the result's base_parameters), " << mostly_data << " of them mostly the data's rather than this "
+       << "URDF's (data_share); what they do not see keeps this URDF's values.\n";
+  if (result.contains("links")) {
+    std::vector<std::string> whole, mass_only, combined;
+    for (const auto& link : result.at("links")) {
+      const nlohmann::json& determined = link.at("determined");
+      const std::string name = link.value("link", std::string());
+      if (determined.value("inertia_about_com", false)) whole.push_back(name);
+      else if (determined.value("mass", false)) mass_only.push_back(name);
+      else combined.push_back(name);
+    }
+    const auto join = [](const std::vector<std::string>& names) {
+      std::string text;
+      for (const std::string& name : names) text += (text.empty() ? "" : ", ") + name;
+      return text.empty() ? std::string("none") : text;
+    };
+    note << "Links whose mass, centre of mass and inertia the data determine alone: " << join(whole)
+         << "; whose mass alone: " << join(mass_only) << "; seen only in combinations with other links: " << join(combined)
+         << ".\n";
+  }
+  const nlohmann::json judge = result.value("judge", nlohmann::json::object());
+  note << "Torque error under the judge (zero-phase 4th-order Butterworth low-pass at "
+       << (judge.contains("cutoff_hz") ? judge.at("cutoff_hz").dump() : std::string("?")) << " Hz): training "
+       << percent_of(result.value("fit", nlohmann::json::object()).value("overall_relative_error", nlohmann::json()));
+  if (result.contains("validation")) {
+    note << ", held-out " << percent_of(result.at("validation").value("overall_relative_error", nlohmann::json()))
+         << " (the URDF's own values: "
+         << percent_of(result.at("validation").value("prior", nlohmann::json::object()).value("overall_relative_error", nlohmann::json()))
+         << ")";
+  }
+  note << ".\nFriction: viscous and Coulomb in each joint's <dynamics damping friction>; offsets and rotor inertias, "
+          "which a URDF has no element for, in comments on the joints.";
+  return note.str();
 }
 
 ParameterValues parameters_from_json(const robot::Model& model, const nlohmann::json& json, const std::string& field) {

@@ -6,6 +6,7 @@
 #include "manipid/api/csv.h"
 #include "manipid/api/robot_json.h"
 #include "manipid/core/robot/identification.h"
+#include "manipid/core/robot/link_table.h"
 #include "manipid/core/robot/urdf_writer.h"
 
 #include <cmath>
@@ -108,6 +109,22 @@ void print_table(const robot::Model& model, const robot::IdentificationResult& r
       if (layout.armature) std::printf(" %12s", value(layout.armature_begin(n)).c_str());
       std::printf("\n");
     }
+  }
+  // The links as the identified URDF holds them; "data" says what the runs determine of each.
+  std::printf("\n%-20s %10s %27s %52s  %s\n", "link (point)", "mass kg", "centre of mass m: x y z",
+              "inertia about it kg m^2: ixx ixy ixz iyy iyz izz", "determined by the data");
+  for (const robot::LinkRow& row : robot::link_table(model, result)) {
+    const Eigen::Matrix3d& I = row.inertia_about_com;
+    const char* seen = row.inertia_determined()             ? "all"
+                       : row.centre_of_mass_determined()    ? "mass, centre of mass"
+                       : row.mass_determined()              ? "mass"
+                                                            : "only in combinations";
+    std::printf("%-20s %10s %8s %8s %9s %8s %8s %8s %8s %8s %8s  %s%s\n", row.link.substr(0, 20).c_str(),
+                format(row.mass, 4).c_str(), format(row.centre_of_mass.x(), 3).c_str(),
+                format(row.centre_of_mass.y(), 3).c_str(), format(row.centre_of_mass.z(), 3).c_str(),
+                format(I(0, 0), 3).c_str(), format(I(0, 1), 3).c_str(), format(I(0, 2), 3).c_str(),
+                format(I(1, 1), 3).c_str(), format(I(1, 2), 3).c_str(), format(I(2, 2), 3).c_str(), seen,
+                row.consistent ? "" : " (not a real body)");
   }
   if (!result.unidentifiable.empty()) {
     std::string list;
@@ -222,17 +239,31 @@ int run_identify_robot(const IdentifyOptions& options) {
   }
   // The URDF's warnings once the call is known to work: a refused call prints one line.
   print_urdf_warnings(options.urdf, parsed_urdf);
+  const nlohmann::ordered_json json = api::robot_result_to_json(model, result, validation);
+  // The URDF first (an estimate it cannot hold is said after the result, which is printed either way).
+  std::string urdf_refused;
   if (!options.write_urdf.empty()) {
     try {
-      write_text(options.write_urdf, robot::write_identified_urdf(read_text(options.urdf.urdf), model, result.layout, result.point));
+      const std::string note = api::identified_urdf_note(json, names(options.inputs));
+      write_text(options.write_urdf, robot::write_identified_urdf(read_text(options.urdf.urdf), model, result.layout,
+                                                                  result.point, note));
     } catch (const InputError& error) {
-      rethrow_with_source(error, "--write-urdf");
+      if (error.field() != "parameters") rethrow_with_source(error, "--write-urdf");
+      urdf_refused = error.what();
     }
   }
   if (options.json) {
-    std::printf("%s\n", api::robot_result_to_json(model, result, validation).dump(2).c_str());
+    std::printf("%s\n", json.dump(2).c_str());
   } else {
     print_table(model, result, validation, names(options.inputs), names(options.validate));
+  }
+  if (!urdf_refused.empty()) {
+    std::fflush(stdout);
+    std::fprintf(stderr,
+                 "manipid: error: --write-urdf: %s not written: %s. The result above stands; for a URDF, identify "
+                 "again with --physical (every link a real rigid body, the data's fit as close as the bodies allow)\n",
+                 options.write_urdf.c_str(), urdf_refused.c_str());
+    return exit_usage;
   }
   return exit_success;
 }

@@ -590,13 +590,28 @@ check "identify --robot --json: base parameters by name" grep -q '"base_paramete
 check "identify --robot --json: the point has every standard parameter" grep -q '"Izz6":' robot.json
 "$manipid" torque --robot "$robots/ur5_like.urdf" --params robot.json --in states.csv --out estimate_tau.csv 2>/dev/null
 check "torque --robot --params: the estimate's torques" test "$(head -1 estimate_tau.csv)" = "t,tau1,tau2,tau3,tau4,tau5,tau6"
-"$manipid" identify robot_run.csv --robot "$robots/ur5_like.urdf" --write-urdf identified.urdf >/dev/null 2>write.err
-status=$?
-if [[ $status -eq 0 ]]; then
-  check "identify --write-urdf: the identified URDF parses" "$manipid" torque --robot identified.urdf --in states.csv --out urdf_tau.csv
-else
-  check "identify --write-urdf: an unphysical estimate is refused, naming the option" grep -q -- "--write-urdf: link" write.err
-fi
+# An arm whose third link is no rigid body (0.5 kg with the URDF's first moments): its estimate follows,
+# so the URDF is refused — after the result, which is printed first, with the way to one that is not.
+"$manipid" torque --robot "$robots/ur5_like.urdf" --params <(echo '{"m3": 0.5}') --in states.csv --with-states \
+  --noise-tau-relative 0.005 --seed 1 --out odd_run.csv 2>/dev/null
+"$manipid" identify odd_run.csv --robot "$robots/ur5_like.urdf" --write-urdf odd.urdf >odd.txt 2>odd.err
+check "identify --write-urdf: an unphysical estimate: exit 2" test $? -eq 2
+check "identify --write-urdf: ... the result printed first" grep -q "^base parameter" odd.txt
+check "identify --write-urdf: ... the link table flags the link that is no body" grep -q "(not a real body)" odd.txt
+check "identify --write-urdf: ... not written, saying why and offering --physical" \
+  grep -q -- "--write-urdf: odd.urdf not written: link .* not positive semi-definite.*identify again with --physical" odd.err
+check "identify --write-urdf: ... and no file" test ! -e odd.urdf
+"$manipid" identify odd_run.csv --robot "$robots/ur5_like.urdf" --physical --write-urdf identified.urdf >physical.txt 2>/dev/null
+check "identify --physical --write-urdf: exit 0" test $? -eq 0
+check "identify --write-urdf: the identified URDF parses" "$manipid" torque --robot identified.urdf --in states.csv --out urdf_tau.csv
+check "identify --write-urdf: a comment says where it came from and what the data determine" python3 -c '
+import re, sys
+text = open("identified.urdf").read()
+note = re.search(r"<!--\s*(Identified by manipid.*?)-->\s*<robot", text, re.S)
+sys.exit(not (note and "from 1 run (odd_run.csv)" in note.group(1) and "constrained to physically consistent links" in note.group(1)
+              and "of 48 base parameters" in note.group(1) and "judge" in note.group(1)))'
+check "identify --robot: a link table, mass to inertia, what the data determine" \
+  grep -Eq "^forearm_link +[0-9.e-]+ .* (all|mass|only in combinations)" physical.txt
 expect_error "identify --robot: joint count" 2 "the data has 4 joints, the robot (ur5_like) has 6" \
   "$manipid" identify paper.csv --robot "$robots/ur5_like.urdf"
 expect_error "identify --robot: the paper's options do not apply" 2 "--preset excludes --robot" \

@@ -212,6 +212,14 @@ try {
   const file = await download.path();
   check(download.suggestedFilename().endsWith("-identified.urdf") && readFileSync(file, "utf8").includes("<robot"),
         `it downloads ${download.suggestedFilename()}, a URDF`);
+  const firstLink = result.links[0];
+  check(await page.locator("#links-table tbody tr").count() === JOINTS &&
+        Number(await page.getAttribute(`#links-table tr[data-link="${firstLink.link}"]`, "data-mass")) === firstLink.mass &&
+        await page.getAttribute(`#links-table tr[data-link="${firstLink.link}"]`, "data-determined") ===
+          (firstLink.determined.inertia_about_com ? "all" : firstLink.determined.centre_of_mass ? "mass, centre of mass"
+            : firstLink.determined.mass ? "mass" : "only in combinations"),
+        `the links table: 7 links, mass, centre of mass, inertia about it and what the data determine (${firstLink.link}: ${firstLink.mass} kg)`);
+  await page.locator("#links").screenshot({ path: shot("robot-job-links.png") });
   await page.screenshot({ path: shot("robot-job-1280x800.png"), fullPage: true });
 
   // ---- keyboard --------------------------------------------------------------------------------
@@ -263,7 +271,19 @@ try {
   check(await page.getAttribute('#base-table tr[data-index="1"]', "data-quality") === "unexcited" &&
         (await page.textContent('#base-table tr[data-index="1"]')).includes("barely seen"), "an unexcited base parameter is marked");
   await page.locator("#consistency").screenshot({ path: shot("robot-job-consistency.png") });
+  // No URDF for links that are no bodies: said at a glance, with the same request again, physically consistent.
+  check(await page.locator("#urdf-download").count() === 0 &&
+        (await page.textContent("#urdf-unavailable")).includes(`${robot.joints[2].link}, ${robot.joints[4].link} of this estimate are not`),
+        "an inconsistent estimate: no download, the links named instead");
+  await page.locator("#glance").screenshot({ path: shot("robot-job-no-urdf.png") });
+  await page.click("#identify-physical");
+  await page.waitForURL((address) => /\/jobs\/job_[0-9a-f]+$/.test(address.pathname) && !address.pathname.endsWith(jobId), { timeout: 30000 });
+  const again = await json(`${url}/v1/jobs/${page.url().split("/").pop()}`);
+  check(again.request.physical === true && again.request.dataset_id === job.request.dataset_id &&
+        again.request.robot_id === robotId, "... its button asks for the same identification with physical: true");
   await page.unroute(`**/v1/jobs/${jobId}`);
+  await page.goto(`${url}/jobs/${jobId}`);  // back where the rest of the test expects to be
+  await page.waitForSelector("body[data-ready=true] #urdf-download");
 
   // ---- the robots list, and the robot's page from the job --------------------------------------
   await page.click('header nav a[href="/robots"]');

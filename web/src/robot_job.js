@@ -7,7 +7,7 @@
 import { api, downloadLink } from "./api.js";
 import { lineChart, PALETTE } from "./charts.js";
 import { facts, h, number, percent, plural, section } from "./dom.js";
-import { robotPath } from "./paths.js";
+import { jobPath, robotPath } from "./paths.js";
 
 // Points per joint chart: a small multiple is 400–700 px wide, so 1000 points draw every pixel.
 export const JOINT_POINTS = 1000;
@@ -56,9 +56,69 @@ function glance(job, result) {
       ["Physical consistency", h("span", { id: "consistency-glance" }, consistencyInWords(result))],
       ["Warnings", result.warnings?.length ? h("a", { href: "#identifiability" }, plural(result.warnings.length, "warning")) : "none"],
     ]),
-    h("p", { class: "actions" },
+    urdfActions(job, result));
+}
+
+/**
+ * The identified URDF: a download when every link is a real body; else why there is none and the
+ * way to one — the same request again with physical consistency (a URDF holds only real bodies).
+ */
+function urdfActions(job, result) {
+  if (result.consistency?.consistent !== false) {
+    return h("p", { class: "actions" },
       downloadLink(`/v1/jobs/${job.id}/urdf`, "Download the identified URDF", { id: "urdf-download", class: "button" }),
-      h("span", { class: "muted" }, "The robot's document with the estimate in its <inertial> and <dynamics> elements.")));
+      h("span", { class: "muted" }, "The robot's document with the estimate in its <inertial> and <dynamics> elements, " +
+        "opened by a comment saying where it came from."));
+  }
+  const bad = (result.consistency.links || []).filter((link) => !link.consistent).map((link) => link.link);
+  const status = h("span", { class: "form-status", role: "status", "aria-live": "polite" });
+  const again = h("button", { type: "button", id: "identify-physical" }, "Identify again, physically consistent");
+  again.addEventListener("click", async () => {
+    again.disabled = true;
+    status.textContent = "Submitting…";
+    try {
+      const next = await api("/v1/identifications", { method: "POST", body: { ...job.request, physical: true } });
+      window.location.assign(jobPath(next.id));
+    } catch (error) {
+      status.textContent = error.message || "The request was refused.";
+      again.disabled = false;
+    }
+  });
+  return h("div", { id: "urdf-unavailable", class: "actions" },
+    h("p", {}, h("strong", {}, "No identified URDF: "),
+      `a URDF holds only real rigid bodies, and ${bad.length ? bad.join(", ") : "some links"} of this estimate ` +
+      `${bad.length === 1 ? "is" : "are"} not (see `, h("a", { href: "#consistency" }, "Physical consistency"), "). " +
+      "The same identification with physical consistency keeps every link a real body, fitting the data as closely as that allows."),
+    h("p", {}, again, " ", status));
+}
+
+// ---- the links as the URDF holds them ---------------------------------------------------------
+
+const DETERMINED_TEXT = (determined) =>
+  determined?.inertia_about_com ? "all"
+    : determined?.centre_of_mass ? "mass, centre of mass"
+      : determined?.mass ? "mass" : "only in combinations";
+
+function linkSection(result) {
+  const links = result.links || [];
+  if (!links.length) return section("links", "Links", h("p", {}, "This result carries no link table."));
+  const cell = (value, digits = 4) => h("td", { class: "number" }, number(value, digits));
+  return section("links", "Links as the URDF holds them",
+    h("p", { class: "muted" }, "Each link's mass, centre of mass (in the link's frame) and inertia about it (in the link's axes), " +
+      "as the identified URDF writes them. \u201cDetermined by the data\u201d: a value the runs fix alone; the rest move only " +
+      "in sums with other links' parameters and, where the data are silent, keep the URDF's values."),
+    h("div", { class: "scroll" }, h("table", { id: "links-table", class: "data" },
+      h("thead", {}, h("tr", {}, ["Link", "Mass, kg", "x, m", "y, m", "z, m", "Ixx", "Ixy", "Ixz", "Iyy", "Iyz", "Izz",
+                                  "Determined by the data"].map((label) => h("th", { scope: "col" }, label)))),
+      h("tbody", {}, links.map((link) => {
+        const c = link.centre_of_mass || [], I = link.inertia_about_com || {};
+        return h("tr", { dataset: { link: link.link, mass: String(link.mass), determined: DETERMINED_TEXT(link.determined) } },
+          h("th", { scope: "row" }, link.link, link.consistent ? null : [" ", h("span", { class: "badge state-failed" }, "not a real body")]),
+          cell(link.mass), cell(c[0], 3), cell(c[1], 3), cell(c[2], 3),
+          cell(I.ixx, 3), cell(I.ixy, 3), cell(I.ixz, 3), cell(I.iyy, 3), cell(I.iyz, 3), cell(I.izz, 3),
+          h("td", {}, DETERMINED_TEXT(link.determined)));
+      })))),
+    h("p", { class: "muted" }, "Inertia in kg·m² (URDF tensor entries)."));
 }
 
 // ---- base parameters ------------------------------------------------------------------------
@@ -442,7 +502,7 @@ async function validationSection(body, job, result) {
 export async function robotIdentificationSections(body, job, drawOrExplain) {
   const result = job.result;
   body.append(glance(job, result), baseParameterSection(result), frictionSection(result),
-              consistencySection(result), identifiabilitySection(result));
+              consistencySection(result), linkSection(result), identifiabilitySection(result));
   await drawOrExplain("Torque fit per joint", () => fitSection(body, job, result));
   if (job.state === "succeeded") await drawOrExplain("Validation", () => validationSection(body, job, result));
 }

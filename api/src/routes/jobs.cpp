@@ -227,10 +227,14 @@ void job_urdf(RouteState& state, const httplib::Request& request, httplib::Respo
   if (!robot || !urdf) throw ApiError(ProblemKind::conflict, "the robot of job " + id + " was deleted", "robot_id");
   const ParsedRobot parsed = parse_robot({robot->name, *urdf, robot->base, robot->tip});
   // The result's point names its layout (fv…, fc…, fo…, Ia…).
-  const ParameterValues point = parameters_from_json(parsed.model, nlohmann::json::parse(job->result), "result");
+  const nlohmann::json result = nlohmann::json::parse(job->result);
+  const ParameterValues point = parameters_from_json(parsed.model, result, "result");
+  // Where it came from: the job and its (first) dataset; the result says how many runs.
+  const std::string note = identified_urdf_note(result, "job " + id + ", dataset " + job->dataset_id);
   try {
     response.status = 200;
-    response.set_content(robot::write_identified_urdf(*urdf, parsed.model, point.layout, point.values), "application/xml");
+    response.set_content(robot::write_identified_urdf(*urdf, parsed.model, point.layout, point.values, note),
+                         "application/xml");
     // The name is the user's: only letters, digits, '.', '_' and '-' reach the header.
     std::string file = robot->name;
     for (char& c : file) {
@@ -238,7 +242,10 @@ void job_urdf(RouteState& state, const httplib::Request& request, httplib::Respo
     }
     response.set_header("Content-Disposition", "attachment; filename=\"" + file + "-identified.urdf\"");
   } catch (const InputError& error) {  // an estimate a URDF cannot hold
-    throw ApiError(ProblemKind::conflict, error.what(), "physical");
+    throw ApiError(ProblemKind::conflict,
+                   std::string(error.what()) + "; for a URDF, identify again with \"physical\": true (every link a real "
+                   "rigid body)",
+                   "physical");
   }
 }
 

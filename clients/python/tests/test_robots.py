@@ -323,6 +323,14 @@ class RobotsAgainstServer(unittest.TestCase):
         with open(path, "rb") as stream:
             self.assertEqual(stream.read(), text.encode("utf-8"))
         self.assertEqual(job.to_urdf(), text)
+        # Before <robot>: where it came from and what the data determine.
+        note = re.search(r"<!--\s*(Identified by manipid.*?)-->\s*<robot", text, re.S)
+        self.assertIsNotNone(note, text[:2000])
+        self.assertIn(f"from 1 run (job {job.id}, dataset {clean.id})", note.group(1))
+        self.assertIn(f"of {len(result['base_parameters'])} base parameters", note.group(1))
+        # The result's link table: what the URDF holds, link by link.
+        self.assertEqual([link["link"] for link in result["links"]], [f"panda_link{k}" for k in range(1, 8)])
+        self.assertAlmostEqual(result["links"][1]["mass"], result.point["m2"], delta=1e-12)
         document = ElementTree.fromstring(text)
         self.assertEqual(document.get("name"), "panda_like")
         links = {link.get("name"): link for link in document.iter("link")}

@@ -50,7 +50,7 @@ void replace_child(TiXmlElement* parent, const char* tag, const TiXmlElement& re
 }  // namespace
 
 std::string write_identified_urdf(const std::string& xml, const Model& model, const ParameterLayout& layout,
-                                  const Eigen::VectorXd& pi) {
+                                  const Eigen::VectorXd& pi, const std::string& note) {
   const int n = model.joint_count();
   if (pi.size() != layout.size(n)) {
     throw InputError("parameters", "the parameter vector has " + std::to_string(pi.size()) + " entries, the robot " +
@@ -127,6 +127,13 @@ std::string write_identified_urdf(const std::string& xml, const Model& model, co
       TiXmlComment comment(note.str().c_str());
       element->second->InsertEndChild(comment);
     }
+  }
+  if (!note.empty()) {
+    // XML forbids "--" inside a comment (and a trailing "-"): "- -" reads the same.
+    std::string text = note;
+    for (std::size_t at = text.find("--"); at != std::string::npos; at = text.find("--", at)) text.replace(at, 2, "- -");
+    TiXmlComment comment(("\n" + text + "\n").c_str());
+    document.InsertBeforeChild(robot, comment);
   }
   TiXmlPrinter printer;
   printer.SetIndent("  ");

@@ -2,6 +2,7 @@
 // parameters against closed forms, noise-free and noisy round trips, jittery loggers, trimmed ramps, a
 // flange and 7 joints, friction kept apart, honest standard errors, validation, and refusals.
 #include "manipid/core/robot/identification.h"
+#include "manipid/core/robot/link_table.h"
 
 #include "manipid/core/errors.h"
 #include "manipid/core/robot/base_parameters.h"
@@ -13,6 +14,7 @@
 
 #include <gtest/gtest.h>
 
+#include <array>
 #include <cmath>
 #include <numbers>
 #include <random>
@@ -148,6 +150,45 @@ TEST(BaseParameters, ThePlanarTwoLinkArmHasSixRegroupedAsTheTextbookSays) {
   // Never in the torque: m1 (its origin never moves), and of each body mz, Ixx, Ixy, Ixz, Iyy, Iyz.
   EXPECT_EQ(base.absent, (std::vector<int>{0, 3, 4, 5, 6, 7, 8, 13, 14, 15, 16, 17, 18}));
   EXPECT_EQ(base.dependent, std::vector<int>{10});  // m2, regrouped into mx1 and Izz1
+}
+
+TEST(LinkTable, ThePlanarArmDeterminesWhatTheTextbookSaysAndNothingMore) {
+  // The planar arm above: of its standard parameters the data fix alone exactly my1, mx2, my2 and Izz2 —
+  // the base parameters that are one standard parameter each; m2 only in combinations, m1 never.
+  const std::string urdf = R"(<robot name="planar">
+    <link name="base"/>
+    <joint name="j1" type="continuous"><parent link="base"/><child link="l1"/><axis xyz="0 0 1"/></joint>
+    <link name="l1"><inertial><origin xyz="0.25 0 0"/><mass value="2"/><inertia ixx="0.01" ixy="0" ixz="0" iyy="0.05" iyz="0" izz="0.05"/></inertial></link>
+    <joint name="j2" type="continuous"><parent link="l1"/><child link="l2"/><origin xyz="0.5 0 0"/><axis xyz="0 0 1"/></joint>
+    <link name="l2"><inertial><origin xyz="0.2 0 0"/><mass value="1"/><inertia ixx="0.01" ixy="0" ixz="0" iyy="0.03" iyz="0" izz="0.03"/></inertial></link>
+  </robot>)";
+  UrdfOptions urdf_options;
+  urdf_options.gravity = Eigen::Vector3d(0.0, -9.81, 0.0);
+  const Model model = parse_urdf(urdf, urdf_options).model;
+  ParameterLayout layout;
+  layout.viscous = layout.coulomb = false;
+  std::mt19937_64 engine(5);
+  const Eigen::VectorXd truth = perturbed_truth(model, layout, engine);
+  const Trajectory data = measure(model, layout, truth, Fourier::random(2, 5, engine), uniform_times(10.0, 2e-3));
+  IdentificationOptions options;
+  options.layout = layout;
+  const IdentificationResult result = identify(model, data, options);
+  const std::vector<LinkRow> links = link_table(model, result);
+  ASSERT_EQ(links.size(), 2u);
+  EXPECT_EQ(links[0].link, "l1");
+  //                       m      mx     my     mz     Ixx    Ixy    Ixz    Iyy    Iyz    Izz
+  const std::array<bool, 10> first{false, false, true, false, false, false, false, false, false, false};
+  const std::array<bool, 10> second{false, true, true, false, false, false, false, false, false, true};
+  EXPECT_EQ(links[0].determined, first);
+  EXPECT_EQ(links[1].determined, second);
+  EXPECT_FALSE(links[1].mass_determined());
+  EXPECT_FALSE(links[1].centre_of_mass_determined());
+  // The values are the point's, as the URDF writer puts them: mass, c = h/m, I_c = I_O − m(‖c‖²E − c cᵀ).
+  const Eigen::VectorXd& point = result.point;
+  EXPECT_DOUBLE_EQ(links[1].mass, point[10]);
+  const Eigen::Vector3d c = point.segment<3>(11) / point[10];
+  EXPECT_NEAR((links[1].centre_of_mass - c).norm(), 0.0, 1e-14);
+  EXPECT_NEAR(links[1].inertia_about_com(2, 2), point[19] - point[10] * (c.x() * c.x() + c.y() * c.y()), 1e-12);
 }
 
 TEST(BaseParameters, TheBaseRegressorReproducesTheFullOneForEveryMotion) {

@@ -65,6 +65,11 @@ void parse_friction(const std::vector<std::string>& terms, robot::ParameterLayou
 nlohmann::ordered_json robot_result_to_json(const robot::Model& model, const robot::IdentificationResult& result,
                                             const std::optional<robot::ValidationReport>& validation);
 
+/// The comment an identified URDF opens with (urdf_writer.h's note), from a robot identification's result
+/// (robot_result_to_json's JSON) and where its runs came from ("train.csv", "datasets ds_1, ds_2"; may be
+/// empty): how it was identified, what the data determine (base parameters, links), the judged errors.
+std::string identified_urdf_note(const nlohmann::json& result, const std::string& sources);
+
 /// A standard parameter vector for `model` from JSON: an identify result (its "point": the layout is
 /// exactly its names') or a flat {"name": value} object (overrides on the URDF: its viscous and Coulomb
 /// friction always, offsets fo* and rotor inertias Ia* when named; everything not named keeps the URDF's

@@ -26,10 +26,11 @@
 
 namespace manipid::robot {
 
-/// `xml` (the document `model` was parsed from with `options`) with `pi` (layout order) written in.
+/// `xml` (the document `model` was parsed from with `options`) with `pi` (layout order) written in, and
+/// `note` (when not empty) as a comment before <robot>: where the values came from and what they determine.
 /// Throws InputError("urdf") when the document cannot be read, InputError("parameters") for a size
 /// mismatch or a body a URDF cannot hold.
 std::string write_identified_urdf(const std::string& xml, const Model& model, const ParameterLayout& layout,
-                                  const Eigen::VectorXd& pi);
+                                  const Eigen::VectorXd& pi, const std::string& note = {});
 
 }  // namespace manipid::robot
