@@ -2,6 +2,8 @@
 // comparison filter, the ridge and the friction terms chosen by held-out prediction (robot/identification.h).
 #include "manipid/core/robot/identification.h"
 
+#include "manipid/core/robot/link_table.h"
+
 #include "manipid/core/errors.h"
 #include "numbers.h"
 #include "manipid/core/estimation/cross_validation.h"
@@ -287,6 +289,23 @@ std::vector<std::string> limit_warnings(const Model& model, const Runs& runs) {
     warnings.insert(warnings.begin(), text);
   }
   return warnings;
+}
+
+/// Step 6: link masses the data see only in combinations that the physical fit moved far (by half or more)
+/// from the URDF's, named with both values — so the report says what the written URDF holds.
+std::string masses_moved(const Model& model, const IdentificationResult& result) {
+  std::string list;
+  const std::vector<LinkRow> links = link_table(model, result);
+  for (std::size_t k = 0; k < links.size(); ++k) {
+    const double before = result.prior[static_cast<Eigen::Index>(10 * k)], after = links[k].mass;
+    if (links[k].mass_determined() || !(std::abs(after - before) > 0.5 * std::abs(before))) continue;
+    list += (list.empty() ? "" : ", ") + links[k].link + " " + manipid::detail::short_number(before) + " -> " +
+            manipid::detail::short_number(after) + " kg";
+  }
+  if (list.empty()) return {};
+  return "the physical fit moved link masses the data see only in sums with other parameters far from the URDF's values (" +
+         list + "): the real bodies nearest the URDF's values (in the scaled distance of the fit's prior term) that keep what "
+         "the data determine; the link table and a written URDF hold these";
 }
 
 /// One friction model tried by step 3.
@@ -634,6 +653,7 @@ IdentificationResult identify(const Model& model, const std::vector<Trajectory>&
       if (!result.physical->converged()) {
         result.warnings.push_back("the physically consistent fit did not converge: " + result.physical->message);
       }
+      if (std::string moved = masses_moved(model, result); !moved.empty()) result.warnings.push_back(std::move(moved));
     }
   }
   result.consistency = check_consistency(structure, result.point);
