@@ -205,6 +205,45 @@ StoredRobotResult decode_robot_result(const robot::Model& model, const nlohmann:
   return stored;
 }
 
+/// What friction must explain, per judged joint: the measured torque less the rigid-body part of the
+/// prediction (π with fv, fc and fo set to 0; the armature Ia·q̈ stays: it is inertia, not friction), both
+/// through the judge's low-pass, beside the judge's q̇ at the same instants, and the friction law the point
+/// holds. Null when the result estimated none of fv, fc, fo.
+Json friction_to_json(const robot::Model& model, const StoredRobotResult& result, const Trajectory& data,
+                      const std::vector<long>& indices) {
+  const int n = model.joint_count();
+  const robot::ParameterLayout& layout = result.layout;
+  if (!layout.viscous && !layout.coulomb && !layout.offset) return nullptr;
+  Eigen::VectorXd rigid = result.point;
+  for (const int begin : {layout.viscous_begin(n), layout.coulomb_begin(n), layout.offset_begin(n)}) {
+    if (begin >= 0) rigid.segment(begin, n).setZero();
+  }
+  const robot::TorquePrediction without = robot::predict_torque(model, layout, rigid, data, result.judge, result.joints);
+  const JudgedStates states = judge_states(data, result.judge);
+  const JudgedSpan span = judged_span(data.t, result.judge);
+  if (span.size() != without.t.size()) throw InputError("result", "the judged span does not match the prediction");
+  Json terms = Json::array();
+  if (layout.viscous) terms.push_back("viscous");
+  if (layout.coulomb) terms.push_back("coulomb");
+  if (layout.offset) terms.push_back("offset");
+  Json joints = Json::array();
+  for (Eigen::Index j = 0; j < without.model.cols(); ++j) {
+    const int k = without.joints[static_cast<std::size_t>(j)];
+    const Eigen::VectorXd qd = states.qd.col(k).segment(span.first, span.size());
+    const Eigen::VectorXd torque = without.measured.col(j) - without.model.col(j);
+    Json law = Json::object();
+    if (layout.viscous) law["fv"] = number(result.point[layout.viscous_begin(n) + k]);
+    if (layout.coulomb) law["fc"] = number(result.point[layout.coulomb_begin(n) + k]);
+    if (layout.offset) law["fo"] = number(result.point[layout.offset_begin(n) + k]);
+    joints.push_back({{"joint", k + 1},
+                      {"name", model.joints[static_cast<std::size_t>(k)].name},
+                      {"law", law},
+                      {"qd", pick(qd, indices)},
+                      {"torque", pick(torque, indices)}});
+  }
+  return {{"terms", terms}, {"joints", joints}};
+}
+
 }  // namespace
 
 nlohmann::ordered_json robot_fit_to_json(const robot::Model& model, const std::string& request_json,
@@ -240,6 +279,7 @@ nlohmann::ordered_json robot_fit_to_json(const robot::Model& model, const std::s
                {"t", pick(fit.t, indices)},
                {"joints", joints},
                {"overall_relative_error", number(fit.overall_relative_error)}};
+  if (Json friction = friction_to_json(model, result, data, indices); !friction.is_null()) json["friction"] = std::move(friction);
   if (prior) {
     const robot::TorquePrediction by_urdf =
         robot::predict_torque(model, result.layout, result.prior, data, result.judge, result.joints);

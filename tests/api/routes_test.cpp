@@ -8,6 +8,8 @@
 #include "manipid/api/dashboard.h"
 #include "manipid/api/robot_requests.h"
 #include "manipid/api/routes.h"
+#include "manipid/core/robot/parameters.h"
+#include "manipid/core/robot/rnea.h"
 
 #include "manipid/api/http_server.h"  // includes httplib.h: after the manipid headers (it breaks Eigen if first)
 
@@ -1423,6 +1425,104 @@ TEST_F(RoutesWithToken, StaticFilesAreNotBehindTheToken) {
     EXPECT_EQ(result->status, 200) << path;
   }
   expect_problem(get("/assets/missing.js"), 404, "NOT_FOUND", "path");  // not 401
+}
+
+// The robot fit's friction view: on a noise-free run whose torque has viscous and Coulomb friction, what the
+// rigid-body model leaves of the measured torque lies on the point's law fv·q̇ + fc·sign(q̇) to 1 % wherever
+// |q̇| is over 80 % of its peak. Nearer its sign changes the judge's low-pass smooths (and rings after) the
+// Coulomb step: at half the peak the points are still 10 % off the law on joint 1.
+TEST_F(Routes, ARobotFitShowsWhatFrictionMustExplainOnTheFittedLaw) {
+  ASSERT_EQ(post("/v1/robots", kTwoJointUrdf, "application/xml")->status, 201);
+  const robot::Model model = parse_robot({"two", kTwoJointUrdf, "", ""}).model;
+  const robot::ParameterLayout layout;  // viscous and Coulomb
+  const int n = model.joint_count();
+  ASSERT_EQ(n, 2);
+  Eigen::VectorXd pi = robot::standard_parameters(model, layout);
+  const double fv[] = {0.8, 0.3}, fc[] = {1.5, 0.6};
+  for (int k = 0; k < n; ++k) {
+    pi[layout.viscous_begin(n) + k] = fv[k];
+    pi[layout.coulomb_begin(n) + k] = fc[k];
+  }
+  const double dt = 0.002, pi2 = 2.0 * std::numbers::pi;
+  const int samples = 4001;  // 8 s
+  const double frequency[] = {0.5, 0.35};
+  Trajectory data;
+  data.t.resize(samples);
+  data.q.resize(samples, n);
+  data.tau.resize(samples, n);
+  for (int i = 0; i < samples; ++i) {
+    const double t = i * dt;
+    data.t[i] = t;
+    Eigen::VectorXd q(n), qd(n), qdd(n);
+    for (int k = 0; k < n; ++k) {
+      const double w = pi2 * frequency[k];
+      q[k] = 0.8 * std::sin(w * t + k);
+      qd[k] = 0.8 * w * std::cos(w * t + k);
+      qdd[k] = -0.8 * w * w * std::sin(w * t + k);
+    }
+    data.q.row(i) = q.transpose();
+    data.tau.row(i) = robot::inverse_dynamics(model, layout, pi, q, qd, qdd).transpose();
+  }
+  fake_.add_dataset(dataset_info("ds_run", n, samples), data);
+  const std::vector<std::string> names = robot::standard_parameter_names(model, layout);
+  Json point = Json::object();
+  for (std::size_t i = 0; i < names.size(); ++i) point[names[i]] = pi[static_cast<Eigen::Index>(i)];
+  const auto stored = [&](const std::string& id, const Json& friction, const Json& values) {
+    JobInfo job = job_info(id, JobKind::identification, JobState::succeeded);
+    job.robot_id = "rb_1";
+    job.dataset_id = "ds_run";
+    job.request = Json{{"robot_id", "rb_1"}, {"dataset_id", "ds_run"}, {"friction", friction}}.dump();
+    job.result = Json{{"parameters", {{"friction", friction}, {"armature", false}}},
+                      {"point", values},
+                      {"judge", {{"cutoff_hz", 5.0}, {"trim_seconds", 0.3}}},
+                      {"filters", {{"differentiation", {{"dt", dt}}}}},
+                      {"torque_joints", {"j1", "j2"}}}
+                     .dump();
+    fake_.add_job(job);
+  };
+  stored("job_friction", {"viscous", "coulomb"}, point);
+
+  const auto answer = get("/v1/jobs/job_friction/fit?max_points=500");
+  ASSERT_TRUE(answer);
+  ASSERT_EQ(answer->status, 200) << answer->body;
+  const Json fit = json_of(answer);
+  ASSERT_TRUE(fit.contains("friction")) << fit.dump().substr(0, 300);
+  const Json& friction = fit["friction"];
+  EXPECT_EQ(friction["terms"], Json::array({"viscous", "coulomb"}));
+  ASSERT_EQ(friction["joints"].size(), 2u);
+  for (int k = 0; k < n; ++k) {
+    const Json& joint = friction["joints"][static_cast<std::size_t>(k)];
+    EXPECT_EQ(joint["joint"], k + 1);
+    EXPECT_EQ(joint["name"], k == 0 ? "j1" : "j2");
+    EXPECT_EQ(joint["law"], Json({{"fv", fv[k]}, {"fc", fc[k]}}));
+    ASSERT_EQ(joint["qd"].size(), fit["t"].size());
+    ASSERT_EQ(joint["torque"].size(), fit["t"].size());
+    const double peak = 0.8 * pi2 * frequency[k];
+    int away = 0;
+    double worst = 0.0, widest = 0.0;
+    for (std::size_t i = 0; i < joint["qd"].size(); ++i) {
+      const double qd = joint["qd"][i].get<double>(), torque = joint["torque"][i].get<double>();
+      widest = std::max(widest, std::abs(qd));
+      if (std::abs(qd) < 0.8 * peak) continue;
+      ++away;
+      const double law = fv[k] * qd + fc[k] * (qd > 0 ? 1.0 : -1.0);
+      worst = std::max(worst, std::abs(torque - law) / std::abs(law));
+    }
+    EXPECT_NEAR(widest, peak, 0.02 * peak) << "joint " << k + 1;  // q̇ is the joint's, in rad/s
+    EXPECT_GT(away, 100) << "joint " << k + 1;
+    EXPECT_LT(worst, 0.01) << "joint " << k + 1 << ": the points leave the law by " << worst;
+  }
+
+  // Without friction terms there is nothing for a law to explain: no "friction" block.
+  const robot::ParameterLayout none{false, false, false, false};
+  const std::vector<std::string> rigid = robot::standard_parameter_names(model, none);
+  Json rigid_point = Json::object();
+  for (const std::string& name : rigid) rigid_point[name] = point[name];
+  stored("job_rigid", Json::array(), rigid_point);
+  const auto without = get("/v1/jobs/job_rigid/fit?max_points=50");
+  ASSERT_TRUE(without);
+  ASSERT_EQ(without->status, 200) << without->body;
+  EXPECT_FALSE(json_of(without).contains("friction"));
 }
 
 TEST_F(RoutesWithToken, BodilessCancelNeedsTheTokenToo) {

@@ -3,11 +3,13 @@
 // with noise, seeds 1 and 2), start `manipid serve --port 0`, upload the URDF with the robots
 // page's form, the runs by the API, identify from the robot's page (keyboard), then check the
 // identification's page against the API: the base-parameter table (rows, numbers, filter,
-// sort), friction, the consistency verdict, one fit chart per joint with the API's point
-// count, the validation errors per joint beside the URDF's, the identified URDF's download;
-// then the robots list and the robot's page from the header, an excitation designed from the
-// robot's page, keyboard reach, a narrow screen, a clean console, and that the binary serves
-// the web/src it was built from. Screenshots go to ARTIFACT_DIR.
+// sort), the correlation map, friction, the consistency verdict, one fit chart per joint with
+// the API's point count, the friction curves (points and law against the API's), the validation
+// errors per joint beside the URDF's, the run's measured angles and torques, the identified URDF's
+// download; then the robots list and the robot's page from the header, an excitation designed
+// from the robot's page, the home page's way to the robots and the job list's robot names,
+// keyboard reach, a narrow screen, a clean console, and that the binary serves the web/src it
+// was built from. Screenshots go to ARTIFACT_DIR.
 //
 //   node tests/dashboard/robot_dashboard_test.mjs path/to/manipid ARTIFACT_DIR
 //
@@ -206,6 +208,71 @@ try {
   }
   check((await page.textContent("#validation-verdict")).length > 20, "the validation verdict is in words");
 
+  // ---- friction curves: what the rigid body leaves against q̇, with the fitted law ---------------
+  check(fit.friction && JSON.stringify(fit.friction.terms) === JSON.stringify(["viscous", "coulomb"]) &&
+        fit.friction.joints.length === JOINTS, "the fit carries the friction view of the 7 joints: viscous and Coulomb");
+  check(await page.locator("#friction-curves .chart").count() === JOINTS, "7 friction charts, one per joint");
+  let curvesDrawn = true, lawIsResult = true, worstLaw = 0, explained = 0, left = 0;
+  for (const [j, joint] of fit.friction.joints.entries()) {
+    const box = `#chart-friction-${joint.joint}`;
+    curvesDrawn &&= Number(await page.getAttribute(box, "data-points")) === joint.qd.filter((v) => v !== null).length &&
+                    joint.qd.length === fit.t.length && await page.getAttribute(box, "data-series") === "2" &&
+                    await page.getAttribute(box, "data-joint-name") === robot.joints[j].name;
+    lawIsResult &&= joint.law.fv === result.friction[j].fv && joint.law.fc === result.friction[j].fc &&
+                    Number(await page.getAttribute(box, "data-fv")) === result.friction[j].fv &&
+                    Number(await page.getAttribute(box, "data-fc")) === result.friction[j].fc &&
+                    (await page.textContent(`${box} .u-title`)).includes(`fv ${Number(result.friction[j].fv.toPrecision(3))}, fc `);
+    // The points less the fit's residual are the model's friction torque through the low-pass (the measurement
+    // cancels): on the law wherever q̇ is well away from its sign changes.
+    const peak = Math.max(...joint.qd.map(Math.abs));
+    const law = (v) => joint.law.fv * v + joint.law.fc * Math.sign(v);
+    joint.qd.forEach((v, i) => {
+      const implied = joint.torque[i] - (fit.joints[j].measured[i] - fit.joints[j].model[i]);
+      if (Math.abs(v) >= 0.8 * peak) worstLaw = Math.max(worstLaw, Math.abs(implied - law(v)) / Math.max(Math.abs(law(v)), 1e-3));
+      explained += joint.torque[i] ** 2;
+      left += (joint.torque[i] - law(v)) ** 2;
+    });
+  }
+  check(curvesDrawn, `each draws the API's ${fit.t.length} (q̇, τ − rigid body) points and the law, by joint name`);
+  check(lawIsResult, "... with the law of the result's friction (fv and fc of each joint, in the chart's title)");
+  check(worstLaw < 0.02, `the points are the measurement less the model without its friction: the fitted law where |q̇| ≥ 80 % of its peak (worst ${(100 * worstLaw).toFixed(2)} %)`);
+  console.log(`      (the friction law explains ${(100 * (1 - left / explained)).toFixed(1)} % of the square of what the rigid body leaves)`);
+  await page.locator("#friction-curves").screenshot({ path: shot("robot-job-friction-curves.png") });
+
+  // ---- the run as measured ----------------------------------------------------------------------
+  const dataPoints = Number(await page.getAttribute("#robot-data [data-max-points]", "data-max-points"));
+  const measuredData = await json(`${url}/v1/datasets/${measured.id}/data?max_points=${dataPoints}`);
+  const [header, firstLine] = readFileSync(path.join(workdir, "run1.csv"), "utf8").split("\n");
+  const firstRow = Object.fromEntries(header.split(",").map((name, k) => [name.trim(), Number(firstLine.split(",")[k])]));
+  check(measuredData.q.length === JOINTS && measuredData.q.every((q, j) => close(q[0], firstRow[`q${j + 1}`], 1e-12)) &&
+        measuredData.tau.every((tau, j) => close(tau[0], firstRow[`tau${j + 1}`], 1e-12)), "the dataset's data are the uploaded run's (first row)");
+  for (const chart of ["angles", "torques"]) {
+    const box = `#chart-robot-${chart}`;
+    check(Number(await page.getAttribute(box, "data-points")) === measuredData.t.length && await page.getAttribute(box, "data-series") === String(JOINTS) &&
+          (await page.textContent(`${box} .u-legend`)).includes(robot.joints[JOINTS - 1].name),
+          `measured ${chart}: one chart, ${measuredData.t.length} points (the API's at max_points=${dataPoints}), 7 joints by name`);
+  }
+  await page.locator("#robot-data").screenshot({ path: shot("robot-job-measured-data.png") });
+
+  // ---- the base parameters' correlation ------------------------------------------------------------
+  const base = result.base_parameters.length;
+  check(Number(await page.getAttribute("#correlation-map", "data-size")) === base &&
+        await page.locator("#correlation-map tbody tr").count() === base &&
+        await page.locator("#correlation-map tbody tr:first-child td").count() === base, `correlation map: ${base} × ${base} cells`);
+  let cellsRight = true;
+  for (const [i, j] of [[0, 0], [0, base - 1], [Math.floor(base / 2), 3], [base - 1, base - 2]]) {
+    const title = await page.getAttribute(`#correlation-map tbody tr:nth-child(${i + 1}) td:nth-child(${j + 2})`, "title");
+    const value = result.correlation[i][j];
+    cellsRight &&= title === `corr(#${i + 1} ${result.base_parameters[i].name}, #${j + 1} ${result.base_parameters[j].name}) = ${value.toFixed(2)}`;
+  }
+  check(cellsRight, "... each cell's title names its pair and gives the result's correlation");
+  const offDiagonal = result.correlation.flatMap((row, i) => row.filter((_, j) => j > i)).sort((a, b) => Math.abs(b) - Math.abs(a));
+  const listed = await page.$$eval("#correlation-strong li[data-value]", (items) => items.map((li) => Number(li.dataset.value)));
+  check(listed.length === 10 && listed.every((value, k) => Math.abs(value) === Math.abs(offDiagonal[k])) &&
+        Number(await page.getAttribute("#correlation-strong-count", "data-count")) === offDiagonal.filter((v) => Math.abs(v) >= 0.9).length,
+        `the 10 most correlated pairs listed by name, strongest first (${listed[0]?.toFixed(3)}), and how many reach ±0.9`);
+  await page.locator("#correlation").screenshot({ path: shot("robot-job-correlation.png") });
+
   // ---- the identified URDF --------------------------------------------------------------------
   check(await page.getAttribute("#urdf-download", "href") === `/v1/jobs/${jobId}/urdf`, "the download link is /v1/jobs/{id}/urdf");
   const [download] = await Promise.all([page.waitForEvent("download"), page.click("#urdf-download")]);
@@ -244,6 +311,8 @@ try {
   const narrow = await overflow(page);
   check(narrow <= 1, `robot job page: no sideways scrolling at 390 px (overflow ${narrow} px; tables scroll in place)`);
   await page.screenshot({ path: shot("robot-job-390.png"), fullPage: true });
+  await page.locator("#correlation").screenshot({ path: shot("robot-job-correlation-390.png") });
+  await page.locator("#friction-curves").screenshot({ path: shot("robot-job-friction-curves-390.png") });
   await page.setViewportSize({ width: 1280, height: 800 });
 
   // ---- an inconsistent estimate, a constrained fit, an unexcited parameter ------------------------
@@ -335,10 +404,20 @@ try {
   check(anglesRight, `each draws the dataset's ${trajectory.t.length} points (the API's) with its lower and upper limits`);
   await page.screenshot({ path: shot("excitation-job-1280x800.png"), fullPage: true });
 
-  // The job list names the robot of each robot job.
+  // The job list names the robot of each robot job; the home page leads to the robots.
   await page.click("a.brand");
   await page.waitForSelector(`#jobs tr[data-job-id="${jobId}"]`);
-  check(await page.locator(`#jobs tr[data-job-id="${jobId}"] a[href="/robots/${robotId}"]`).count() === 1, "the job list links the robot");
+  const robotCell = page.locator(`#jobs tr[data-job-id="${jobId}"] a[href="/robots/${robotId}"]`);
+  check(await robotCell.count() === 1 && (await robotCell.textContent()) === robot.name && await robotCell.getAttribute("title") === robotId,
+        `the job list links the robot by its name, "${robot.name}" (its id on hover)`);
+  check(await page.getAttribute("#robots-card-link", "href") === "/robots" &&
+        (await page.textContent("#robots-card-link")).includes("upload a URDF"), "the home page has a way to the robots: \"Your own arm: upload a URDF\"");
+  await page.locator("#robots-card").screenshot({ path: shot("home-robots-card.png") });
+  await page.click("#robots-card-link");
+  await page.waitForSelector(`body[data-ready=true] #robots tr[data-robot-id="${robotId}"]`);
+  check(true, "... which opens the robots list");
+  await page.goBack();
+  await page.waitForSelector(`#jobs tr[data-job-id="${jobId}"]`);
 
   check(consoleErrors.length === 0, `no console errors${consoleErrors.length ? ": " + consoleErrors.join(" | ") : ""}`);
 

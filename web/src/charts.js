@@ -73,7 +73,8 @@ function logSplits(u, axisIdx, min, max) {
 }
 
 /**
- * A line chart in `container`. `series`: [{label, color?, dash?, width?, show?}], `data`: [x, y1, y2, ...].
+ * A line chart in `container`. `series`: [{label, color?, dash?, width?, show?, points?}], `data`: [x, y1, y2, ...];
+ * a series with `points: true` is drawn as dots, not joined (a scatter; x must still ascend).
  * Options: xLabel, yLabel, logY, height, sync (charts with the same key share the cursor: small
  * multiples over the same time axis), legend (false: none, for small multiples with one key).
  */
@@ -101,7 +102,9 @@ export function lineChart(container, { title, xLabel, yLabel, series, data, logY
         width: s.width || 1.5,
         dash: s.dash,
         show: s.show !== false,
-        points: { show: false },
+        ...(s.points
+          ? { paths: () => null, points: { show: true, size: 3, width: 0, fill: s.color || PALETTE[i % PALETTE.length] } }
+          : { points: { show: false } }),
       })),
     ],
     legend: { show: legend },

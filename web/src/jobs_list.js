@@ -1,6 +1,7 @@
-// jobs_list.js — the front page: a form that starts the paper's experiment (simulate +
-// identify) with its defaults filled in from GET /v1/presets/cedro2009, and the job list with
-// state and kind filters, newest first, refreshed while jobs are active.
+// jobs_list.js — the front page: the way to your own arm (URDF robots), a form that starts the
+// paper's experiment (simulate + identify) with its defaults filled in from GET
+// /v1/presets/cedro2009, and the job list with state and kind filters, newest first, robot jobs
+// by their robot's name, refreshed while jobs are active.
 import { api, ApiProblem } from "./api.js";
 import { h, number, stateBadge, when } from "./dom.js";
 import { robotPath } from "./paths.js";
@@ -91,21 +92,39 @@ function paperForm(preset, navigate) {
   return form;
 }
 
-function jobRow(job) {
+function jobRow(job, robotNames) {
   const result = job.result || {};
   const paper = job.kind === "identification" && !job.robot_id;  // cost and evaluations: the paper's method's
+  const robotName = robotNames.get(job.robot_id);
   return h("tr", { dataset: { jobId: job.id } },
     h("td", {}, h("a", { href: `/jobs/${job.id}` }, job.id)),
     h("td", {}, job.kind),
-    h("td", {}, job.robot_id ? h("a", { href: robotPath(job.robot_id) }, job.robot_id) : h("span", { class: "muted" }, "preset")),
+    h("td", {}, job.robot_id
+      ? h("a", { href: robotPath(job.robot_id), title: job.robot_id, class: "robot-name" }, robotName || job.robot_id)
+      : h("span", { class: "muted" }, "preset")),
     h("td", {}, stateBadge(job.state)),
     h("td", {}, when(job.created_at)),
     h("td", { class: "number" }, paper ? number(result.final_cost ?? job.progress.best_cost, 4) : "–"),
     h("td", { class: "number" }, paper ? String(job.progress.evaluations) : "–"));
 }
 
+/** A short way to the robots pages, as prominent as the paper's form. */
+function robotsCard() {
+  return h("section", { id: "robots-card", class: "card", "aria-labelledby": "robots-card-title" },
+    h("h2", { id: "robots-card-title" }, "Your own arm"),
+    h("p", {}, "Any serial arm described by a URDF: upload it, design an excitation within its limits, identify its base " +
+      "parameters and friction from your runs, check them on a run they were not fitted to, and download the identified URDF."),
+    h("p", { class: "actions" }, h("a", { href: "/robots", class: "button", id: "robots-card-link" }, "Your own arm: upload a URDF")));
+}
+
+/** Robot id → name, from one page of /v1/robots; empty when the list cannot be read (ids are shown then). */
+async function robotNames() {
+  const page = await api("/v1/robots?page_size=1000").catch(() => ({ items: [] }));
+  return new Map((page.items || []).map((robot) => [robot.id, robot.name]));
+}
+
 export async function jobsListView(main, navigate) {
-  const preset = await api("/v1/presets/cedro2009");
+  const [preset, names] = await Promise.all([api("/v1/presets/cedro2009"), robotNames()]);
   const stateFilter = select("filter-state", "state", ["any", "queued", "running", "succeeded", "failed", "cancelled"], "any");
   const kindFilter = select("filter-kind", "kind", ["any", "identification", "simulation", "excitation"], "any");
   const body = h("tbody");
@@ -116,6 +135,7 @@ export async function jobsListView(main, navigate) {
     body);
   main.replaceChildren(
     h("h1", {}, "Jobs"),
+    robotsCard(),
     paperForm(preset, navigate),
     h("section", { class: "card", "aria-labelledby": "jobs-title" },
       h("h2", { id: "jobs-title" }, "All jobs"),
@@ -125,6 +145,7 @@ export async function jobsListView(main, navigate) {
       h("div", { class: "scroll" }, table), more));
 
   let token = null;
+  const missing = new Set();  // robot ids /v1/robots does not know (deleted robots)
   const query = () => {
     const parts = [];
     if (stateFilter.value !== "any") parts.push(`state=${stateFilter.value}`);
@@ -135,7 +156,13 @@ export async function jobsListView(main, navigate) {
     const parts = query();
     if (append && token) parts.push(`page_token=${encodeURIComponent(token)}`);
     const page = await api(`/v1/jobs${parts.length ? "?" + parts.join("&") : ""}`);
-    const rows = page.items.map(jobRow);
+    // A robot uploaded since the page was drawn: look the names up again (one call), once per unknown id.
+    const unknown = page.items.filter((job) => job.robot_id && !names.has(job.robot_id) && !missing.has(job.robot_id));
+    if (unknown.length) {
+      for (const [id, name] of await robotNames()) names.set(id, name);
+      for (const job of unknown) if (!names.has(job.robot_id)) missing.add(job.robot_id);
+    }
+    const rows = page.items.map((job) => jobRow(job, names));
     if (append) body.append(...rows);
     else body.replaceChildren(...rows);
     if (!body.children.length) body.append(h("tr", {}, h("td", { colspan: 7, class: "muted" }, "No jobs yet.")));

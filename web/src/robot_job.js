@@ -1,9 +1,10 @@
 // robot_job.js — the sections of a job on a URDF robot (/jobs/{id} when the job has robot_id).
-// An identification: what it found at a glance, the base parameters (filterable, sortable),
-// friction per joint, physical consistency and identifiability in words, the filtered measured
-// torque beside the model's per joint (small multiples), and the validation run predicted by
-// the estimate beside the URDF's own values. An excitation: the design's figures and each
-// joint's angle within its limits.
+// An identification: what it found at a glance, the base parameters (filterable, sortable) and
+// their correlation map, friction per joint, physical consistency and identifiability in words,
+// the filtered measured torque beside the model's per joint (small multiples), the friction
+// curves (what the rigid-body model leaves against q̇, with the fitted law), the validation run
+// predicted by the estimate beside the URDF's own values, and the run's raw angles and torques.
+// An excitation: the design's figures and each joint's angle within its limits.
 import { api, downloadLink } from "./api.js";
 import { lineChart, PALETTE } from "./charts.js";
 import { facts, h, number, percent, plural, section } from "./dom.js";
@@ -11,6 +12,10 @@ import { jobPath, robotPath } from "./paths.js";
 
 // Points per joint chart: a small multiple is 400–700 px wide, so 1000 points draw every pixel.
 export const JOINT_POINTS = 1000;
+// Points of the measured data's charts: they are as wide as the page.
+export const DATA_POINTS = 2000;
+// The most correlated pairs listed by name under the map, and what counts as strongly correlated.
+const PAIRS = 10, STRONG = 0.9;
 // Relative standard error thresholds for the base-parameter table.
 const WELL = 0.1, DETERMINED = 1;
 
@@ -249,6 +254,55 @@ function baseParameterSection(result) {
       tbody)));
 }
 
+// ---- correlation of the base parameters ---------------------------------------------------------
+
+function heatColor(value) {
+  if (value === null || value === undefined || Number.isNaN(value)) return "#f2f2f2";
+  const strength = Math.min(1, Math.abs(value));
+  return `hsl(${value >= 0 ? 0 : 220} 75% ${100 - 45 * strength}%)`;  // red positive, blue negative
+}
+
+/**
+ * The base parameters' correlation (base × base, result.correlation) as a map of small cells numbered as the
+ * table's rows, each cell's pair and value in its title (on hover); the strongest pairs by name below it.
+ */
+function correlationSection(result) {
+  const matrix = result.correlation || [];
+  const names = result.base_parameters.map((parameter) => parameter.name);
+  if (!matrix.length || matrix.length !== names.length) {
+    return section("correlation", "Correlation of the base parameters", h("p", {}, "This result carries no correlation matrix."));
+  }
+  const text = (value) => (typeof value === "number" ? value.toFixed(2) : "–");
+  const label = (i) => `#${i + 1} ${names[i]}`;
+  const pairs = [];
+  matrix.forEach((row, i) => row.forEach((value, j) => { if (j > i && typeof value === "number") pairs.push({ i, j, value }); }));
+  pairs.sort((a, b) => Math.abs(b.value) - Math.abs(a.value));
+  const strong = pairs.filter((pair) => Math.abs(pair.value) >= STRONG).length;
+  const tick = (i) => ((i + 1) % 5 === 0 || i === 0 ? String(i + 1) : "");
+  const map = h("table", { id: "correlation-map", class: "heat map", dataset: { size: String(names.length) } },
+    h("caption", { class: "visually-hidden" }, `Correlation of the ${names.length} base parameters, numbered as the table above`),
+    h("thead", {}, h("tr", {}, h("td", {}),
+      names.map((name, j) => h("th", { scope: "col", title: label(j) }, h("span", { class: "tick" }, tick(j)))))),
+    h("tbody", {}, matrix.map((row, i) => h("tr", {},
+      h("th", { scope: "row", title: label(i) }, tick(i)),
+      row.map((value, j) => h("td", { style: `background:${heatColor(value)}`, title: `corr(${label(i)}, ${label(j)}) = ${text(value)}` }))))));
+  const legend = h("p", { class: "key", "aria-hidden": "true" },
+    [-1, -0.5, 0, 0.5, 1].map((value) => h("span", {}, h("span", { class: "swatch-box", style: `background:${heatColor(value)}` }), ` ${value}`)));
+  return section("correlation", "Correlation of the base parameters",
+    h("p", { class: "muted" }, "Red +1, blue −1: how the estimates' errors move together (from the least-squares covariance). " +
+      "A strongly correlated pair is told apart only by what little of the data moves one without the other. " +
+      `${names.length} × ${names.length}, numbered as the table above; point at a cell for its pair and value.`),
+    legend,
+    h("div", { class: "scroll" }, map),
+    h("h3", {}, "The most correlated pairs"),
+    h("p", { id: "correlation-strong-count", dataset: { count: String(strong) } },
+      strong ? `${plural(strong, "pair")} correlated ±${STRONG} or more; the ${Math.min(PAIRS, pairs.length)} strongest:`
+        : `No two base parameters are correlated ±${STRONG} or more; the ${Math.min(PAIRS, pairs.length)} strongest pairs:`),
+    h("ul", { id: "correlation-strong", class: "strong-pairs" }, pairs.slice(0, PAIRS).map(({ i, j, value }) =>
+      h("li", { dataset: { i: String(i + 1), j: String(j + 1), value: String(value) } },
+        h("strong", {}, text(value)), ": ", h("code", {}, label(i)), " and ", h("code", {}, label(j))))));
+}
+
 // ---- friction -------------------------------------------------------------------------------
 
 const FRICTION = {
@@ -435,6 +489,71 @@ async function fitSection(body, job, result) {
       `Overall error ‖τ̂ − τ‖ / ‖τ‖ ${percent(fit.overall_relative_error)}; each chart's title gives its joint's.`),
     charts));
   charts.draw();
+  if (fit.friction) {
+    const curves = frictionCurves(fit.friction, result.robot?.joints || [], fit.judge);
+    body.append(curves);
+    curves.draw();
+  }
+}
+
+/** fv·q̇ + fc·sign(q̇) + fo with the terms the law has (sign(0) = 0, as the model's). */
+const frictionLaw = (law, qd) => (law.fv ?? 0) * qd + (law.fc ?? 0) * Math.sign(qd) + (law.fo ?? 0);
+
+/** "fv 0.251, fc 0.601" (the units are the friction table's). */
+function lawInWords(law) {
+  return ["fv", "fc", "fo"].filter((key) => law[key] !== undefined).map((key) => `${key} ${number(law[key], 3)}`).join(", ");
+}
+
+/**
+ * Friction curves (the /fit answer's "friction"): per joint, what the rigid-body model leaves of the measured
+ * torque against q̇, as points, with the fitted law over them. Returns the section; its draw() draws the charts.
+ */
+function frictionCurves(friction, joints, judge) {
+  const boxes = friction.joints.map((joint) => h("div", { id: `chart-friction-${joint.joint}`,
+    dataset: { jointName: joint.name, ...Object.fromEntries(Object.entries(joint.law).map(([key, value]) => [key, String(value)])) } }));
+  const terms = ["fv·q̇", "fc·sign(q̇)", "fo"].filter((_, i) => friction.terms.includes(["viscous", "coulomb", "offset"][i]));
+  const element = section("friction-curves", "Friction curves per joint",
+    h("p", { class: "muted" },
+      `Each dot: the filtered measured torque less the model's rigid-body part at the estimate (its friction set to 0) — ` +
+      `what friction must explain — against the joint's velocity q̇, both through the fit's ${number(judge?.cutoff_hz, 3)} Hz ` +
+      `low-pass. The line: the fitted law ${terms.join(" + ")}. Near q̇ = 0 the low-pass smooths the Coulomb step, ` +
+      "so there the dots cross between the law's two branches. Units as in the friction table."),
+    h("p", { class: "key", "aria-hidden": "true" },
+      h("span", {}, h("span", { class: "dot" }), " measured − rigid body"),
+      h("span", {}, h("span", { class: "swatch model solid" }), " fitted law (a colour per joint)")),
+    h("div", { class: "grid joints" }, boxes));
+  element.draw = () => friction.joints.forEach((joint, i) => {
+    const meta = joints[joint.joint - 1];
+    const order = joint.qd.map((_, k) => k).filter((k) => typeof joint.qd[k] === "number" && typeof joint.torque[k] === "number")
+      .sort((a, b) => joint.qd[a] - joint.qd[b]);
+    const qd = order.map((k) => joint.qd[k]);
+    lineChart(boxes[i], {
+      title: `${joint.name}: ${lawInWords(joint.law)}`,
+      xLabel: isPrismatic(meta) ? "q̇, m/s" : "q̇, rad/s", yLabel: torqueUnit(meta), height: 220, legend: false,
+      series: [{ label: "measured − rigid body", color: "#7a7a7a", points: true },
+               { label: "fitted law", color: PALETTE[i % PALETTE.length], width: 2 }],
+      data: [qd, order.map((k) => joint.torque[k]), qd.map((v) => frictionLaw(joint.law, v))] });
+  });
+  return element;
+}
+
+/** The identification's run as measured (its first run when there were several): joint angles and torques. */
+async function measuredDataSection(body, job, result) {
+  const data = await api(`/v1/datasets/${job.dataset_id}/data?max_points=${DATA_POINTS}`);
+  const joints = result.robot?.joints || [];
+  const name = (j) => joints[j]?.name || `joint ${j + 1}`;
+  const runs = job.request?.dataset_ids?.length || 1;
+  const angleBox = h("div", { id: "chart-robot-angles" });
+  const torqueBox = h("div", { id: "chart-robot-torques" });
+  const prismatic = joints.some(isPrismatic);
+  body.append(section("robot-data", "Measured data",
+    h("p", { class: "muted", dataset: { maxPoints: String(DATA_POINTS) } },
+      `Dataset ${job.dataset_id}${runs > 1 ? ` (the first of ${runs} runs)` : ""} as uploaded, before any filter: ` +
+      `${plural(data.q.length, "joint")}, drawn ${data.t.length} samples.` + (prismatic ? " Prismatic joints in m and N." : "")),
+    angleBox, data.tau ? torqueBox : h("p", {}, "The dataset has no torque.")));
+  const series = data.q.map((_, j) => ({ label: name(j), color: PALETTE[j % PALETTE.length] }));
+  lineChart(angleBox, { title: "Joint angles", xLabel: "t, s", yLabel: "rad", series, data: [data.t, ...data.q] });
+  if (data.tau) lineChart(torqueBox, { title: "Joint torques", xLabel: "t, s", yLabel: "N·m", series, data: [data.t, ...data.tau] });
 }
 
 function ratioInWords(estimate, prior) {
@@ -501,10 +620,11 @@ async function validationSection(body, job, result) {
 /** The sections of a robot identification's page. */
 export async function robotIdentificationSections(body, job, drawOrExplain) {
   const result = job.result;
-  body.append(glance(job, result), baseParameterSection(result), frictionSection(result),
+  body.append(glance(job, result), baseParameterSection(result), correlationSection(result), frictionSection(result),
               consistencySection(result), linkSection(result), identifiabilitySection(result));
   await drawOrExplain("Torque fit per joint", () => fitSection(body, job, result));
   if (job.state === "succeeded") await drawOrExplain("Validation", () => validationSection(body, job, result));
+  if (job.dataset_id) await drawOrExplain("Measured data", () => measuredDataSection(body, job, result));
 }
 
 // ---- excitation -------------------------------------------------------------------------------

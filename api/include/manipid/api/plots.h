@@ -40,7 +40,11 @@ nlohmann::ordered_json torque_fit_to_json(const std::string& request_json, const
 /// with "relative_error" per joint and overall. With `prior`, also the URDF's own values' errors under "prior"
 /// (the validation view). {"judge": {"lowpass", "cutoff_hz", "trim_seconds"}, "samples", "t", "joints":
 /// [{"joint", "name", "measured", "model", "residual", "rms_measured", "rms_residual", "relative_error"}],
-/// "overall_relative_error", "prior"?}.
+/// "overall_relative_error", "friction"?, "prior"?}. "friction", when the result estimated any of fv, fc, fo:
+/// {"terms": ["viscous", "coulomb", "offset"] (those estimated), "joints": [{"joint", "name", "law": {"fv"?,
+/// "fc"?, "fo"?}, "qd": [...], "torque": [...]}]} — per fitted joint, at the same instants as "t", the judge's
+/// q̇ and what friction must explain: the measured torque less the prediction with fv, fc and fo set to 0
+/// (the armature stays), both under the judge's low-pass; "law" the point's friction terms.
 nlohmann::ordered_json robot_fit_to_json(const robot::Model& model, const std::string& request_json,
                                          const std::string& result_json, const Trajectory& data, long max_points,
                                          bool prior);
