@@ -202,6 +202,13 @@ try {
         close(shown(row.shown[1]) / 100, validation.prior.relative_error[j], 6e-3)), "... shown in % to 3 significant digits");
   check(Number(await page.getAttribute("#validation-table tfoot tr", "data-estimate-error")) === validation.overall_relative_error,
         "... and the overall error");
+  const rms = await page.$$eval("#validation-table tbody tr", (trs) => trs.map((tr) => ({
+    estimate: Number(tr.dataset.estimateRms), prior: Number(tr.dataset.priorRms), text: tr.querySelector("td.number").textContent })));
+  check(rms.every((row, j) => row.estimate === result.validation.rms_error[j] && row.prior === result.validation.prior.rms_error[j] &&
+        close(parseFloat(row.text.split("(")[1]), result.validation.rms_error[j], 6e-3) && row.text.includes("N·m")),
+        `... each beside its RMS in N·m, the result's (${rms[0].text})`);
+  check((await page.textContent("#validation")).includes("judged under a zero-phase 4th-order Butterworth low-pass at 5 Hz"),
+        "... and the low-pass the figures were judged under");
   for (const joint of validation.joints) {
     check(Number(await page.getAttribute(`#chart-validation-${joint.joint}`, "data-points")) === validation.t.length,
           `validation chart of ${joint.name}: ${validation.t.length} points`);

@@ -585,11 +585,17 @@ async function validationSection(body, job, result) {
                           validation.overall_relative_error || 0) || 1;
   const bar = (value, kind) => h("span", { class: `bar ${kind}`, style: `width:${Math.max(0.5, (100 * (value || 0)) / widest)}%` });
   const bars = (estimate, urdf) => h("td", { class: "bars", "aria-hidden": "true" }, bar(estimate, "estimate"), bar(urdf, "prior"));
+  // Each joint's error also in its unit (RMS of τ̂ − τ under the judge; the result's figures, first run).
+  const rmsEstimate = result.validation?.rms_error || [], rmsPrior = result.validation?.prior?.rms_error || [];
+  const withUnit = (fraction, rms, joint) => [percent(fraction),
+    typeof rms === "number" ? h("span", { class: "muted rms" }, ` (${number(rms, 3)} ${torqueUnit(joint)})`) : null];
+  const robotJoints = result.robot?.joints || [];
   const rows = validation.joints.map((joint, i) => h("tr", {
-    dataset: { joint: joint.name, estimateError: String(joint.relative_error), priorError: String(prior[i]) } },
+    dataset: { joint: joint.name, estimateError: String(joint.relative_error), priorError: String(prior[i]),
+               estimateRms: String(rmsEstimate[i] ?? ""), priorRms: String(rmsPrior[i] ?? "") } },
     h("th", { scope: "row" }, joint.name),
-    h("td", { class: "number" }, percent(joint.relative_error)),
-    h("td", { class: "number" }, percent(prior[i])),
+    h("td", { class: "number" }, withUnit(joint.relative_error, rmsEstimate[i], robotJoints[joint.joint - 1])),
+    h("td", { class: "number" }, withUnit(prior[i], rmsPrior[i], robotJoints[joint.joint - 1])),
     bars(joint.relative_error, prior[i]),
     h("td", { class: "number" }, ratioInWords(joint.relative_error, prior[i]))));
   const overall = validation.overall_relative_error, overallPrior = validation.prior?.overall_relative_error;
@@ -599,7 +605,8 @@ async function validationSection(body, job, result) {
     h("p", { id: "validation-verdict" }, validationVerdict(overall, overallPrior)),
     h("p", { class: "muted", dataset: { maxPoints: String(JOINT_POINTS) } },
       `Dataset ${job.validation_dataset_id}, through the identification's filters: ${validation.samples} filtered samples. ` +
-      "Error per joint: ‖τ̂ − τ‖ / ‖τ‖, predicted by the estimate and by the URDF's own inertial and friction values."),
+      "Error per joint: ‖τ̂ − τ‖ / ‖τ‖ and, in brackets, the RMS of τ̂ − τ, predicted by the estimate and by the URDF's own " +
+      `inertial and friction values, ${judgeInWords(result.judge)}.`),
     h("div", { class: "scroll" }, h("table", { id: "validation-table", class: "data" },
       h("thead", {}, h("tr", {},
         h("th", { scope: "col" }, "Joint"),
