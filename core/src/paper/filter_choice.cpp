@@ -99,7 +99,10 @@ double floor_of(const RobotModel& model, const ParameterProducts& products, cons
     const double norm = Y.col(k).norm();
     if (norm > 0.0) Y.col(k) /= norm;
   }
-  Eigen::MatrixXd gram(p, p);
+  // Zeroed: gram_lower fills the lower triangle only, and the finiteness check below reads all of it (an
+  // uninitialised upper triangle made it a coin toss whether a candidate had a floor — found by valgrind;
+  // the paper's 2-joint test then chose another filter depending on the heap's contents).
+  Eigen::MatrixXd gram = Eigen::MatrixXd::Zero(p, p);
   gram_lower(Y.data(), rows, p, gram.data());
   // Nothing non-finite reaches the eigensolver (Eigen 3.4's reads out of bounds on NaN, see
   // uncertainty.cpp): data whose regressor overflows have no floor, and are never chosen.
