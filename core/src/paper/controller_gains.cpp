@@ -2,9 +2,13 @@
 #include "manipid/core/paper/controller_gains.h"
 
 #include "numbers.h"
+#include "manipid/core/estimation/rules.h"
+#include "manipid/core/signal/filters.h"
 
+#include <Eigen/LU>
 #include <Eigen/QR>
 
+#include <algorithm>
 #include <cmath>
 #include <limits>
 #include <string>
@@ -53,6 +57,10 @@ GainFit fit_pd_gains(const FilteredData& filtered, const Eigen::MatrixXd& refere
   fit.gains.kd.resize(n);
   fit.relative_residual.resize(n);
   Eigen::MatrixXd columns(filtered.samples(), 2);
+  // The residual is low-passed noise: its samples are correlated over about 1/Σc² of them.
+  const double correlation = estimation::filtered_residual_factor(
+      1, cached_filter(filtered.filter)->coefficients(FilterOrder::lowpass).squaredNorm());
+  const double dof = std::max(1.0, static_cast<double>(filtered.samples() - 2));
   for (int j = 0; j < n; ++j) {
     columns.col(0) = reference.col(j) - filtered.q.col(j);  // multiplies Kp
     columns.col(1) = -filtered.qd.col(j);                   // multiplies Kd
@@ -63,6 +71,11 @@ GainFit fit_pd_gains(const FilteredData& filtered, const Eigen::MatrixXd& refere
     fit.gains.kd[j] = std::isfinite(gains[1]) ? gains[1] : 0.0;
     const Eigen::VectorXd residual = filtered.tau.col(j) - columns * Eigen::Vector2d(fit.gains.kp[j], fit.gains.kd[j]);
     fit.relative_residual[j] = relative(residual, filtered.tau.col(j));
+    // A joint whose columns are dependent (it never moves) has no finite covariance: NaN says so.
+    const Eigen::Matrix2d information = columns.transpose() * columns;
+    const Eigen::FullPivLU<Eigen::Matrix2d> lu(information);
+    fit.covariance.push_back(lu.isInvertible() ? Eigen::Matrix2d(residual.squaredNorm() / dof * correlation * lu.inverse())
+                                               : Eigen::Matrix2d::Constant(std::numeric_limits<double>::quiet_NaN()));
   }
   return fit;
 }

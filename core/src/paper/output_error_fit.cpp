@@ -2,6 +2,7 @@
 #include "paper/output_error_fit.h"
 
 #include <Eigen/Cholesky>
+#include <Eigen/QR>
 
 #include <algorithm>
 #include <cmath>
@@ -167,7 +168,46 @@ GaussNewtonOutcome gauss_newton_output_error(const OutputErrorCost& cost, const 
   const Eigen::MatrixXd relative = reduced.leftCols(r) * basis.transpose();
   outcome.jacobian = Eigen::MatrixXd::Zero(outcome.residual.size(), outcome.theta.size());
   for (int a = 0; a < p; ++a) outcome.jacobian.col(free_index[a]) = relative.col(a) / scale[a];
+  outcome.reduced = reduced;
+  outcome.scale = scale;
   return outcome;
+}
+
+Eigen::MatrixXd gain_sensitivity(const RobotModel& model, const Trajectory& data, const PdController& gains,
+                                 double relative_tolerance, const Eigen::VectorXd& theta, const Eigen::VectorXd* start,
+                                 const Eigen::VectorXd& residual, const Eigen::MatrixXd& unknowns_jacobian,
+                                 const Eigen::MatrixXd& to_theta) {
+  const int n = static_cast<int>(gains.kp.size());
+  Eigen::MatrixXd response(residual.size(), 2 * n);  // J_g
+  for (int g = 0; g < 2 * n; ++g) {
+    PdController moved = gains;
+    double& gain = g < n ? moved.kp[g] : moved.kd[g - n];
+    const double step = 1e-4 * std::max(std::abs(gain), 1e-6);
+    gain += step;
+    Eigen::VectorXd shifted;
+    OutputErrorCost(model, data, moved, relative_tolerance).evaluate(Parameters::from_vector(theta), &shifted, start);
+    response.col(g) = (shifted - residual) / step;
+  }
+  // Least squares' response of the unknowns (a pseudo-inverse: Ĵ may be rank-deficient along directions the
+  // run barely sees, and is zero along those it cannot).
+  return to_theta * (-unknowns_jacobian.completeOrthogonalDecomposition().solve(response));
+}
+
+Eigen::MatrixXd gain_sensitivity(const RobotModel& model, const Trajectory& data, const PdController& gains,
+                                 double relative_tolerance, const GaussNewtonOutcome& outcome, const Eigen::MatrixXd& basis,
+                                 const FitBounds& bounds) {
+  const int n = bounds.n;
+  const int r = static_cast<int>(basis.cols());
+  // θ moves by D B along the directions (D = |θ| of the free parameters); the start angles move θ not at all.
+  Eigen::MatrixXd to_theta = Eigen::MatrixXd::Zero(outcome.theta.size(), r + n);
+  Eigen::Index a = 0;
+  for (int i = 0; i < static_cast<int>(bounds.free.size()); ++i) {
+    if (!bounds.free[static_cast<std::size_t>(i)]) continue;
+    to_theta.row(i).head(r) = basis.row(a) * outcome.scale[a];
+    ++a;
+  }
+  return gain_sensitivity(model, data, gains, relative_tolerance, outcome.theta, &outcome.start, outcome.residual,
+                          outcome.reduced, to_theta);
 }
 
 }  // namespace manipid::detail

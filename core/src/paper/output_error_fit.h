@@ -31,6 +31,10 @@ Eigen::MatrixXd output_error_jacobian(const OutputErrorCost& cost, const Eigen::
 struct GaussNewtonOutcome {
   Eigen::VectorXd theta, start, residual;
   Eigen::MatrixXd jacobian;  ///< ∂residual/∂θ at `theta`, θ units (zero along unseen directions)
+  /// The last measured Jacobian the fit stepped with: residual × (identifiable directions in relative
+  /// coordinates, then the start angles), and the |θ| that made the directions relative (free parameters).
+  Eigen::MatrixXd reduced;
+  Eigen::VectorXd scale;
   double cost = 0.0;
   int iterations = 0;
   std::string stop_reason;
@@ -45,5 +49,21 @@ struct GaussNewtonOutcome {
 GaussNewtonOutcome gauss_newton_output_error(const OutputErrorCost& cost, const Eigen::VectorXd& theta_start,
                                              const Eigen::MatrixXd& basis, const FitBounds& bounds,
                                              const IdentificationOptions& options, EvaluationLog& log);
+
+/// ∂θ̂/∂g: how an output-error estimate moves per unit change of each PD gain the simulation used, to first
+/// order (θ × 2n, columns Kp1..Kpn then Kd1..Kdn, θ units per N·m/rad and per N·m·s/rad): the fit's unknowns
+/// u respond as least squares would, δu = −Ĵ⁺ J_g δg, and θ moves by `to_theta` δu. Ĵ = ∂residual/∂u at the
+/// estimate (`unknowns_jacobian`), J_g the residual's forward-difference response to each gain at θ̂ and
+/// the start angles `start` (nullptr: the measured ones), 2n simulations with 1e-4 relative steps. Zero
+/// along the directions the data cannot see (Ĵ⁺ is a pseudo-inverse).
+Eigen::MatrixXd gain_sensitivity(const RobotModel& model, const Trajectory& data, const PdController& gains,
+                                 double relative_tolerance, const Eigen::VectorXd& theta, const Eigen::VectorXd* start,
+                                 const Eigen::VectorXd& residual, const Eigen::MatrixXd& unknowns_jacobian,
+                                 const Eigen::MatrixXd& to_theta);
+
+/// The same for the two-stage fit: its unknowns are the identifiable directions and the start angles.
+Eigen::MatrixXd gain_sensitivity(const RobotModel& model, const Trajectory& data, const PdController& gains,
+                                 double relative_tolerance, const GaussNewtonOutcome& outcome, const Eigen::MatrixXd& basis,
+                                 const FitBounds& bounds);
 
 }  // namespace manipid::detail

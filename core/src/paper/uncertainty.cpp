@@ -116,7 +116,11 @@ Uncertainty assess_uncertainty(const UncertaintyInput& input) {
       report.findings.push_back(text.str());
     }
   }
-  const Eigen::MatrixXd covariance = input.residual_variance * inverse;  // relative coordinates
+  Eigen::MatrixXd covariance = input.residual_variance * inverse;  // relative coordinates
+  if (input.added_covariance.rows() == total && input.added_covariance.allFinite()) {
+    for (int a = 0; a < p; ++a)
+      for (int b = 0; b < p; ++b) covariance(a, b) += input.added_covariance(free_index[a], free_index[b]) / (scale[a] * scale[b]);
+  }
 
   for (int a = 0; a < p; ++a) {
     if (unidentifiable.count(a)) continue;

@@ -24,6 +24,9 @@ struct UncertaintyInput {
   // never have an exact null space, so they should not decide it.
   Eigen::MatrixXd structure;
   double residual_variance = 0.0;  // σ² of one residual (with any correlation correction)
+  // Covariance of θ (all parameters, θ units) from what the residual cannot show — the PD gains two-stage
+  // estimated and simulated with — added to σ² H⁺ on the identifiable parameters; empty = none.
+  Eigen::MatrixXd added_covariance;
   const ParameterProducts* products = nullptr;  // to name identifiable combinations
 };
 

@@ -16,12 +16,17 @@
 
 #include <Eigen/Core>
 
+#include <vector>
+
 namespace manipid {
 
 struct GainFit {
   PdController gains;  ///< the least-squares Kp (N·m/rad) and Kd (N·m·s/rad), one per joint
   /// Per joint, RMS of τ^f − law(gains) over RMS of τ^f (dimensionless; 0.01 = 1 %).
   Eigen::VectorXd relative_residual;
+  /// Per joint, the covariance of (Kp, Kd): σ² (AᵀA)⁻¹ with σ² the law's residual variance, inflated
+  /// for the low-passed residual's correlation (estimation/rules.h). Units (N·m/rad)², (N·m·s/rad)².
+  std::vector<Eigen::Matrix2d> covariance;
 };
 
 /// r^f: each joint's reference low-passed with `filter` (samples × joints, aligned with the
