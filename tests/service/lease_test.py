@@ -73,8 +73,9 @@ class Leases(unittest.TestCase):
         return holder, self.servers[1 - names.index(job["worker"])]
 
     def test_a_paused_worker_loses_its_job_to_the_other_process_and_writes_nothing_more(self):
-        # Output-error simulates the loop at every evaluation: slow enough to be caught running.
-        body = {"simulation": {"duration": 3.0}, "method": "output-error", "max_evaluations": 40}
+        # Output-error simulates the loop at every evaluation: 200 of a 10 s run take about 1.5 s in a release
+        # build (40 of 3 s, 0.08 s, ended before the poll could see it running) and ~15 s under the sanitizers.
+        body = {"simulation": {"duration": 10.0}, "method": "output-error", "max_evaluations": 200}
         status, _, job = self.servers[0].request("POST", "/v1/identifications", body)
         self.assertEqual(status, 202, job)
         running = wait_for(lambda j: j["state"] == "running" and j["progress"]["evaluations"] > 0,

@@ -5,7 +5,7 @@
 #include "manipid/core/estimation/rules.h"
 #include "manipid/core/signal/filters.h"
 
-#include <Eigen/LU>
+#include <Eigen/LU>  // Matrix2d::inverse
 #include <Eigen/QR>
 
 #include <algorithm>
@@ -73,9 +73,10 @@ GainFit fit_pd_gains(const FilteredData& filtered, const Eigen::MatrixXd& refere
     fit.relative_residual[j] = relative(residual, filtered.tau.col(j));
     // A joint whose columns are dependent (it never moves) has no finite covariance: NaN says so.
     const Eigen::Matrix2d information = columns.transpose() * columns;
-    const Eigen::FullPivLU<Eigen::Matrix2d> lu(information);
-    fit.covariance.push_back(lu.isInvertible() ? Eigen::Matrix2d(residual.squaredNorm() / dof * correlation * lu.inverse())
-                                               : Eigen::Matrix2d::Constant(std::numeric_limits<double>::quiet_NaN()));
+    const double determinant = information.determinant();
+    const bool invertible = std::isfinite(determinant) && determinant > 1e-12 * information(0, 0) * information(1, 1);
+    fit.covariance.push_back(invertible ? Eigen::Matrix2d(residual.squaredNorm() / dof * correlation * information.inverse())
+                                        : Eigen::Matrix2d::Constant(std::numeric_limits<double>::quiet_NaN()));
   }
   return fit;
 }
