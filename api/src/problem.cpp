@@ -133,4 +133,13 @@ Problem problem_from(const InputError& error) {
   return Problem{ProblemKind::invalid_field, error.what(), error.field()};
 }
 
+bool is_valid_utf8(std::string_view text) {
+  for (std::size_t i = 0; i < text.size();) {
+    const std::size_t length = utf8_sequence_length(text, i);
+    if (length == 0) return false;
+    i += length;
+  }
+  return true;
+}
+
 }  // namespace manipid::api

@@ -1253,6 +1253,23 @@ TEST_F(Routes, AROS2BagIsADatasetItsJointsMatchedByTheRobotsNames) {
   expect_problem(post("/v1/datasets", "t,q1\n0,1\n", "application/vnd.sqlite3"), 422, "INVALID_FIELD", "bag");
 }
 
+TEST_F(Routes, TextThatIsNotUtf8IsRefusedBeforeAnythingIsStored) {
+  // ?name=%FF decodes to one byte no JSON can hold: once stored, it broke every later list (issue 29).
+  const std::string csv = "t,q1,tau1\n0,0,1\n0.001,0.1,1\n0.002,0.2,1\n";
+  Json problem = expect_problem(post("/v1/datasets?name=%FF", csv, "text/csv"), 422, "INVALID_FIELD", "name");
+  EXPECT_NE(problem["detail"].get<std::string>().find("not valid UTF-8"), std::string::npos) << problem;
+  expect_problem(post("/v1/robots?name=%C3%28", kTwoJointUrdf, "application/xml"), 422, "INVALID_FIELD", "name");
+  std::string urdf = kTwoJointUrdf;
+  urdf.insert(urdf.find("<link"), "<!-- \xFF -->");
+  expect_problem(post("/v1/robots", urdf, "application/xml"), 422, "INVALID_FIELD", "urdf");
+  expect_problem(post("/v1/robots?tip=%ED%A0%80", kTwoJointUrdf, "application/xml"), 422, "INVALID_FIELD", "tip");  // a surrogate
+  EXPECT_TRUE(fake_.uploads().empty());
+  EXPECT_EQ(json_of(get("/v1/robots"))["items"].size(), 0u);
+  // UTF-8 names are names like any other.
+  EXPECT_EQ(post("/v1/datasets?name=Gel%C3%A4nde", csv, "text/csv")->status, 201);
+  EXPECT_EQ(fake_.uploads().at(0).upload.name, "Gel\xC3\xA4nde");
+}
+
 TEST_F(Routes, BadRobotsAreRefusedNamingTheFieldAndNothingIsStored) {
   expect_problem(post("/v1/robots", "<robot name='x'><link", "application/xml"), 422, "INVALID_FIELD", "urdf");
   expect_problem(post("/v1/robots?tip=nowhere", kTwoJointUrdf, "application/xml"), 422, "INVALID_FIELD", "tip");

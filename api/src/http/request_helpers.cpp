@@ -121,4 +121,13 @@ bool wants_csv(const httplib::Request& request) {
 
 std::string etag_of(const std::string& body) { return "\"" + sha256_hex({body}).substr(0, 32) + "\""; }
 
+void require_utf8(std::string_view value, const char* field) {
+  if (!is_valid_utf8(value)) {
+    throw ApiError(ProblemKind::invalid_field,
+                   std::string(field) + " is not valid UTF-8: send text as UTF-8 (percent-encode a query parameter's UTF-8 "
+                                        "bytes)",
+                   field);
+  }
+}
+
 }  // namespace manipid::api::http

@@ -21,6 +21,10 @@ std::string media_type(const httplib::Request& request);
 /// True when the body's first non-blank character opens a JSON object or array.
 bool looks_like_json(const std::string& body);
 
+/// Throws ApiError(invalid_field, `field`) when `value` (a query parameter, a document) is not UTF-8: it
+/// would be stored and answered as JSON, which cannot hold it.
+void require_utf8(std::string_view value, const char* field);
+
 /// The body's text, when its media type is JSON's (as json_body accepts) and it is not empty.
 const std::string& json_text(const httplib::Request& request);
 /// The body as a JSON object. Accepts application/json, and — because `curl -d @file` sends

@@ -7,7 +7,8 @@ namespace manipid::api::http {
 
 void send_json(httplib::Response& response, int status, const nlohmann::ordered_json& body) {
   response.status = status;
-  response.set_content(body.dump(), "application/json");
+  // A stored row from before names were checked could hold invalid UTF-8: answered with U+FFFD, never a 500.
+  response.set_content(body.dump(-1, ' ', false, nlohmann::ordered_json::error_handler_t::replace), "application/json");
 }
 
 Problem out_of_memory() {

@@ -147,6 +147,7 @@ void create_dataset(RouteState& state, const httplib::Request& request, httplib:
     }
     upload = dataset_from_bag(request.body, options);
     upload.name = request.get_param_value("name");
+    require_utf8(upload.name, "name");
     if (upload.name.size() > 200) throw ApiError(ProblemKind::invalid_field, "name is longer than 200 bytes", "name");
   } else if (type == "text/csv" || (unlabelled && !looks_like_json(request.body))) {
     // A lab's own log: its column map and units from the query (and a robot's joint names for {joint}).
@@ -168,6 +169,7 @@ void create_dataset(RouteState& state, const httplib::Request& request, httplib:
                                "line ends; send it with curl --data-binary @run.csv -H 'Content-Type: text/csv'");
     }
     upload.name = request.get_param_value("name");  // CSV has no room for it: ?name=
+    require_utf8(upload.name, "name");
     if (upload.name.size() > 200) throw ApiError(ProblemKind::invalid_field, "name is longer than 200 bytes", "name");
   } else {
     upload = dataset_from_json_text(json_text(request));  // refuses other media types with 415; no document

@@ -31,6 +31,10 @@ void create_robot(RouteState& state, const httplib::Request& request, httplib::R
     upload.name = request.get_param_value("name");
     upload.base = request.get_param_value("base");
     upload.tip = request.get_param_value("tip");
+    require_utf8(upload.urdf, "urdf");
+    require_utf8(upload.name, "name");
+    require_utf8(upload.base, "base");
+    require_utf8(upload.tip, "tip");
     if (upload.name.size() > 200) throw ApiError(ProblemKind::invalid_field, "name is longer than 200 bytes", "name");
   } else {
     upload = robot_from_json(json_body(request));  // refuses other media types with 415

@@ -12,6 +12,7 @@
 
 #include <stdexcept>
 #include <string>
+#include <string_view>
 
 namespace manipid::api {
 
@@ -51,6 +52,9 @@ const char* title_of(ProblemKind kind);  ///< e.g. "A field of the request is in
 
 /// {"type", "title", "status", "detail", "code"[, "field"][, "instance"]}
 nlohmann::json problem_to_json(const Problem& problem, const std::string& instance = "");
+
+/// Whether `text` is well-formed UTF-8 (no overlong forms, no surrogates): what JSON text may hold.
+bool is_valid_utf8(std::string_view text);
 
 /// Thrown by api/ and server/ code that wants a specific answer; routes turn it into the
 /// response. InputError from the core becomes invalid_field with the same field.
