@@ -535,6 +535,11 @@ void assess_output_error(const Problem& problem, const OutputErrorCost& output_e
   apply_uncertainty(result, detail::assess_uncertainty(uncertainty));
 }
 
+// Output-error and two-stage simulate the loop with the gains as exact. Estimated from the data, their
+// 0.1–0.2 % error on the noisy paper case moves θ̂ by several of the residual's standard errors (m2 by
+// 7.5 σ on the README's seed 7), so the standard errors carry it: S Σ_g Sᵀ added to σ² H⁺, S = ∂θ̂/∂g
+// (output_error_fit.h).
+
 /// The estimated PD gains' covariance as one matrix over (Kp1..Kpn, Kd1..Kdn) (controller_gains.h), or empty
 /// when the gains were given or assumed, or a joint's covariance is not finite.
 Eigen::MatrixXd estimated_gains_covariance(const IdentificationResult& result, int n) {
@@ -551,11 +556,6 @@ Eigen::MatrixXd estimated_gains_covariance(const IdentificationResult& result, i
   }
   return covariance;
 }
-
-// Output-error and two-stage simulate the loop with the gains as exact. Estimated from the data, their
-// 0.1–0.2 % error on the noisy paper case moves θ̂ by several of the residual's standard errors (m2 by
-// 7.5 σ on the README's seed 7), so the standard errors carry it: S Σ_g Sᵀ added to σ² H⁺, S = ∂θ̂/∂g
-// (output_error_fit.h).
 
 void assess_input_error(const Problem& problem, const InputErrorStage& stage, IdentificationResult& result) {
   const Setup& setup = problem.setup;
@@ -651,7 +651,7 @@ void identify_output_error(const Problem& problem, IdentificationResult& result)
   output_error.evaluate(Parameters::from_vector(result.estimate), &residual);
   const Eigen::MatrixXd jacobian = detail::output_error_jacobian(output_error, result.estimate, residual, setup.free, basis);
   Eigen::MatrixXd gain_part;
-  if (const Eigen::MatrixXd sigma = estimated_gains_covariance(result, setup.n); sigma.size() > 0) {
+  if (const Eigen::MatrixXd sigma = estimated_gains_covariance(result, setup.n); sigma.size() > 0 && !result.cancelled) {
     const Eigen::MatrixXd identity = Eigen::MatrixXd::Identity(result.estimate.size(), result.estimate.size());
     const Eigen::MatrixXd sensitivity =
         detail::gain_sensitivity(problem.model, problem.data, *options.controller, options.simulation_relative_tolerance,
