@@ -134,17 +134,23 @@ void create_dataset(RouteState& state, const httplib::Request& request, httplib:
   // `curl --data-binary @run.csv` labels the body form-urlencoded unless told otherwise: an
   // unlabelled body is JSON when it looks like JSON, else CSV.
   const bool unlabelled = type.empty() || type == "application/x-www-form-urlencoded";
+  // What a bag's joints and a column map's {joint} match: the names of the robot the query names, if any.
+  const auto robot_joint_names = [&] {
+    std::vector<std::string> names;
+    if (request.has_param("robot_id")) {
+      for (const robot::Joint& joint : stored_robot(state, request.get_param_value("robot_id"), "robot_id").model.joints) {
+        names.push_back(joint.name);
+      }
+    }
+    return names;
+  };
   DatasetUpload upload;
   const bool bag_type = type == "application/vnd.sqlite3" || type == "application/x-sqlite3";
   if (bag_type || ((unlabelled || type == "application/octet-stream") && is_sqlite_database(request.body))) {
     // A ROS 2 bag (sqlite3 storage) of JointState: its topic from the query, its joints by the robot's names.
     BagOptions options;
     options.topic = request.get_param_value("topic");
-    if (request.has_param("robot_id")) {
-      for (const robot::Joint& joint : stored_robot(state, request.get_param_value("robot_id"), "robot_id").model.joints) {
-        options.joint_names.push_back(joint.name);
-      }
-    }
+    options.joint_names = robot_joint_names();
     upload = dataset_from_bag(request.body, options);
     upload.name = request.get_param_value("name");
     require_utf8(upload.name, "name");
@@ -155,11 +161,7 @@ void create_dataset(RouteState& state, const httplib::Request& request, httplib:
     format.columns = request.get_param_value("columns");
     if (request.has_param("time_unit")) format.time_unit = request.get_param_value("time_unit");
     if (request.has_param("angle_unit")) format.angle_unit = request.get_param_value("angle_unit");
-    if (request.has_param("robot_id")) {
-      for (const robot::Joint& joint : stored_robot(state, request.get_param_value("robot_id"), "robot_id").model.joints) {
-        format.joint_names.push_back(joint.name);
-      }
-    }
+    format.joint_names = robot_joint_names();
     try {
       upload = dataset_from_csv(request.body, format);
     } catch (const InputError& error) {

@@ -130,9 +130,8 @@ ParameterLayout with_offset() {
 
 // ---- base parameters ----
 
-TEST(BaseParameters, ThePlanarTwoLinkArmHasSixRegroupedAsTheTextbookSays) {
-  // Two parallel z axes, the second 0.5 m along x, gravity in the plane (−y): six base inertial
-  // parameters (Gautier & Khalil): Izz1 + a²·m2, mx1 + a·m2, my1, Izz2, mx2, my2.
+/// Two parallel z axes, the second 0.5 m along x, gravity in the plane (−y): the textbook planar arm.
+Model planar_two_link_arm() {
   const std::string urdf = R"(<robot name="planar">
     <link name="base"/>
     <joint name="j1" type="continuous"><parent link="base"/><child link="l1"/><axis xyz="0 0 1"/></joint>
@@ -142,7 +141,13 @@ TEST(BaseParameters, ThePlanarTwoLinkArmHasSixRegroupedAsTheTextbookSays) {
   </robot>)";
   UrdfOptions options;
   options.gravity = Eigen::Vector3d(0.0, -9.81, 0.0);
-  const Model model = parse_urdf(urdf, options).model;
+  return parse_urdf(urdf, options).model;
+}
+
+TEST(BaseParameters, ThePlanarTwoLinkArmHasSixRegroupedAsTheTextbookSays) {
+  // Two parallel z axes, the second 0.5 m along x, gravity in the plane (−y): six base inertial
+  // parameters (Gautier & Khalil): Izz1 + a²·m2, mx1 + a·m2, my1, Izz2, mx2, my2.
+  const Model model = planar_two_link_arm();
   ParameterLayout layout;
   layout.viscous = layout.coulomb = false;
   const BaseParameters base = base_parameters(model, layout);
@@ -155,16 +160,7 @@ TEST(BaseParameters, ThePlanarTwoLinkArmHasSixRegroupedAsTheTextbookSays) {
 TEST(LinkTable, ThePlanarArmDeterminesWhatTheTextbookSaysAndNothingMore) {
   // The planar arm above: of its standard parameters the data fix alone exactly my1, mx2, my2 and Izz2 —
   // the base parameters that are one standard parameter each; m2 only in combinations, m1 never.
-  const std::string urdf = R"(<robot name="planar">
-    <link name="base"/>
-    <joint name="j1" type="continuous"><parent link="base"/><child link="l1"/><axis xyz="0 0 1"/></joint>
-    <link name="l1"><inertial><origin xyz="0.25 0 0"/><mass value="2"/><inertia ixx="0.01" ixy="0" ixz="0" iyy="0.05" iyz="0" izz="0.05"/></inertial></link>
-    <joint name="j2" type="continuous"><parent link="l1"/><child link="l2"/><origin xyz="0.5 0 0"/><axis xyz="0 0 1"/></joint>
-    <link name="l2"><inertial><origin xyz="0.2 0 0"/><mass value="1"/><inertia ixx="0.01" ixy="0" ixz="0" iyy="0.03" iyz="0" izz="0.03"/></inertial></link>
-  </robot>)";
-  UrdfOptions urdf_options;
-  urdf_options.gravity = Eigen::Vector3d(0.0, -9.81, 0.0);
-  const Model model = parse_urdf(urdf, urdf_options).model;
+  const Model model = planar_two_link_arm();
   ParameterLayout layout;
   layout.viscous = layout.coulomb = false;
   std::mt19937_64 engine(5);
