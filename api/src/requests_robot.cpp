@@ -231,9 +231,28 @@ RobotIdentificationSpec robot_identification_from_json(const nlohmann::json& bod
   return spec;
 }
 
+namespace {
+
+/// A per-joint limit: one positive number for every joint, or an array of them (one per joint; the count
+/// is checked against the robot by the core).
+Eigen::VectorXd read_joint_limits(const fields::Json& value, const std::string& field, const std::string& unit) {
+  if (value.is_number()) return Eigen::VectorXd::Constant(1, fields::read_positive(value, field));
+  if (value.is_array() && !value.empty()) {
+    Eigen::VectorXd values(static_cast<Eigen::Index>(value.size()));
+    for (std::size_t i = 0; i < value.size(); ++i) {
+      values[static_cast<Eigen::Index>(i)] = fields::read_positive(value[i], fields::element_path(field, i));
+    }
+    return values;
+  }
+  throw InputError(field, field + " must be a number or one number per joint, " + unit + ", got " + fields::describe(value));
+}
+
+}  // namespace
+
 ExcitationSpec excitation_from_json(const nlohmann::json& body) {
   const fields::ObjectFields object(body, "",
                                     {"robot_id", "name", "period", "harmonics", "criterion", "max_acceleration",
+                                     "max_velocity", "max_jerk", "max_torque", "torque_parameters", "start_pose",
                                      "position_margin", "duration", "dt", "friction", "armature", "seed", "max_seconds",
                                      "max_evaluations"});
   ExcitationSpec spec;
@@ -250,19 +269,25 @@ ExcitationSpec excitation_from_json(const nlohmann::json& body) {
     options.criterion = robot::parse_excitation_criterion(
         fields::read_choice(*criterion, "criterion", {"condition", "logdet"}), "criterion");
   }
-  if (const fields::Json* acceleration = object.find("max_acceleration")) {
-    if (acceleration->is_number()) {
-      options.max_acceleration = Eigen::VectorXd::Constant(1, fields::read_positive(*acceleration, "max_acceleration"));
-    } else if (acceleration->is_array() && !acceleration->empty()) {
-      options.max_acceleration.resize(static_cast<Eigen::Index>(acceleration->size()));
-      for (std::size_t i = 0; i < acceleration->size(); ++i) {
-        options.max_acceleration[static_cast<Eigen::Index>(i)] =
-            fields::read_positive((*acceleration)[i], fields::element_path("max_acceleration", i));
-      }
-    } else {
-      throw InputError("max_acceleration", "max_acceleration must be a number or one number per joint, rad/s^2, got " +
-                                               fields::describe(*acceleration));
+  if (const fields::Json* value = object.find("max_acceleration")) {
+    options.max_acceleration = read_joint_limits(*value, "max_acceleration", "rad/s^2");
+  }
+  if (const fields::Json* value = object.find("max_velocity")) options.max_velocity = read_joint_limits(*value, "max_velocity", "rad/s");
+  if (const fields::Json* value = object.find("max_jerk")) options.max_jerk = read_joint_limits(*value, "max_jerk", "rad/s^3");
+  if (const fields::Json* value = object.find("max_torque")) options.max_torque = read_joint_limits(*value, "max_torque", "N m");
+  if (const fields::Json* pose = object.find("start_pose")) {
+    if (!pose->is_array() || pose->empty()) {
+      throw InputError("start_pose", "start_pose must be an array of joint positions (rad, m prismatic), one per joint, got " +
+                                         fields::describe(*pose));
     }
+    options.start_pose.resize(static_cast<Eigen::Index>(pose->size()));
+    for (std::size_t i = 0; i < pose->size(); ++i) {
+      options.start_pose[static_cast<Eigen::Index>(i)] = fields::read_number((*pose)[i], fields::element_path("start_pose", i));
+    }
+  }
+  if (const fields::Json* model = object.find("torque_parameters")) {
+    fields::require_object(*model, "torque_parameters");
+    spec.torque_parameters = *model;
   }
   if (const fields::Json* margin = object.find("position_margin")) {
     options.position_margin = fields::read_non_negative(*margin, "position_margin");
@@ -287,8 +312,19 @@ ExcitationSpec excitation_from_json(const nlohmann::json& body) {
   return spec;
 }
 
+robot::ExcitationOptions excitation_options(const ExcitationSpec& spec, const robot::Model& model) {
+  robot::ExcitationOptions options = spec.options;
+  if (!spec.torque_parameters.is_null()) {
+    const ParameterValues values = parameters_from_json(model, spec.torque_parameters, "torque_parameters");
+    options.torque_layout = values.layout;
+    options.torque_parameters = values.values;
+  }
+  return options;
+}
+
 void check_excitation(const ExcitationSpec& spec, const robot::Model& model) {
-  (void)robot::excitation_limits(model, spec.options);  // the robot's limits leave room; per-joint sizes match
+  // The robot's limits leave room; per-joint sizes match; the torque model fits the robot.
+  (void)robot::excitation_limits(model, excitation_options(spec, model));
   // The designed dataset holds t, q, qd and qdd: it must fit the store like an upload.
   const double samples = spec.options.period * spec.periods / spec.dt + 1.0;
   limits::check_dataset_size(static_cast<long long>(samples), model.joint_count(), 3, "duration",

@@ -6,6 +6,8 @@
 #include "manipid/core/robot/base_parameters.h"
 #include "manipid/core/robot/excitation.h"
 #include "manipid/core/robot/link_table.h"
+#include "manipid/core/robot/rnea.h"
+#include "manipid/api/plots.h"
 
 #include <algorithm>
 #include <cmath>
@@ -359,7 +361,22 @@ nlohmann::ordered_json excitation_to_json(const robot::Model& model, const robot
                       {"limit", limit.limit}});
   }
   const robot::ParameterLayout& layout = design_options.layout;
-  return nlohmann::ordered_json{
+  // Per joint, what the design reaches and the share of each limit it uses (LimitKind's order).
+  const auto column = [](const Eigen::MatrixXd& m, Eigen::Index c) {
+    return c < m.cols() ? vector_json(m.col(c)) : Json::array();
+  };
+  nlohmann::ordered_json ramp = nullptr;
+  if (design.ramp) {
+    ramp = {{"pose", vector_json(design.ramp->pose)},
+            {"target", vector_json(design.ramp->target)},
+            {"duration", design.ramp->duration},
+            {"peaks",
+             {{"velocity", column(design.ramp->peaks, 0)},
+              {"acceleration", column(design.ramp->peaks, 1)},
+              {"jerk", column(design.ramp->peaks, 2)},
+              {"torque", column(design.ramp->peaks, 3)}}}};
+  }
+  nlohmann::ordered_json json{
       {"robot", model.name},
       {"joints", joints},
       {"series", "q_k(t) = q0_k + sum_{l=1..L} [a_kl/(w l) sin(w l t) - b_kl/(w l) cos(w l t)], w = 2 pi / period; "
@@ -385,14 +402,52 @@ nlohmann::ordered_json excitation_to_json(const robot::Model& model, const robot
         {"upper", vector_json(limits.upper)},
         {"velocity", vector_json(limits.velocity)},
         {"acceleration", vector_json(limits.acceleration)},
+        {"jerk", vector_json(limits.jerk)},
+        {"torque", vector_json(limits.torque)},
+        {"torque_model", design_options.torque_parameters.size() ? "given parameters" : "the URDF's"},
         {"position_margin", design_options.position_margin}}},
+      {"peaks",
+       {{"lower", column(summary.peaks, 0)},
+        {"upper", column(summary.peaks, 1)},
+        {"velocity", column(summary.peaks, 2)},
+        {"acceleration", column(summary.peaks, 3)},
+        {"jerk", column(summary.peaks, 4)},
+        {"torque", column(summary.peaks, 5)}}},
+      {"usage",
+       {{"lower", column(summary.usage, 0)},
+        {"upper", column(summary.usage, 1)},
+        {"velocity", column(summary.usage, 2)},
+        {"acceleration", column(summary.usage, 3)},
+        {"jerk", column(summary.usage, 4)},
+        {"torque", column(summary.usage, 5)}}},
+      {"torque_scale", summary.torque_scale},
       {"active_limits", active},
+      {"ramp", ramp},
       {"seed", design_options.seed},
       {"evaluations", summary.evaluations},
+      {"max_evaluations", design_options.max_evaluations},
       {"wall_seconds", summary.wall_seconds},
       {"termination", robot::to_string(summary.termination)},
       {"message", summary.message},
   };
+  return json;
+}
+
+nlohmann::ordered_json excitation_torque_json(const robot::Model& model, const robot::ExcitationLimits& limits,
+                                              const robot::SampledExcitation& sampled, long max_points) {
+  const std::vector<long> indices = plot_indices(static_cast<long>(sampled.t.size()), max_points);
+  const Eigen::Index n = model.joint_count();
+  robot::Data data(model);
+  Eigen::VectorXd tau(n);
+  Json t = Json::array();
+  std::vector<Json> joints(static_cast<std::size_t>(n), Json::array());
+  for (const long i : indices) {
+    robot::inverse_dynamics(model, data, limits.torque_layout, limits.torque_parameters, sampled.q.col(i),
+                            sampled.qd.col(i), sampled.qdd.col(i), tau);
+    t.push_back(sampled.t[i]);
+    for (Eigen::Index k = 0; k < n; ++k) joints[static_cast<std::size_t>(k)].push_back(tau[k]);
+  }
+  return {{"t", t}, {"tau", joints}};
 }
 
 }  // namespace manipid::api

@@ -10,6 +10,8 @@
 
 #include <nlohmann/json.hpp>
 
+#include <unistd.h>
+
 #include <cmath>
 #include <cstdio>
 #include <sstream>
@@ -24,6 +26,11 @@ std::string excitation_option(const std::string& field, const std::string& urdf)
   if (field == "period") return "--period";
   if (field == "harmonics") return "--harmonics";
   if (field == "max_acceleration") return "--max-acceleration";
+  if (field == "max_velocity") return "--max-velocity";
+  if (field == "max_jerk") return "--max-jerk";
+  if (field == "max_torque") return "--max-torque";
+  if (field == "torque_parameters") return "--params";
+  if (field == "start_pose") return "--start-pose";
   if (field == "position_margin") return "--position-margin";
   if (field == "criterion") return "--criterion";
   if (field == "max_seconds") return "--max-seconds";
@@ -33,15 +40,40 @@ std::string excitation_option(const std::string& field, const std::string& urdf)
   return urdf;
 }
 
-Eigen::VectorXd parse_accelerations(const std::string& text) {
+/// "V" or "V1,...,Vn" for `option` ("" = none given: an empty vector, the core's default).
+Eigen::VectorXd parse_values(const std::string& text, const std::string& option) {
   const std::vector<std::string> items = split_list(text);
-  if (items.empty()) throw InputError("max_acceleration", "--max-acceleration: expected A or A1,...,An in rad/s^2");
   Eigen::VectorXd values(static_cast<Eigen::Index>(items.size()));
   for (std::size_t i = 0; i < items.size(); ++i) {
-    values[static_cast<Eigen::Index>(i)] = parse_number_option(items[i], "--max-acceleration");
+    values[static_cast<Eigen::Index>(i)] = parse_number_option(items[i], option);
   }
   return values;
 }
+
+/// A progress line on stderr at most once a second: "design: 2400/8000 evaluations, best condition 5.61, 1.9 s".
+class ProgressLine {
+ public:
+  ProgressLine(long budget, const char* criterion, bool terminal) : budget_(budget), criterion_(criterion), terminal_(terminal) {}
+  void operator()(const robot::ExcitationProgress& progress) {
+    if (progress.seconds < next_) return;
+    next_ = progress.seconds + 1.0;
+    std::fprintf(stderr, "%smanipid excitation: %ld/%ld evaluations, best %s %.6g, %.1f s%s", terminal_ ? "\r" : "",
+                 progress.evaluation, budget_, criterion_, progress.best_value, progress.seconds, terminal_ ? "" : "\n");
+    std::fflush(stderr);
+    shown_ = true;
+  }
+  /// Ends a line left open on a terminal.
+  void finish() const {
+    if (terminal_ && shown_) std::fputc('\n', stderr);
+  }
+
+ private:
+  long budget_;
+  const char* criterion_;
+  bool terminal_;
+  double next_ = 1.0;
+  bool shown_ = false;
+};
 
 /// --duration as a whole number of periods (default 1): any other length would not end at rest.
 }  // namespace
@@ -79,6 +111,22 @@ CLI::App* add_excitation_command(CLI::App& app, ExcitationOptions& options) {
       ->add_option("--max-acceleration", options.max_acceleration,
                    "Acceleration limit, rad/s^2 (m/s^2 prismatic): one value, or one per joint comma-separated")
       ->capture_default_str();
+  command->add_option("--max-velocity", options.max_velocity,
+                      "Velocity limit, rad/s (m/s): one value, or one per joint comma-separated; never above the "
+                      "URDF's (default: the URDF's)");
+  command->add_option("--max-jerk", options.max_jerk,
+                      "Jerk limit, rad/s^3 (m/s^3): one value, or one per joint comma-separated (default: none)");
+  command->add_option("--max-torque", options.max_torque,
+                      "Torque limit, N m (N): one value, or one per joint comma-separated; never above the URDF's "
+                      "effort (default: the URDF's efforts)");
+  command->add_option("--params", options.parameters,
+                      "The model whose torque the limits hold, as `manipid torque --params` takes it (an identify "
+                      "result JSON, or {\"name\": value} overrides); default: the URDF's inertial parameters");
+  command->add_option("--start-pose", options.start_pose,
+                      "Where the arm stands before and after, q1,...,qn in rad (m): the output then ramps from it to "
+                      "the trajectory and back (default: none; the output starts at the trajectory's own start)");
+  command->add_flag("--progress", options.progress,
+                    "Report the design's progress on stderr once a second (on by default when stderr is a terminal)");
   command
       ->add_option("--position-margin", options.position_margin,
                    "Distance kept from each position limit, rad (m prismatic)")
@@ -125,7 +173,25 @@ int run_excitation(const ExcitationOptions& options) {
   design_options.max_evaluations = options.max_evaluations;
   design_options.criterion = robot::parse_excitation_criterion(options.criterion, "criterion");
   design_options.layout = parameter_layout(options.friction, options.armature);
-  design_options.max_acceleration = parse_accelerations(options.max_acceleration);
+  design_options.max_acceleration = parse_values(options.max_acceleration, "--max-acceleration");
+  if (design_options.max_acceleration.size() == 0) {
+    throw InputError("max_acceleration", "--max-acceleration: expected A or A1,...,An in rad/s^2");
+  }
+  design_options.max_velocity = parse_values(options.max_velocity, "--max-velocity");
+  design_options.max_jerk = parse_values(options.max_jerk, "--max-jerk");
+  design_options.max_torque = parse_values(options.max_torque, "--max-torque");
+  design_options.start_pose = parse_values(options.start_pose, "--start-pose");
+  if (!options.parameters.empty()) {
+    nlohmann::json json;
+    try {
+      json = nlohmann::json::parse(read_text(options.parameters));
+    } catch (const nlohmann::json::exception&) {
+      throw InputError("params", input_name(options.parameters) + ": not a JSON document");
+    }
+    const api::ParameterValues torque_model = api::parameters_from_json(model, json, input_name(options.parameters));
+    design_options.torque_layout = torque_model.layout;
+    design_options.torque_parameters = torque_model.values;
+  }
 
   // Everything is checked before the design's seconds are spent, and before the parser's warnings are
   // printed: a refused call prints one line.
@@ -140,20 +206,25 @@ int run_excitation(const ExcitationOptions& options) {
   }
   print_urdf_warnings(options.urdf, parsed);
 
+  ProgressLine progress(options.max_evaluations, robot::to_string(design_options.criterion), isatty(fileno(stderr)) != 0);
+  if (options.progress || isatty(fileno(stderr))) {
+    design_options.progress = [&progress](const robot::ExcitationProgress& step) { progress(step); };
+  }
   robot::ExcitationDesign design;
   robot::SampledExcitation sampled;
   try {
     design = robot::design_excitation(model, design_options);
-    sampled = robot::sample_excitation(design.trajectory, options.dt, periods);
+    progress.finish();
+    sampled = robot::sample_excitation(design, options.dt, periods);
   } catch (const InputError& error) {
+    progress.finish();
     rethrow_with_source(error, excitation_option(error.field(), urdf_name));  // "model": no parameter to see
   }
 
-  // What is written never leaves a limit: the design guarantees it for every t; this checks the rows.
-  if (const std::optional<robot::LimitViolation> violation = robot::first_limit_violation(limits, sampled)) {
-    throw std::logic_error("the designed trajectory leaves the " + std::string(robot::to_string(violation->kind)) +
-                           " limit of joint " + std::to_string(violation->joint) + " at t = " +
-                           std::to_string(violation->t) + " s; nothing was written");
+  // What is written never leaves a limit: the design guarantees the kinematic ones for every t and the
+  // torque with a margin; this checks the rows, the torque by inverse dynamics at each.
+  if (const std::optional<robot::LimitViolation> violation = robot::first_limit_violation(limits, sampled, &model)) {
+    throw std::logic_error("the designed trajectory leaves " + robot::describe(*violation) + "; nothing was written");
   }
 
   const robot::ExcitationSummary& summary = design.summary;
@@ -174,6 +245,14 @@ int run_excitation(const ExcitationOptions& options) {
                model.name.c_str(), model.joint_count(), options.harmonics, options.period,
                summary.brief_report().c_str(), static_cast<long>(sampled.t.size()),
                sampled.t.size() > 0 ? sampled.t[sampled.t.size() - 1] : 0.0, output_name(options.output).c_str());
+  if (sampled.ramp_duration > 0.0) {
+    std::fprintf(stderr, "manipid excitation: ramps of %g s from the start pose to the trajectory (t = 0..%g s) and back\n",
+                 sampled.ramp_duration, sampled.ramp_duration);
+  }
+  if (summary.torque_scale < 1.0) {
+    std::fprintf(stderr, "manipid excitation: the torque limits cut the motion to %.3g of what the kinematic limits allow\n",
+                 summary.torque_scale);
+  }
   return exit_success;
 }
 

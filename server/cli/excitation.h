@@ -21,6 +21,12 @@ struct ExcitationOptions {
   int harmonics = 0;
   std::string criterion;
   std::string max_acceleration;     ///< "A" or "A1,...,An" (rad/s^2)
+  std::string max_velocity;         ///< "" (the URDF's), "V" or "V1,...,Vn" (rad/s)
+  std::string max_jerk;             ///< "" (none), "J" or "J1,...,Jn" (rad/s^3)
+  std::string max_torque;           ///< "" (the URDF's efforts), "T" or "T1,...,Tn" (N m)
+  std::string parameters;           ///< --params: the torque model (an identify result or overrides), "" = the URDF's
+  std::string start_pose;           ///< "q1,...,qn" (rad), "" = none
+  bool progress = false;            ///< --progress: a line per second on stderr (also when stderr is a terminal)
   double position_margin = 0.0;
   std::string friction;             ///< comma list of viscous, coulomb, offset; or "none"
   bool armature = false;

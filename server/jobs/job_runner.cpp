@@ -1,6 +1,7 @@
 // job_runner.cpp — one job from its stored request to its outcome (job_runner.h).
 #include "jobs/job_runner.h"
 
+#include "manipid/api/limits.h"
 #include "manipid/api/problem.h"
 #include "manipid/api/requests.h"
 #include "manipid/api/result_json.h"
@@ -298,6 +299,9 @@ JobOutcome run_robot_identification_job(const api::JobInfo& job, store::Store& s
   return outcome;
 }
 
+/// Points of the predicted torque an excitation's result carries for drawing (the page's joint charts).
+constexpr long kExcitationTorquePoints = 1000;
+
 /// An excitation design: the trajectory sampled into a dataset (stored idempotently under the job's id,
 /// like a simulation's) and the coefficients in the result.
 JobOutcome run_excitation_job(const api::JobInfo& job, store::Store& store, LiveJob& live, const RunnerOptions& options) {
@@ -311,7 +315,7 @@ JobOutcome run_excitation_job(const api::JobInfo& job, store::Store& store, Live
                       .dump());
   }
   const api::ParsedRobot parsed = api::parse_robot({robot->name, *urdf, robot->base, robot->tip});
-  robot::ExcitationOptions& design_options = spec.options;
+  robot::ExcitationOptions design_options = api::excitation_options(spec, parsed.model);
   design_options.max_seconds = std::min(design_options.max_seconds, options.job_time_limit_seconds);
   design_options.cancel = &live.cancel;
   design_options.progress = [&live](const robot::ExcitationProgress& progress) {
@@ -337,10 +341,12 @@ JobOutcome run_excitation_job(const api::JobInfo& job, store::Store& store, Live
     outcome.state = api::JobState::cancelled;
     return outcome;
   }
-  const robot::SampledExcitation sampled = robot::sample_excitation(design.trajectory, spec.dt, spec.periods);
-  if (const auto violation = robot::first_limit_violation(limits, sampled)) {
-    return failed(job_failed("the designed trajectory leaves a limit of joint " + std::to_string(violation->joint) +
-                             " at t = " + std::to_string(violation->t) + " s"));
+  const robot::SampledExcitation sampled = robot::sample_excitation(design, spec.dt, spec.periods);
+  // Submission checked the series' samples; the ramps from a start pose, known only now, add theirs.
+  api::limits::check_dataset_size(static_cast<long long>(sampled.t.size()), parsed.model.joint_count(), 3, "start_pose",
+                             "the excitation's ramps, duration / dt");
+  if (const auto violation = robot::first_limit_violation(limits, sampled, &parsed.model)) {
+    return failed(job_failed("the designed trajectory leaves " + robot::describe(*violation)));
   }
   const std::string name = spec.name.empty() ? "excitation " + robot->name + " (" + job.id + ")" : spec.name;
   const api::IdempotencyKey key{"job-output:" + job.id, job.id};
@@ -354,7 +360,9 @@ JobOutcome run_excitation_job(const api::JobInfo& job, store::Store& store, Live
       {"dt", dataset.dt},
       {"periods", spec.periods},
       {"condition_number", design.summary.condition_number},
+      {"ramp_duration", sampled.ramp_duration},
       {"coefficients", api::excitation_to_json(parsed.model, design_options, limits, design)},
+      {"torque", api::excitation_torque_json(parsed.model, limits, sampled, kExcitationTorquePoints)},
       {"wall_seconds", std::chrono::duration<double>(Clock::now() - started).count()},
   }.dump();
   return outcome;

@@ -384,8 +384,8 @@ check "excitation (UR5-like): ends where it started" \
 check "excitation (UR5-like): moves (q1 spans more than 0.5 rad)" bash -c "
   cut -d, -f2 ur5_excitation.csv | awk 'NR == 2 { lo = hi = \$1 } NR > 2 { if (\$1 < lo) lo = \$1; if (\$1 > hi) hi = \$1 }
                                         END { exit !(hi - lo > 0.5) }'"
-check "excitation (UR5-like): within the URDF's limits (margin 0.05 rad, 7.5 rad/s^2)" \
-  within_limits ur5_excitation.csv "$robots/ur5_like.urdf" 6 0.05 7.5
+check "excitation (UR5-like): within the URDF's limits (margin 0.1 rad, 7.5 rad/s^2)" \
+  within_limits ur5_excitation.csv "$robots/ur5_like.urdf" 6 0.1 7.5
 check "excitation (UR5-like): one summary line" bash -c "test \$(grep -c '^manipid excitation: ur5_like, 6 joints, 5 harmonics, period 10 s: condition ' ur5_excitation.err) -eq 1"
 check "excitation (UR5-like): the parser's warning is passed on" grep -q '^manipid: warning: .*ur5_like.urdf: link tool0 has no <inertial>' ur5_excitation.err
 check "excitation (UR5-like): coefficients name the robot and its joints" \
@@ -410,9 +410,41 @@ check "excitation (Panda-like): at rest at 0, 10 and 20 s" \
 check "excitation (Panda-like): the file is there" test -s panda_excitation.csv
 check "excitation (Panda-like): the second period repeats the first" \
   cmp -s <(sed -n 2,1001p panda_excitation.csv | cut -d, -f2-) <(sed -n 1002,2001p panda_excitation.csv | cut -d, -f2-)
-check "excitation (Panda-like): within the URDF's limits (margin 0.05 rad, 5 rad/s^2)" \
-  within_limits panda_excitation.csv "$robots/panda_like.urdf" 7 0.05 5
+check "excitation (Panda-like): within the URDF's limits (margin 0.1 rad, 5 rad/s^2)" \
+  within_limits panda_excitation.csv "$robots/panda_like.urdf" 7 0.1 5
 check "excitation (Panda-like): the summary names the criterion" grep -q '^manipid excitation: panda_like, 7 joints, .*: logdet ' panda_excitation.err
+
+# A lab's run: where the arm stands, slower than the URDF allows, torque and jerk limited.
+"$manipid" excitation --robot "$robots/panda_like.urdf" --dt 0.01 --max-evaluations 60 --start-pose 0,-0.5,0,-2,0,1.5,0 \
+  --max-velocity 1 --max-torque 60 --max-jerk 40 --out panda_lab.csv --coefficients panda_lab.json 2>panda_lab.err
+check "excitation --start-pose: exit 0" test $? -eq 0
+check "excitation --start-pose: starts and ends at the pose, at rest" bash -c "
+  $(declare -f at_rest); at_rest panda_lab.csv 7 1 && at_rest panda_lab.csv 7 \$((\$(wc -l <panda_lab.csv) - 1)) &&
+  test \"\$(sed -n 2p panda_lab.csv | cut -d, -f2-8)\" = '0,-0.5,0,-2,0,1.5,0' &&
+  test \"\$(tail -1 panda_lab.csv | cut -d, -f2-8)\" = '0,-0.5,0,-2,0,1.5,0'"
+check "excitation --start-pose: stderr gives the ramps' length" grep -Eq '^manipid excitation: ramps of [0-9.]+ s from the start pose' panda_lab.err
+check "excitation --start-pose: within the URDF's limits, ramps included" within_limits panda_lab.csv "$robots/panda_like.urdf" 7 0 7.5
+check "excitation --max-velocity 1: no joint faster" \
+  awk -F, 'NR > 1 { for (c = 9; c <= 15; c++) if ($c > 1 || -$c > 1) bad++ } END { exit bad > 0 }' panda_lab.csv
+"$manipid" torque --robot "$robots/panda_like.urdf" --in panda_lab.csv --out panda_lab_tau.csv 2>/dev/null
+check "excitation --max-torque 60: the URDF's torque within 60 N m (12 on the wrist), ramps included" \
+  awk -F, 'NR > 1 { for (c = 2; c <= 8; c++) { limit = c <= 5 ? 60 : 12; if ($c > limit || -$c > limit) bad++ } } END { exit bad > 0 }' panda_lab_tau.csv
+check "excitation: the JSON gives the limits, peaks and usage per joint, and the ramp" /usr/bin/python3 -c "
+import json; d = json.load(open('panda_lab.json'))
+assert d['limits']['torque'] == [60, 60, 60, 60, 12, 12, 12] and d['limits']['jerk'] == [40] * 7, d['limits']
+assert all(p <= 40 for p in d['peaks']['jerk']) and all(u <= 1 for u in d['usage']['torque'])
+assert d['ramp']['pose'] == [0, -0.5, 0, -2, 0, 1.5, 0] and d['ramp']['duration'] > 0
+assert d['max_evaluations'] == 60 and d['evaluations'] == 60"
+expect_error "excitation: --start-pose with the wrong count" 2 "--start-pose: start_pose needs one value per joint (7), got 2" \
+  "$manipid" excitation --robot "$robots/panda_like.urdf" --start-pose 0,0
+expect_error "excitation: --start-pose outside the URDF's limits" 2 "--start-pose: the start pose puts joint 4 (panda_joint4) at 0 rad, outside its URDF limits" \
+  "$manipid" excitation --robot "$robots/panda_like.urdf" --start-pose 0,0,0,0,0,0,0
+# Found by the design, so after the URDF's warnings: the error is the last line.
+"$manipid" excitation --robot "$robots/panda_like.urdf" --max-torque 0.001 --max-evaluations 20 --out weak.csv 2>weak.err
+check "excitation: --max-torque that cannot hold the arm: exit 2, said, nothing written" bash -c "
+  test $? -eq 2 && tail -1 weak.err | grep -q '^manipid: error: --max-torque: the torque limits cannot hold the arm at rest' && test ! -e weak.csv"
+expect_error "excitation: --max-jerk not positive" 2 "--max-jerk: max_jerk must be positive and finite" \
+  "$manipid" excitation --robot "$robots/panda_like.urdf" --max-jerk 0
 
 printf '<robot name="broken"><link name="a"/><joint name="j" type="revolute"><parent link="a"/></joint></robot>\n' >broken.urdf
 expect_error "excitation without --robot" 2 "--robot is required" "$manipid" excitation --out x.csv

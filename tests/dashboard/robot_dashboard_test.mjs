@@ -388,8 +388,13 @@ try {
   await page.screenshot({ path: shot("robot-1280x800.png"), fullPage: true });
 
   // ---- an excitation, designed from the robot's page --------------------------------------------
+  // A lab's run: a budget of evaluations (the same result on any machine), a start pose to ramp from and
+  // back, a torque limit below the URDF's efforts and a jerk limit.
   await page.fill("#e-duration", "10");
-  await page.fill("#e-max-seconds", "1");
+  await page.fill("#e-max-evaluations", "300");
+  await page.fill("#e-start-pose", "0, 0, 0, -1.5, 0, 1.5, 0");
+  await page.fill("#e-max-torque", "60");
+  await page.fill("#e-max-jerk", "40");
   await page.focus("#excitation-submit");
   await page.keyboard.press("Enter");
   await page.waitForURL(/\/jobs\/job_[0-9a-f]+$/, { timeout: 30000 });
@@ -409,6 +414,29 @@ try {
                     await page.getAttribute(`#chart-excitation-q-${k}`, "data-series") === "3";
   }
   check(anglesRight, `each draws the dataset's ${trajectory.t.length} points (the API's) with its lower and upper limits`);
+  const design = excitation.result.coefficients;
+  check(excitation.request.max_evaluations === 300 && design.evaluations === 300 && JSON.stringify(excitation.request.start_pose) === "[0,0,0,-1.5,0,1.5,0]" &&
+        excitation.request.max_torque === 60 && excitation.request.max_jerk === 40,
+        "the form sent the evaluation budget, the start pose and the torque and jerk limits");
+  check(excitation.result.ramp_duration > 0 && trajectory.q[3][0] === -1.5 && trajectory.q[5][trajectory.t.length - 1] === 1.5 &&
+        (await page.textContent("#excitation-ramp")).includes("ramps of"),
+        `the run starts and ends at the start pose, ramps of ${excitation.result.ramp_duration} s, said on the page`);
+  check(design.limits.torque[1] === 60 && design.limits.torque[6] === 12 && design.peaks.torque.every((peak, j) => peak <= design.limits.torque[j]) &&
+        design.peaks.jerk.every((peak) => peak <= 40),
+        "torque limits min(60, the URDF's effort) and the jerk limit held over the period");
+  check(await page.locator("#excitation-usage tbody tr").count() === JOINTS &&
+        Number(await page.getAttribute("#excitation-usage tbody tr:nth-child(2) td[data-kind=torque]", "data-usage")) === design.usage.torque[1],
+        "the limits table gives each joint's share of its limits");
+  let ratesRight = true;
+  for (const [key, section, limit] of [["qd", "excitation-velocities", "velocity"], ["qdd", "excitation-accelerations", "acceleration"],
+                                       ["tau", "excitation-torques", "torque"]]) {
+    ratesRight &&= await page.locator(`#${section} .chart`).count() === JOINTS &&
+                   await page.getAttribute(`#chart-excitation-${key}-2`, "data-series") === (typeof design.limits[limit][1] === "number" ? "3" : "1");
+  }
+  const torquePoints = excitation.result.torque.t.length;
+  check(ratesRight && Number(await page.getAttribute("#chart-excitation-tau-1", "data-points")) === torquePoints &&
+        excitation.result.torque.tau.every((tau, j) => tau.every((value) => Math.abs(value) <= design.limits.torque[j] + 1e-9)),
+        `velocity, acceleration and torque charts per joint with ± their limits (torque: ${torquePoints} points, all within)`);
   await page.screenshot({ path: shot("excitation-job-1280x800.png"), fullPage: true });
 
   // The job list names the robot of each robot job; the home page leads to the robots.

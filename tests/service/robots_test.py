@@ -217,6 +217,37 @@ class RobotThroughTheService(unittest.TestCase):
         status, _, problem = self.server.request("POST", "/v1/excitations", {"robot_id": ur5["id"], "harmonics": 1})
         self.assertEqual(status, 422, problem)
         self.assertEqual(problem["field"], "harmonics")
+        # A lab's limits are checked against the robot at submission, each naming its field.
+        for body, field, words in [
+                ({"start_pose": [0, 0]}, "start_pose", "one value per joint (6), got 2"),
+                ({"start_pose": [0, 0, 9, 0, 0, 0]}, "start_pose", "outside its URDF limits"),
+                ({"max_torque": [1, 2]}, "max_torque", "1 value or one per joint (6), got 2"),
+                ({"max_jerk": -1}, "max_jerk", "positive"),
+                ({"torque_parameters": {"m99": 1}}, "torque_parameters", "m99")]:
+            status, _, problem = self.server.request("POST", "/v1/excitations", {"robot_id": ur5["id"], **body})
+            self.assertEqual(status, 422, (body, problem))
+            self.assertEqual(problem["field"], field, problem)
+            self.assertIn(words, problem["detail"])
+
+        # Where the arm stands, torque held below the URDF's efforts: the dataset ramps from the pose
+        # and back, and the result carries the predicted torque within its limits.
+        pose = [0.0, -1.0, 1.0, -1.0, 0.5, 0.0]
+        job = self.server.wait_job(self.post("/v1/excitations", {
+            "robot_id": ur5["id"], "period": 5, "harmonics": 3, "dt": 0.01, "max_evaluations": 40, "max_seconds": 600,
+            "start_pose": pose, "max_torque": 100, "max_velocity": [1, 1, 1, 2, 2, 2]})["id"])
+        self.assertEqual(job["state"], "succeeded", job)
+        result = job["result"]
+        self.assertGreater(result["ramp_duration"], 0)
+        data = self.server.request("GET", f"/v1/datasets/{result['dataset_id']}/data")[2]
+        self.assertEqual([q[0] for q in data["q"]], pose)
+        self.assertEqual([q[-1] for q in data["q"]], pose)
+        self.assertAlmostEqual(data["t"][-1], 5 + 2 * result["ramp_duration"], places=9)
+        self.assertLessEqual(max(abs(v) for v in data["qd"][0]), 1.0)
+        limits = result["coefficients"]["limits"]
+        self.assertEqual(limits["torque"], [100, 100, 100, 28, 28, 28])
+        self.assertEqual(len(result["torque"]["tau"]), 6)
+        for tau, limit in zip(result["torque"]["tau"], limits["torque"]):
+            self.assertLessEqual(max(abs(value) for value in tau), limit)
 
         # A robot in use is not deleted; once its job ended it is.
         job = self.post("/v1/excitations", {"robot_id": ur5["id"], "max_seconds": 30})

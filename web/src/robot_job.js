@@ -4,7 +4,8 @@
 // the filtered measured torque beside the model's per joint (small multiples), the friction
 // curves (what the rigid-body model leaves against q̇, with the fitted law), the validation run
 // predicted by the estimate beside the URDF's own values, and the run's raw angles and torques.
-// An excitation: the design's figures and each joint's angle within its limits.
+// An excitation: the design's figures, the share of each limit it uses per joint, and each joint's
+// angle, velocity, acceleration and torque over the run against its limits.
 import { api, downloadLink } from "./api.js";
 import { lineChart, PALETTE } from "./charts.js";
 import { facts, h, number, percent, plural, section } from "./dom.js";
@@ -654,6 +655,15 @@ export async function excitationSections(body, job, drawOrExplain) {
       ["Base parameters excited", design.base_parameters !== undefined ? String(design.base_parameters) : null],
       ["Trajectory", `${number(design.period, 4)} s period, ${plural(design.harmonics, "harmonic")}, ` +
                      `${result.periods !== undefined ? plural(result.periods, "period") + ", " : ""}${result.samples} samples every ${number(result.dt, 3)} s`],
+      ["Start pose", design.ramp
+        ? h("span", { id: "excitation-ramp" }, `(${design.ramp.pose.map((value) => number(value, 3)).join(", ")}); ` +
+            `ramps of ${number(result.ramp_duration ?? design.ramp.duration, 3)} s to the trajectory and back`)
+        : null],
+      ["Torque", design.limits?.torque
+        ? `of ${design.limits.torque_model || "the URDF's"} parameters; ` +
+          (design.torque_scale < 1 ? `its limits cut the motion to ${number(design.torque_scale, 3)} of what the other limits allow`
+                                   : "its limits do not bind")
+        : null],
       ["Search", design.evaluations !== undefined
         ? `${design.evaluations} evaluations in ${number(design.wall_seconds, 3)} s, stopped: ${design.message || design.termination}` : null],
       ["Seed", design.seed !== undefined ? String(design.seed) : null],
@@ -670,26 +680,80 @@ export async function excitationSections(body, job, drawOrExplain) {
              h("th", { scope: "row" }, limit.joint), h("td", {}, limit.kind),
              h("td", { class: "number" }, number(limit.peak, 4)), h("td", { class: "number" }, number(limit.limit, 4)))))))]
       : null));
+  if (design.usage) body.append(limitUsage(design, names, robot));
   if (result.dataset_id) await drawOrExplain("Joint angles", () => excitationCharts(body, result, design, names, robot));
+}
+
+// What each joint reaches against each of its limits (the design's measure, over one period).
+const LIMIT_COLUMNS = [
+  ["velocity", "q̇", (joint) => (isPrismatic(joint) ? "m/s" : "rad/s")],
+  ["acceleration", "q̈", (joint) => (isPrismatic(joint) ? "m/s²" : "rad/s²")],
+  ["jerk", "jerk", (joint) => (isPrismatic(joint) ? "m/s³" : "rad/s³")],
+  ["torque", "τ", torqueUnit],
+];
+
+function limitUsage(design, names, robot) {
+  const share = (value) => (typeof value === "number" ? percent(value, 3) : "no limit");
+  const cell = (kind, j, unit) => {
+    const peak = design.peaks?.[kind]?.[j], limit = design.limits?.[kind]?.[j], used = design.usage?.[kind]?.[j];
+    return h("td", { class: "number", dataset: { kind, usage: typeof used === "number" ? String(used) : "" },
+                     title: typeof limit === "number" ? `limit ${number(limit, 4)} ${unit}` : "no limit" },
+      typeof peak === "number" ? `${number(peak, 3)} ${unit} (${share(used)})` : "—");
+  };
+  const margin = (j) => {
+    const low = design.usage?.lower?.[j], high = design.usage?.upper?.[j];
+    const values = [low, high].filter((value) => typeof value === "number");
+    return values.length ? percent(Math.max(...values), 3) : "no limit";
+  };
+  return section("excitation-limits", "Limits per joint",
+    h("p", { class: "muted" },
+      "What the design reaches over a period, and in brackets the share of each limit it uses. Positions: the share of the room " +
+      `between the mean pose and the nearer limit (the URDF's, less ${number(design.limits?.position_margin ?? 0, 3)}).`),
+    h("div", { class: "scroll" }, h("table", { id: "excitation-usage", class: "data" },
+      h("thead", {}, h("tr", {}, ["Joint", "Position room", ...LIMIT_COLUMNS.map(([, label]) => `Peak |${label}|`)].map(
+        (label, i) => h("th", { scope: "col", class: i > 0 ? "number" : null }, label)))),
+      h("tbody", {}, names.map((name, j) => h("tr", {},
+        h("th", { scope: "row" }, name),
+        h("td", { class: "number", dataset: { kind: "position" } }, margin(j)),
+        LIMIT_COLUMNS.map(([kind, , unit]) => cell(kind, j, unit(robot?.joints[j])))))))));
 }
 
 async function excitationCharts(body, result, design, names, robot) {
   const data = await api(`/v1/datasets/${result.dataset_id}/data?max_points=${JOINT_POINTS}`);
-  const boxes = data.q.map((_, j) => h("div", { id: `chart-excitation-q-${j + 1}`, dataset: { jointName: names[j] || `q${j + 1}` } }));
-  body.append(section("excitation-angles", "Joint angles",
-    h("p", { class: "muted", dataset: { maxPoints: String(JOINT_POINTS) } },
-      `Each joint's angle over the trajectory (drawn: ${data.t.length} points); dashed: the design's limits (the URDF's, less a margin).`),
-    h("div", { class: "grid joints" }, boxes)));
-  const lower = design.limits?.lower || [], upper = design.limits?.upper || [];
-  data.q.forEach((q, j) => {
-    const series = [{ label: `q${j + 1}`, color: PALETTE[j % PALETTE.length] }];
-    const columns = [data.t, q];
-    for (const [label, limit] of [["lower", lower[j]], ["upper", upper[j]]]) {
-      if (typeof limit !== "number") continue;  // null: no limit (a continuous joint)
-      series.push({ label, color: "#777", dash: [4, 4], width: 1 });
-      columns.push(data.t.map(() => limit));
-    }
-    lineChart(boxes[j], { title: names[j] || `joint ${j + 1}`, xLabel: "t, s", yLabel: isPrismatic(robot?.joints[j]) ? "m" : "rad",
-                          height: 200, sync: "excitation", legend: false, series, data: columns });
-  });
+  const ramp = result.ramp_duration > 0 ? ` The first and last ${number(result.ramp_duration, 3)} s ramp from the start pose and back.` : "";
+  const torque = result.torque;  // the limits' model's torque at ≤ 1000 samples (older results: none)
+  const quantities = [
+    { key: "q", id: "excitation-angles", title: "Joint angles", values: data.q, t: data.t, unit: (joint) => (isPrismatic(joint) ? "m" : "rad"),
+      limits: (j) => [["lower", design.limits?.lower?.[j]], ["upper", design.limits?.upper?.[j]]],
+      words: "each joint's angle; dashed: the design's limits (the URDF's, less a margin)." },
+    { key: "qd", id: "excitation-velocities", title: "Joint velocities", values: data.qd, t: data.t, unit: LIMIT_COLUMNS[0][2], symmetric: "velocity",
+      words: "each joint's velocity; dashed: ± its velocity limit." },
+    { key: "qdd", id: "excitation-accelerations", title: "Joint accelerations", values: data.qdd, t: data.t, unit: LIMIT_COLUMNS[1][2], symmetric: "acceleration",
+      words: "each joint's acceleration; dashed: ± its acceleration limit." },
+    { key: "tau", id: "excitation-torques", title: "Joint torques", values: torque?.tau, t: torque?.t, unit: torqueUnit, symmetric: "torque",
+      words: `the torque ${design.limits?.torque_model === "given parameters" ? "the given model" : "the URDF's parameters"} ` +
+             "predict for it; dashed: ± each joint's torque limit." },
+  ];
+  for (const quantity of quantities) {
+    if (!quantity.values || !quantity.t) continue;
+    const boxes = quantity.values.map((_, j) =>
+      h("div", { id: `chart-excitation-${quantity.key}-${j + 1}`, dataset: { jointName: names[j] || `joint ${j + 1}` } }));
+    body.append(section(quantity.id, quantity.title,
+      h("p", { class: "muted", dataset: { maxPoints: String(JOINT_POINTS) } },
+        `Over the run (drawn: ${quantity.t.length} points), ${quantity.words}${ramp}`),
+      h("div", { class: "grid joints" }, boxes)));
+    quantity.values.forEach((values, j) => {
+      const series = [{ label: `${quantity.key}${j + 1}`, color: PALETTE[j % PALETTE.length] }];
+      const columns = [quantity.t, values];
+      const limit = quantity.symmetric ? design.limits?.[quantity.symmetric]?.[j] : undefined;
+      const bounds = quantity.limits ? quantity.limits(j) : [["−limit", typeof limit === "number" ? -limit : null], ["+limit", limit]];
+      for (const [label, value] of bounds) {
+        if (typeof value !== "number") continue;  // null: no limit
+        series.push({ label, color: "#777", dash: [4, 4], width: 1 });
+        columns.push(quantity.t.map(() => value));
+      }
+      lineChart(boxes[j], { title: names[j] || `joint ${j + 1}`, xLabel: "t, s", yLabel: quantity.unit(robot?.joints[j]),
+                            height: 200, sync: "excitation", legend: false, series, data: columns });
+    });
+  }
 }

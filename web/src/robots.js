@@ -197,26 +197,43 @@ function excitationForm(robot, navigate) {
   const status = h("p", { class: "form-status", role: "status", "aria-live": "polite" });
   const form = h("form", { id: "excitation-form", class: "card", "aria-labelledby": "excitation-form-title", novalidate: true },
     h("h2", { id: "excitation-form-title" }, "Design an excitation"),
-    h("p", { class: "muted" }, "Fourier-series joint trajectories that start and end at rest, stay within the URDF's limits, " +
-      "and make the base regressor as well conditioned as the time budget allows."),
+    h("p", { class: "muted" }, "Fourier-series joint trajectories that start and end at rest, stay within the URDF's position, " +
+      "velocity and effort limits (and those given here), and make the base regressor as well conditioned as the evaluation budget allows. " +
+      "Limits: one value for every joint, or one per joint separated by commas."),
     h("div", { class: "fields" },
       field("Period, s", textInput("e-period", "period", 10, { inputmode: "decimal" })),
       field("Harmonics", textInput("e-harmonics", "harmonics", 5, { inputmode: "numeric" })),
       field("Duration, s", textInput("e-duration", "duration", "", { inputmode: "decimal", placeholder: "one period" })),
-      field("Max acceleration, rad/s²", textInput("e-max-acceleration", "max_acceleration", "", { inputmode: "decimal", placeholder: "the default" })),
+      field("Max velocity, rad/s", textInput("e-max-velocity", "max_velocity", "", { inputmode: "decimal", placeholder: "the URDF's" })),
+      field("Max acceleration, rad/s²", textInput("e-max-acceleration", "max_acceleration", "", { inputmode: "decimal", placeholder: "7.5" })),
+      field("Max jerk, rad/s³", textInput("e-max-jerk", "max_jerk", "", { inputmode: "decimal", placeholder: "none" })),
+      field("Max torque, N·m", textInput("e-max-torque", "max_torque", "", { inputmode: "decimal", placeholder: "the URDF's efforts" })),
+      field("Position margin, rad", textInput("e-position-margin", "position_margin", "", { inputmode: "decimal", placeholder: "0.1" })),
+      field("Start pose, rad", textInput("e-start-pose", "start_pose", "", { placeholder: "none: q1,…,qn" }),
+            "where the arm stands: the run ramps from it and back"),
       field("Criterion", h("select", { id: "e-criterion", name: "criterion" },
         h("option", { value: "condition" }, "condition number"), h("option", { value: "logdet" }, "log det"))),
-      field("Time budget, s", textInput("e-max-seconds", "max_seconds", 30, { inputmode: "decimal" })),
+      field("Evaluations", textInput("e-max-evaluations", "max_evaluations", 8000, { inputmode: "numeric" }),
+            "the budget: the same on every machine"),
+      field("Time cap, s", textInput("e-max-seconds", "max_seconds", 300, { inputmode: "decimal" })),
       field("Seed", textInput("e-seed", "seed", 1, { inputmode: "numeric" }))),
     h("div", { class: "actions" }, h("button", { type: "submit", id: "excitation-submit" }, "Design"), status));
   form.addEventListener("submit", async (event) => {
     event.preventDefault();
     clearProblems(form, status);
     const body = { robot_id: robot.id, criterion: form.querySelector("[name=criterion]").value };
-    for (const name of ["period", "harmonics", "duration", "max_acceleration", "max_seconds", "seed"]) {
+    for (const name of ["period", "harmonics", "duration", "position_margin", "max_evaluations", "max_seconds", "seed"]) {
       const value = form.querySelector(`[name=${name}]`).value.trim();
       if (value) body[name] = Number(value);
     }
+    // One value, or a comma-separated list (one per joint); the server names what is wrong with either.
+    const list = (text) => text.split(",").map((item) => Number(item.trim()));
+    for (const name of ["max_velocity", "max_acceleration", "max_jerk", "max_torque"]) {
+      const value = form.querySelector(`[name=${name}]`).value.trim();
+      if (value) body[name] = value.includes(",") ? list(value) : Number(value);
+    }
+    const pose = form.querySelector("[name=start_pose]").value.trim();
+    if (pose) body.start_pose = list(pose);
     status.textContent = "Submitting…";
     try {
       const job = await api("/v1/excitations", { method: "POST", body });

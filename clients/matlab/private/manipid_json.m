@@ -12,8 +12,8 @@ function text = manipid_json(value, path, mode)
 %   struct -> object (fields that are [] are left out: the service's default applies);
 %   struct array -> array of objects; cell -> array; char row -> string;
 %   logical/numeric scalar -> true/false/number; vector -> array; matrix -> array of
-%   rows. The fields free, kp, kd, step_times, amplitudes, dataset_ids, validation_dataset_ids and
-%   torque_joints are always arrays.
+%   rows. The fields free, kp, kd, step_times, amplitudes, dataset_ids, validation_dataset_ids,
+%   torque_joints and start_pose are always arrays.
 %   NaN and Inf are refused (error manipid:INVALID_FIELD naming the element): they are
 %   not JSON and never go on the wire. Numbers are written so that they read back to
 %   the same double (shortest of %.15g / %.17g; bulk arrays use %.17g).
@@ -87,7 +87,7 @@ end
 end
 
 function text = encode_object(value, path)
-array_keys = {'free', 'kp', 'kd', 'step_times', 'amplitudes', 'dataset_ids', 'validation_dataset_ids', 'torque_joints'};
+array_keys = {'free', 'kp', 'kd', 'step_times', 'amplitudes', 'dataset_ids', 'validation_dataset_ids', 'torque_joints', 'start_pose'};
 names = fieldnames(value);
 parts = {};
 for k = 1:numel(names)

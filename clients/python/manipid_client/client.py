@@ -472,11 +472,15 @@ class Client:
         """Queues an excitation design for a robot (POST /v1/excitations); returns its Job.
 
         Per joint a Fourier series of `period` s (server default 10) with `harmonics` (5),
-        at rest at both ends, within the URDF's position and velocity limits, minimising the
-        condition number of the base regressor (criterion "condition") or maximising log det
-        ("logdet"); sampled every `dt` (0.001 s) over `duration` (whole periods; default one).
-        Other keyword options are the request's fields: name (of the dataset it makes),
-        max_acceleration, position_margin, dt, friction, armature, seed, max_seconds (30).
+        at rest at both ends, within the URDF's position (less position_margin, 0.1 rad),
+        velocity and effort limits, minimising the condition number of the base regressor
+        (criterion "condition") or maximising log det ("logdet"); sampled every `dt` (0.001 s)
+        over `duration` (whole periods; default one). Other keyword options are the request's
+        fields: name (of the dataset it makes), max_velocity, max_acceleration (7.5), max_jerk,
+        max_torque (each one number or one per joint), torque_parameters (an identification's
+        result: the model whose torque max_torque holds), start_pose (a list, rad: the run
+        ramps from it and back), position_margin, dt, friction, armature, seed,
+        max_evaluations (8000: the same design on every machine), max_seconds (300, a cap).
         Options left at None are not sent (the server's default applies).
 
         The job's result names the dataset it made (job.dataset_id; t, q, qd, qdd) and carries

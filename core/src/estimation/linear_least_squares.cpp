@@ -7,6 +7,7 @@
 #include <Eigen/QR>
 #include <Eigen/SVD>
 
+#include <algorithm>
 #include <cmath>
 #include <limits>
 #include <string>
@@ -97,7 +98,8 @@ LinearSolution solve_linear(const Eigen::Ref<const Eigen::MatrixXd>& A, const Ei
   for (Eigen::Index i = 0; i < m; ++i) {
     const Eigen::Index ci = kept[static_cast<std::size_t>(i)];
     x[ci] += dx[i];
-    solution.parameter_share[ci] = share[i];
+    // Σ_k V_ik² f_k with Σ_k V_ik² = 1 lies in [0, 1]; rounding can put it a few ulps above 1.
+    solution.parameter_share[ci] = std::clamp(share[i], 0.0, 1.0);
     for (Eigen::Index j = 0; j < m; ++j) {
       const Eigen::Index cj = kept[static_cast<std::size_t>(j)];
       solution.covariance_unit(ci, cj) = covariance_scaled(i, j) / (solution.scale[ci] * solution.scale[cj]);

@@ -15,7 +15,7 @@ namespace {
 using detail::format_number;
 using detail::kTwoPi;
 
-constexpr long kMaxSampledInstants = 10'000'000;
+using detail::kMaxSampledInstants;
 
 }  // namespace
 
@@ -28,6 +28,7 @@ HarmonicTable::HarmonicTable(double period, int harmonics, int instants, Instant
   position.resize(2 * L, instants);
   velocity.resize(2 * L, instants);
   acceleration.resize(2 * L, instants);
+  jerk.resize(2 * L, instants);
   for (int j = 0; j < instants; ++j) {
     const long m = 2 * static_cast<long>(j) + (where == Instants::midpoints ? 1 : 0);
     for (int l = 1; l <= L; ++l) {
@@ -40,6 +41,8 @@ HarmonicTable::HarmonicTable(double period, int harmonics, int instants, Instant
       velocity(L + l - 1, j) = s;
       acceleration(l - 1, j) = -w * s;
       acceleration(L + l - 1, j) = w * c;
+      jerk(l - 1, j) = -w * w * c;
+      jerk(L + l - 1, j) = -w * w * s;
     }
   }
 }
@@ -124,13 +127,14 @@ SampledExcitation sample_excitation(const FourierTrajectory& trajectory, double 
   sampled.q.resize(n, instants);
   sampled.qd.resize(n, instants);
   sampled.qdd.resize(n, instants);
+  sampled.jerk.resize(n, instants);
   // One period, evaluated term by term in a fixed order — harmonics 2..L, then harmonic 1 — the order in
   // which design_excitation re-imposes the rest conditions (a_k1 = −Σ_{l≥2} a_kl, b_k1 = −Σ_{l≥2} l b_kl).
   // At t = 0 every product is exact (cos 0 = 1, sin 0 = 0), so a designed trajectory's q̇ and q̈ come out
   // exactly 0 there, not ±1e-16. Later periods copy the first: bitwise identical, and exactly at rest at
   // every period's end.
   const double omega = trajectory.angular_frequency();
-  Eigen::MatrixXd q(n, per_period), qd(n, per_period), qdd(n, per_period);
+  Eigen::MatrixXd q(n, per_period), qd(n, per_period), qdd(n, per_period), jerk(n, per_period);
   Eigen::VectorXd sines(L), cosines(L);
   for (long j = 0; j < per_period; ++j) {
     for (int l = 1; l <= L; ++l) {
@@ -140,7 +144,7 @@ SampledExcitation sample_excitation(const FourierTrajectory& trajectory, double 
       cosines[l - 1] = std::cos(phase);
     }
     for (int k = 0; k < n; ++k) {
-      double position = 0.0, velocity = 0.0, acceleration = 0.0;
+      double position = 0.0, velocity = 0.0, acceleration = 0.0, third = 0.0;
       for (int step = 0; step < L; ++step) {
         const int l = step + 1 < L ? step + 2 : 1;  // 2, 3, …, L, then 1
         const double a = trajectory.a(k, l - 1), b = trajectory.b(k, l - 1);
@@ -148,10 +152,12 @@ SampledExcitation sample_excitation(const FourierTrajectory& trajectory, double 
         position += (a * s - b * c) / (omega * l);
         velocity += a * c + b * s;
         acceleration += l * (b * c - a * s);
+        third -= static_cast<double>(l) * l * (a * c + b * s);
       }
       q(k, j) = trajectory.q0[k] + position;
       qd(k, j) = velocity;
       qdd(k, j) = omega * acceleration;
+      jerk(k, j) = omega * omega * third;
     }
   }
   for (long i = 0; i < instants; ++i) {
@@ -160,6 +166,7 @@ SampledExcitation sample_excitation(const FourierTrajectory& trajectory, double 
     sampled.q.col(i) = q.col(j);
     sampled.qd.col(i) = qd.col(j);
     sampled.qdd.col(i) = qdd.col(j);
+    sampled.jerk.col(i) = jerk.col(j);
   }
   return sampled;
 }

@@ -4,10 +4,12 @@
 // The files, by topic:
 //   excitation_fourier.cpp    the series: FourierTrajectory, the basis tables, sampling;
 //   excitation_limits.cpp     the limits: resolving them (and the options), the grid bound, the largest
-//                             scale within them, the checks of a sampled or designed trajectory;
+//                             scale within them, the torque guard, the checks of a sampled or designed
+//                             trajectory;
 //   excitation_criterion.cpp  the criterion: the stacked base regressor, its condition number and log det;
 //   excitation_design.cpp     the design: the search space, random starts and the local runs (through
-//                             estimation/optimizer.h, core's one NLopt adapter), the summary.
+//                             estimation/optimizer.h, core's one NLopt adapter), the summary;
+//   excitation_ramp.cpp       the start pose: the ramp to the series and back, the design sampled with it.
 #pragma once
 
 #include "manipid/core/robot/base_parameters.h"
@@ -31,6 +33,7 @@ inline constexpr int kMinHarmonics = 2;   // the two rest conditions take one co
 inline constexpr int kMaxHarmonics = 20;  // beyond any published excitation; the optimiser's dimension is n (2L − 1)
 inline constexpr int kConstraintPointsPerHarmonic = 64;  // grid points per period of the highest harmonic
 inline constexpr int kMaxSamples = 100000;               // the criterion's instants per period
+inline constexpr long kMaxSampledInstants = 10'000'000;  // the most samples a sampled excitation has
 
 /// `value` with six significant digits: a figure in a message.
 inline std::string format_number(double value) {
@@ -48,10 +51,11 @@ enum class Instants {
 };
 
 /// The Fourier basis at N evenly spaced instants of one period, as 2L × N matrices, so that for K = [a b]
-/// (n × 2L): p = K·position (q − q0), q̇ = K·velocity, q̈ = K·acceleration (n × N each). Phases are reduced
-/// exactly in integers: ω l t_j = 2π ((l m_j) mod 2N) / 2N with m_j = 2j (starts) or 2j + 1 (midpoints).
+/// (n × 2L): p = K·position (q − q0), q̇ = K·velocity, q̈ = K·acceleration, jerk = K·jerk (n × N each).
+/// Phases are reduced exactly in integers: ω l t_j = 2π ((l m_j) mod 2N) / 2N with m_j = 2j (starts) or
+/// 2j + 1 (midpoints).
 struct HarmonicTable {
-  Eigen::MatrixXd position, velocity, acceleration;
+  Eigen::MatrixXd position, velocity, acceleration, jerk;
 
   HarmonicTable(double period, int harmonics, int instants, Instants where);
 };
@@ -68,6 +72,7 @@ struct Peaks {
   double lowest = 0.0;   ///< min p
   double velocity = 0.0;
   double acceleration = 0.0;
+  double jerk = 0.0;
 };
 
 /// The grid on which the limits are checked, with the inter-sample bounds.
@@ -87,13 +92,36 @@ class LimitGrid {
   HarmonicTable table_;
 };
 
-/// The largest s ≥ 0 with q0 + s·p inside every limit of the joint, p's extremes bounded by `peaks`.
-double largest_scale(const Peaks& peaks, double q0, double lower, double upper, double velocity, double acceleration);
+/// The largest s ≥ 0 with q0 + s·p inside every kinematic limit of joint k, p's extremes bounded by `peaks`.
+double largest_scale(const Peaks& peaks, double q0, const ExcitationLimits& limits, Eigen::Index k);
 
-/// How much of each limit `trajectory` uses (n × 4: lower, upper, velocity, acceleration; NaN where there is
-/// no limit; see ExcitationSummary::usage), and in `peaks` what it reaches (min q, max q, max |q̇|, max |q̈|):
-/// measured on a grid 4× finer than the limit grid, for the report.
-Eigen::MatrixXd measured_usage(const FourierTrajectory& trajectory, const ExcitationLimits& limits,
+/// The torque limits on a design: the largest common factor γ ∈ [0, 1] of every joint's motion about q0
+/// (q = q0 + γ p) whose torque stays within kTorqueShare of each limit at N instants of a period. One per
+/// design; nothing is allocated per call.
+class TorqueGuard {
+ public:
+  TorqueGuard(const Model& model, const ExcitationLimits& limits, double period, int harmonics, int instants);
+
+  /// γ for q0 (n) and K (n × 2L): 1 when the motion as given keeps the limits, else the largest factor
+  /// found (within 0.5 %) that does; negative when even the arm at rest at q0 exceeds a limit.
+  double largest_factor(const Eigen::VectorXd& q0, const Eigen::MatrixXd& K);
+
+ private:
+  /// max over joints and instants of |τ| / (kTorqueShare · limit), for q0 + γ p.
+  double ratio(double gamma);
+
+  const Model& model_;
+  const ExcitationLimits& limits_;
+  HarmonicTable table_;
+  Data data_;
+  Eigen::MatrixXd p_, v_, a_;
+  Eigen::VectorXd q0_, q_, qd_, qdd_, tau_;
+};
+
+/// How much of each limit `trajectory` uses (n × 6, LimitKind's order; NaN where there is no limit; see
+/// ExcitationSummary::usage), and in `peaks` what it reaches (min q, max q, max |q̇|, |q̈|, |jerk|, |τ|):
+/// measured on a grid 4× finer than the limit grid, the torque by inverse dynamics with the limits' model.
+Eigen::MatrixXd measured_usage(const Model& model, const FourierTrajectory& trajectory, const ExcitationLimits& limits,
                                Eigen::MatrixXd& peaks);
 
 // ---- The criterion (excitation_criterion.cpp) --------------------------------------------------

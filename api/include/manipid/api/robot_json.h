@@ -50,11 +50,18 @@ namespace manipid::api {
 nlohmann::ordered_json robot_description(const robot::Model& model, const std::vector<std::string>& warnings);
 
 /// An excitation design as JSON: the series' formula, period, harmonics, q0, a, b per joint, the start,
-/// the criterion's value and the condition number, the layout, the limits, the binding ones, the seed,
-/// evaluations, time and why it stopped (what `manipid excitation --coefficients` writes and an excitation
+/// the criterion's value and the condition number, the layout, the limits (position, velocity,
+/// acceleration, jerk, torque; null where none), per joint the peaks reached and the share of each limit
+/// used ("peaks", "usage"), the torque's amplitude factor, the binding limits, the ramp from the start pose
+/// (null without one), the seed, evaluations, time and why it stopped (what `manipid excitation --coefficients` writes and an excitation
 /// job's result carries).
 nlohmann::ordered_json excitation_to_json(const robot::Model& model, const robot::ExcitationOptions& options,
                                           const robot::ExcitationLimits& limits, const robot::ExcitationDesign& design);
+/// The torque the limits' model predicts along a sampled excitation, at plot_indices (plots.h):
+/// {"t": [...], "tau": [[joint 1 ...], ...]} (N m; N prismatic) — what the excitation page draws against the
+/// torque limits.
+nlohmann::ordered_json excitation_torque_json(const robot::Model& model, const robot::ExcitationLimits& limits,
+                                              const robot::SampledExcitation& sampled, long max_points);
 
 /// The friction terms a layout has, by name: "viscous", "coulomb", "offset".
 std::vector<std::string> friction_names(const robot::ParameterLayout& layout);

@@ -69,17 +69,24 @@ RobotIdentificationSpec robot_identification_from_json(const nlohmann::json& bod
 struct ExcitationSpec {
   std::string robot_id;
   std::string name;                  ///< of the dataset it makes; default "excitation <robot> (<job>)"
-  robot::ExcitationOptions options;  ///< cancel and progress left empty
+  robot::ExcitationOptions options;  ///< cancel and progress left empty; the torque model not yet resolved
+  nlohmann::json torque_parameters;  ///< the torque model as parameters_from_json takes it; null = the URDF's
   int periods = 1;                   ///< whole periods sampled
   double dt = 0.001;                 ///< s, the dataset's sample period
 };
 
 /// {"robot_id", "name"?, "period"?: 10, "harmonics"?: 5, "criterion"?: "condition"|"logdet",
-///  "max_acceleration"?: rad/s² (one number, or one per joint), "position_margin"?, "duration"?: s (whole
-///  periods; default one), "dt"?: 0.001, "friction"?: [...], "armature"?, "seed"?, "max_seconds"?: 30}.
-/// What needs the robot (limits, the joint count of max_acceleration) is checked by the core when the
-/// job runs, and at submission by check_excitation.
+///  "max_acceleration"?: rad/s² (one number, or one per joint), "max_velocity"?: rad/s (default the URDF's),
+///  "max_jerk"?: rad/s³ (default none), "max_torque"?: N m (default the URDF's efforts), "torque_parameters"?:
+///  {an identification's result, or {"name": value} overrides} (default the URDF's), "start_pose"?: [rad …],
+///  "position_margin"?: 0.1, "duration"?: s (whole periods; default one), "dt"?: 0.001, "friction"?: [...],
+///  "armature"?, "seed"?, "max_seconds"?: 300, "max_evaluations"?: 8000}. What needs the robot (limits, the
+///  joint counts, the torque model) is checked at submission by check_excitation and by the core when the
+///  job runs.
 ExcitationSpec excitation_from_json(const nlohmann::json& body);
+/// The core's options for `spec` on `model`: the torque model resolved (InputError("torque_parameters")
+/// for names the robot does not have).
+robot::ExcitationOptions excitation_options(const ExcitationSpec& spec, const robot::Model& model);
 /// Checks the request against the robot (its limits leave room, per-joint values match its joints), so
 /// a job that is accepted can run.
 void check_excitation(const ExcitationSpec& spec, const robot::Model& model);

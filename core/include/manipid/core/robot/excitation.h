@@ -27,8 +27,20 @@
 //
 // Limits (resolved per joint by excitation_limits()): the URDF's position limits narrowed by
 // `position_margin` on each side (continuous joints: none), the URDF's velocity limit (+∞ without <limit>)
-// and `max_acceleration`. They hold for the continuous trajectory, for every t, not only on a grid (see
-// design_excitation()), so a trajectory sampled at any step never leaves them.
+// or `max_velocity` where lower, `max_acceleration`, `max_jerk` (none by default) and the torque: the
+// URDF's effort limit (none where the URDF gives none or 0) or `max_torque`, for the torque the URDF's
+// inertial parameters — or an identified model's, `torque_parameters` — predict. The kinematic limits hold
+// for the continuous trajectory, for every t, not only on a grid (see design_excitation()), so a trajectory
+// sampled at any step never leaves them. The torque, a nonlinear function of the motion, is held to
+// kTorqueShare of its limit at 40 instants per period of the highest harmonic and checked at 4× as many,
+// and every sample written is checked again (first_limit_violation).
+//
+// Start pose (`start_pose`, optional). A lab's arm stands somewhere when the run begins. The sampled
+// output then opens with a ramp from that pose to the series' start q(0) and closes with the same ramp
+// back: per joint the quintic rest-to-rest profile q = q_a + (q_b − q_a)(10s³ − 15s⁴ + 6s⁵), s = t/D, whose
+// velocity and acceleration are 0 at both ends (so the junctions with the series, also at rest, are
+// smooth in q, q̇ and q̈), and whose peaks are 1.875 Δ/D (q̇), 5.7735 Δ/D² (q̈) and 60 Δ/D³ (jerk, at the
+// ends). D is the shortest time that keeps every joint's limits, the torque's included (plan_ramp()).
 //
 // Criterion: the base regressor Y_b (the columns of robot/regressor.h's Y for the base parameters of
 // robot/base_parameters.h, friction, offset and armature columns of the layout included), stacked at
@@ -85,7 +97,8 @@ ExcitationCriterion parse_excitation_criterion(const std::string& text, const st
 struct ExcitationProgress {
   long evaluation = 0;      ///< 1, 2, …
   double value = 0.0;       ///< the criterion at this evaluation (condition number or log det)
-  double best_value = 0.0;  ///< the best so far
+  double best_value = 0.0;  ///< at the best candidate so far (by the cost, whose centring tie-break may
+                            ///< rank a candidate 0.025 % worse by the criterion first)
   double seconds = 0.0;     ///< since design_excitation() started
 };
 
@@ -106,9 +119,31 @@ struct ExcitationOptions {
   /// limit even on its highest harmonic (ω_f · L · q̇_max = 0.63 · 5 · 2.2 ≈ 6.9 rad/s²), so the velocity
   /// and position limits, not this one, shape most joints' motion. Give the robot's own figures where known.
   Eigen::VectorXd max_acceleration = Eigen::VectorXd::Constant(1, 7.5);
+  /// Largest |q̇|, rad/s (m/s): empty = the URDF's velocity limits; one value for every joint, or one per
+  /// joint. Never above the URDF's own limit (the lower of the two holds): give it to run slower, e.g. at
+  /// half speed on a first run.
+  Eigen::VectorXd max_velocity;
+  /// Largest |d³q/dt³| (jerk), rad/s³ (m/s³): empty = no jerk limit; one value, or one per joint. A
+  /// series' jerk is ω_f l times its acceleration per harmonic (about 16 rad/s³ at the defaults' 7.5 rad/s²
+  /// and 5 harmonics of a 10 s period: far below arms' jerk limits, e.g. the Panda's 5000–7500 rad/s³);
+  /// the ramps' jerk is 60 Δ/D³. Give the arm's figures where its controller enforces them.
+  Eigen::VectorXd max_jerk;
+  /// Largest |τ|, N·m (N): empty = the URDF's effort limits (joints whose <limit> has no effort, or 0, have
+  /// none); one value, or one per joint. Never above the URDF's own effort.
+  Eigen::VectorXd max_torque;
+  /// The model whose torque max_torque limits: standard parameters (robot/parameters.h) for
+  /// `torque_layout` — an identified model's, whose friction counts too. Empty: the URDF's own inertial
+  /// parameters, damping and friction (standard_parameters).
+  ParameterLayout torque_layout;
+  Eigen::VectorXd torque_parameters;
   /// Distance kept from each position limit, rad (m prismatic): a tracking controller overshoots its
-  /// reference a little, and a hard stop is not a place to identify friction. 0.05 rad ≈ 3°.
-  double position_margin = 0.05;
+  /// reference a little, a hard stop is not a place to identify friction, and some controllers stop the
+  /// arm before its limit (Franka's reflexes trip within a few degrees of it). 0.1 rad ≈ 6°.
+  double position_margin = 0.1;
+  /// Where the arm stands before and after the run, rad (m), n values; empty = no ramp (the output starts
+  /// at the series' own start q(0)). Must lie within the URDF's position limits (the margin need not hold
+  /// there), and the torque limits must hold the arm still at it.
+  Eigen::VectorXd start_pose;
   /// N: instants per period at which the regressor is stacked for the criterion; 0 = max(200, 40 L).
   /// The regressor's entries are products of the joint motion's harmonics, so N must resolve harmonic 2L
   /// and more: at least 8 L.
@@ -122,9 +157,10 @@ struct ExcitationOptions {
   /// Seeds the random starts: the same seed, options and robot give the same trajectory (unless
   /// max_seconds cuts the run short: time depends on the machine, evaluations do not).
   std::uint64_t seed = 1;
-  /// Budget, s of wall time, checked at each evaluation. A backstop: the default evaluation budget ends a
-  /// 7-joint design well before it, so results do not depend on the machine's speed.
-  double max_seconds = 30.0;
+  /// Budget, s of wall time, checked at each evaluation. A backstop only: the evaluation budget ends a
+  /// 7-joint design in 6–15 s, 20× within it even on a loaded machine (at 30 s, a loaded machine stopped
+  /// designs early, so their result depended on its speed).
+  double max_seconds = 300.0;
   /// Budget of criterion evaluations, random starts included. 8000 take about 6 s for a 7-joint arm with 5
   /// harmonics (Release, one core; about 0.75 ms each); twice as many improve the condition number by a few
   /// per cent at most.
@@ -135,23 +171,36 @@ struct ExcitationOptions {
   /// Called after each evaluation, in the calling thread.
   std::function<void(const ExcitationProgress&)> progress;
 
-  /// Throws InputError naming the field ("period", "harmonics", "max_acceleration", "position_margin",
-  /// "samples", "random_starts", "local_starts", "max_seconds", "max_evaluations", or "joint NAME" for a
-  /// joint whose limits leave it no room to move) unless a design can run on `model`.
+  /// Throws InputError naming the field ("period", "harmonics", "max_acceleration", "max_velocity",
+  /// "max_jerk", "max_torque", "torque_parameters", "position_margin", "start_pose", "samples",
+  /// "random_starts", "local_starts", "max_seconds", "max_evaluations", or "joint NAME" for a joint whose
+  /// limits leave it no room to move) unless a design can run on `model`.
   void validate(const Model& model) const;
 };
 
+/// The share of a torque limit the design aims at on its grid (40 instants per period of the highest
+/// harmonic): a sinusoid's peak lies at most 1 − cos(π/20) ≈ 1.2 % above its largest sample there, so
+/// the continuous torque stays within the limit; the result is checked on a 4× finer grid.
+inline constexpr double kTorqueShare = 0.98;
+
 /// The limits a design keeps, per joint (n each): positions narrowed by the margin (±∞ for continuous
-/// joints), the URDF's velocity limit (+∞ without <limit>), the acceleration limit.
+/// joints), velocity (the URDF's, or max_velocity where lower; +∞ without either), acceleration, jerk and
+/// torque (+∞ where there is none), and the model whose torque is limited.
 struct ExcitationLimits {
   Eigen::VectorXd lower, upper;  ///< rad (m)
   Eigen::VectorXd velocity;      ///< rad/s (m/s)
   Eigen::VectorXd acceleration;  ///< rad/s² (m/s²)
+  Eigen::VectorXd jerk;          ///< rad/s³ (m/s³)
+  Eigen::VectorXd torque;        ///< N·m (N)
+  ParameterLayout torque_layout;       ///< the torque model: layout and standard parameters
+  Eigen::VectorXd torque_parameters;
+  bool any_torque() const;  ///< a finite torque limit on some joint
 };
 /// Throws InputError as ExcitationOptions::validate does.
 ExcitationLimits excitation_limits(const Model& model, const ExcitationOptions& options);
 
-enum class LimitKind { lower, upper, velocity, acceleration };
+enum class LimitKind { lower, upper, velocity, acceleration, jerk, torque };
+inline constexpr int kLimitKinds = 6;
 const char* to_string(LimitKind kind);
 
 /// A limit the trajectory reaches (within 1 %).
@@ -159,8 +208,17 @@ struct ActiveLimit {
   int joint = 0;           ///< k, 1..n
   std::string joint_name;  ///< the URDF joint's name
   LimitKind kind = LimitKind::velocity;
-  double peak = 0.0;       ///< min q, max q, max |q̇| or max |q̈| over the period
+  double peak = 0.0;       ///< min q, max q, max |q̇|, |q̈|, |jerk| or |τ| over the period
   double limit = 0.0;      ///< the limit it is held to (margin included)
+};
+
+/// The smooth move from a start pose to the series' start and back (see the file comment).
+struct StartRamp {
+  Eigen::VectorXd pose;    ///< n: where the arm stands, rad (m)
+  Eigen::VectorXd target;  ///< n: the series' start q(0)
+  double duration = 0.0;   ///< D, s: the shortest within every limit (the sampled ramp is rounded up to whole steps)
+  /// Per joint, the ramp's peaks (n × 4: |q̇|, |q̈|, |jerk|, |τ|) at `duration`.
+  Eigen::MatrixXd peaks;
 };
 
 enum class ExcitationTermination {
@@ -194,9 +252,15 @@ struct ExcitationSummary {
   /// The limits the result reaches, by joint. The optimiser fills each joint's room, so every joint has at
   /// least one.
   std::vector<ActiveLimit> active_limits;
-  /// How much of each limit the result uses, n × 4 (lower, upper, velocity, acceleration): 1 = reaches
-  /// it; positions as the share of the room between q0 and the limit; NaN where there is no limit.
+  /// How much of each limit the result uses, n × 6 (lower, upper, velocity, acceleration, jerk, torque —
+  /// LimitKind's order): 1 = reaches it; positions as the share of the room between q0 and the limit; NaN
+  /// where there is no limit.
   Eigen::MatrixXd usage;
+  /// What the result reaches, n × 6 in the same order: min q, max q, max |q̇|, |q̈|, |jerk|, |τ| over a
+  /// period (|τ| of the torque model, also where no torque limit holds).
+  Eigen::MatrixXd peaks;
+  /// The amplitude factor (0, 1] the torque limits left: 1 = the kinematic limits alone shape the motion.
+  double torque_scale = 1.0;
 
   /// One line: "condition 8.75 -> 5.42, 57 base parameters, 8000 evaluations in 6.1 s, stopped:
   /// max_evaluations" (logdet: "logdet 127.4 -> 175.4 (condition number 9.28), ...").
@@ -206,6 +270,7 @@ struct ExcitationSummary {
 struct ExcitationDesign {
   FourierTrajectory trajectory;
   ExcitationSummary summary;
+  std::optional<StartRamp> ramp;  ///< when options.start_pose was given
 };
 
 /// Designs an excitation for `model` (see the file comment): random starts, then `local_starts`
@@ -214,10 +279,19 @@ struct ExcitationDesign {
 /// a trajectory outside the limits: a cancelled or failed run returns the best one evaluated.
 ExcitationDesign design_excitation(const Model& model, const ExcitationOptions& options = {});
 
+/// The ramp from `pose` to `target` (n each) for `model`'s limits: the shortest D (s) whose quintic keeps
+/// every joint's velocity, acceleration, jerk and torque limit. Throws InputError("start_pose") when the pose
+/// leaves the URDF's position limits, or when the torque limits cannot hold the arm at rest at the pose or
+/// the target (naming the joint, the torque and the limit), or along the ramp however slow.
+StartRamp plan_ramp(const Model& model, const ExcitationLimits& limits, const Eigen::VectorXd& pose,
+                    const Eigen::VectorXd& target);
+
 /// Positions, rates and accelerations at evenly spaced instants.
 struct SampledExcitation {
-  Eigen::VectorXd t;                 ///< N + 1 instants 0, Δ, …, periods·T, s
+  Eigen::VectorXd t;                 ///< N + 1 instants 0, Δ, …, s
   Eigen::MatrixXd q, qd, qdd;        ///< n × (N + 1), one column per instant (as stacked_regressor takes them)
+  Eigen::MatrixXd jerk;              ///< n × (N + 1): d³q/dt³ (one-sided at the junctions of ramp and series)
+  double ramp_duration = 0.0;        ///< s: the ramp in (and out), whole steps; 0 without a start pose
 };
 
 /// Samples `trajectory` every `dt` seconds over `periods` periods, both ends included. dt must divide the
@@ -227,6 +301,9 @@ struct SampledExcitation {
 /// period (too coarse to show the highest harmonic) or more than 10^7 samples in all; InputError("periods")
 /// for periods < 1.
 SampledExcitation sample_excitation(const FourierTrajectory& trajectory, double dt, int periods = 1);
+/// The design sampled: its series as above, between its ramp in and out when it has one (each ramp's
+/// duration rounded up to whole steps of dt, so the series starts on a sample).
+SampledExcitation sample_excitation(const ExcitationDesign& design, double dt, int periods = 1);
 /// The number of whole periods in `duration` (s); InputError("duration") unless it is one (to 1e-9): a
 /// trajectory ends at rest only after whole periods.
 int whole_periods(double duration, double period);
@@ -237,7 +314,9 @@ Trajectory to_trajectory(const SampledExcitation& sampled);
 /// refuse a bad step before spending seconds on a design. Throws InputError("dt"/"periods"/"period").
 void check_sampling(double period, int harmonics, double dt, int periods = 1);
 
-/// The first sample of `sampled` outside `limits` (rounding at 1e-12 relative tolerated), if any.
+/// The first sample of `sampled` outside `limits` (rounding at 1e-12 relative tolerated), if any: position,
+/// velocity, acceleration and jerk; with `model`, also the torque (limits.torque for the limits' torque
+/// model, by inverse dynamics at every sample).
 struct LimitViolation {
   int joint = 0;  ///< k, 1..n
   LimitKind kind = LimitKind::velocity;
@@ -245,7 +324,10 @@ struct LimitViolation {
   double value = 0.0;
   double limit = 0.0;
 };
-std::optional<LimitViolation> first_limit_violation(const ExcitationLimits& limits, const SampledExcitation& sampled);
+std::optional<LimitViolation> first_limit_violation(const ExcitationLimits& limits, const SampledExcitation& sampled,
+                                                    const Model* model = nullptr);
+/// "the velocity limit of joint 3 (2.2 rad/s) at t = 1.25 s: 2.31": for a message.
+std::string describe(const LimitViolation& violation);
 
 /// How well a trajectory excites the model, by the design's own measure.
 struct ExcitationQuality {
