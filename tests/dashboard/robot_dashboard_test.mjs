@@ -5,8 +5,9 @@
 // identification's page against the API: the base-parameter table (rows, numbers, filter,
 // sort), the correlation map, friction, the consistency verdict, one fit chart per joint with
 // the API's point count, the friction curves (points and law against the API's), the validation
-// errors per joint beside the URDF's, the run's measured angles and torques, the identified URDF's
-// download; then the robots list and the robot's page from the header, an excitation designed
+// errors per joint beside the URDF's, the run's measured angles and torques, charts that keep
+// their axes (the legend, zoom across small multiples, the plot switch, a resize), the identified
+// URDF's download; then the robots list and the robot's page from the header, an excitation designed
 // from the robot's page, the home page's way to the robots and the job list's robot names,
 // keyboard reach, a narrow screen, a clean console, and that the binary serves the web/src it
 // was built from. Screenshots go to ARTIFACT_DIR.
@@ -18,7 +19,8 @@ import { execFileSync } from "node:child_process";
 import { mkdirSync, mkdtempSync, readFileSync, rmSync } from "node:fs";
 import { tmpdir } from "node:os";
 import path from "node:path";
-import { check, chromiumOrSkip, failed, json, launch, newPage, overflow, root, startServer, stopServer, tabUntil } from "./support.mjs";
+import { axisRange, check, chromiumOrSkip, dragAcross, failed, json, launch, newPage, overflow, root, startServer, stopServer,
+         tabUntil } from "./support.mjs";
 
 const [given, artifacts = path.join(tmpdir(), "manipid-dashboard-artifacts")] = process.argv.slice(2);
 const binary = given && path.resolve(given);
@@ -260,6 +262,61 @@ try {
           `measured ${chart}: one chart, ${measuredData.t.length} points (the API's at max_points=${dataPoints}), 7 joints by name`);
   }
   await page.locator("#robot-data").screenshot({ path: shot("robot-job-measured-data.png") });
+
+  // ---- charts that keep their axes ----------------------------------------------------------------
+  // Zoom: a drag across one fit chart zooms the time axis of all seven (one time axis); y fits the window.
+  const fitBoxes = fit.joints.map((joint) => `#chart-robot-fit-${joint.joint}`);
+  const xRanges = () => Promise.all(fitBoxes.map((box) => axisRange(page, box, "x")));
+  const [fullX] = await xRanges();
+  await dragAcross(page, fitBoxes[0], 0.25, 0.5);
+  const zoomed = await xRanges();
+  const span = (range) => range[1] - range[0];
+  // Each chart turns the stretch dragged into times with its own width: the same to rounding.
+  const sameRange = (a, b) => a.every((value, k) => Math.abs(value - b[k]) <= 1e-9 * span(fullX));
+  check(zoomed.every((range) => sameRange(range, zoomed[0])) && span(zoomed[0]) < 0.4 * span(fullX) &&
+        zoomed[0][0] > fullX[0], `a drag across one fit chart zooms all 7 to the same stretch (t ${zoomed[0].map((v) => v.toFixed(2)).join("…")} s)`);
+  await page.locator("#robot-fit").screenshot({ path: shot("robot-job-fit-zoomed.png") });
+  const torqueY = await axisRange(page, fitBoxes[1], "y");
+  await page.check("#robot-fit input[value=residual]");
+  const residualY = await axisRange(page, fitBoxes[1], "y");
+  check(JSON.stringify(await xRanges()) === JSON.stringify(zoomed) && span(residualY) < 0.2 * span(torqueY),
+        `the plot switch keeps the zoom; y fits the residual (${fit.joints[1].name}: ±${(span(residualY) / 2).toPrecision(2)} N·m against ±${(span(torqueY) / 2).toPrecision(2)})`);
+  await page.check("#robot-fit input[value=torque]");
+  const width = () => page.$eval(fitBoxes[0], (box) => box.querySelector(".uplot").getBoundingClientRect().width);
+  const wide = await width();
+  await page.setViewportSize({ width: 1000, height: 800 });
+  await page.waitForFunction(([box, before]) => document.querySelector(box).querySelector(".uplot").getBoundingClientRect().width !== before,
+                             [fitBoxes[0], wide]);
+  check(JSON.stringify(await xRanges()) === JSON.stringify(zoomed), "a resize keeps the zoom");
+  await page.setViewportSize({ width: 1280, height: 800 });
+  await page.locator(`${fitBoxes[3]} .u-over`).dblclick();
+  check(JSON.stringify(await xRanges()) === JSON.stringify(fit.joints.map(() => fullX)), "a double-click on any of them shows the whole run again in all 7");
+  // The legend: hiding a joint leaves the axes where they are (the other curves do not jump).
+  const torques = "#chart-robot-torques";
+  const legendEntry = (k) => page.locator(`${torques} .u-legend .u-series:nth-child(${k + 2}) th`);  // k: 0-based joint
+  const peak = (values) => Math.max(...values.filter((v) => v !== null).map(Math.abs));
+  const largest = measuredData.tau.reduce((best, tau, j) => (peak(tau) > peak(measuredData.tau[best]) ? j : best), 0);
+  const allY = await axisRange(page, torques, "y");
+  const plotLeft = () => page.$eval(`${torques} .u-over`, (over) => over.style.left);
+  const plotLeftBefore = await plotLeft();
+  await legendEntry(largest).click();
+  check(await page.locator(`${torques} .u-legend .u-series:nth-child(${largest + 2}).u-off`).count() === 1 &&
+        JSON.stringify(await axisRange(page, torques, "y")) === JSON.stringify(allY),
+        `hiding ${robot.joints[largest].name} (the largest torque) from the legend keeps the y axis (${allY.join(" … ")} N·m)`);
+  await page.locator(`${torques} .u-over`).dblclick();
+  const restY = await axisRange(page, torques, "y");
+  check(span(restY) < span(allY), `... a double-click fits it to the joints left (${restY.join(" … ")} N·m)`);
+  await legendEntry(largest).click();
+  const backY = await axisRange(page, torques, "y");
+  const tauLargest = measuredData.tau[largest].filter((v) => v !== null);
+  check(backY[0] <= Math.min(...tauLargest) && backY[1] >= Math.max(...tauLargest) && backY[0] <= restY[0] && backY[1] >= restY[1],
+        `... shown again, y widens to hold it (${backY.join(" … ")} N·m), never narrows`);
+  for (let j = 0; j < JOINTS; j += 1) await legendEntry(j).click();
+  check(await page.locator(`${torques} .u-legend .u-series.u-off`).count() === JOINTS &&
+        JSON.stringify(await axisRange(page, torques, "y")) === JSON.stringify(backY) && await plotLeft() === plotLeftBefore,
+        "every joint hidden: the y axis stays, with its ticks and label, and the plot where it was");
+  await page.locator(torques).screenshot({ path: shot("robot-job-torques-all-hidden.png") });
+  for (let j = 0; j < JOINTS; j += 1) await legendEntry(j).click();
 
   // ---- the base parameters' correlation ------------------------------------------------------------
   const base = result.base_parameters.length;

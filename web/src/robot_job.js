@@ -468,7 +468,7 @@ function jointTorqueCharts(id, fit, joints, { measuredLabel, modelLabel }) {
     const meta = joints[joint.joint - 1];  // the fitted joints may be fewer than the robot's
     charts.push(lineChart(boxes[i], {
       title: `${joint.name}: error ${percent(joint.relative_error)}`,
-      xLabel: "t, s", yLabel: torqueUnit(meta), height: 200, sync: id, legend: false,
+      xLabel: "t, s", yLabel: `τ, ${torqueUnit(meta)}`, height: 200, sync: id, legend: false,
       series: [{ label: measuredLabel, color: "#333" }, { label: modelLabel, color: PALETTE[i % PALETTE.length], dash: [5, 3] },
                { label: "residual", color: "#b42318", show: false }],
       data: [fit.t, joint.measured, joint.model, joint.residual] }));
@@ -529,7 +529,7 @@ function frictionCurves(friction, joints, judge) {
     const qd = order.map((k) => joint.qd[k]);
     lineChart(boxes[i], {
       title: `${joint.name}: ${lawInWords(joint.law)}`,
-      xLabel: isPrismatic(meta) ? "q̇, m/s" : "q̇, rad/s", yLabel: torqueUnit(meta), height: 220, legend: false,
+      xLabel: isPrismatic(meta) ? "q̇, m/s" : "q̇, rad/s", yLabel: `τ, ${torqueUnit(meta)}`, height: 220, legend: false,
       series: [{ label: "measured − rigid body", color: "#7a7a7a", points: true },
                { label: "fitted law", color: PALETTE[i % PALETTE.length], width: 2 }],
       data: [qd, order.map((k) => joint.torque[k]), qd.map((v) => frictionLaw(joint.law, v))] });
@@ -552,8 +552,15 @@ async function measuredDataSection(body, job, result) {
       `${plural(data.q.length, "joint")}, drawn ${data.t.length} samples.` + (prismatic ? " Prismatic joints in m and N." : "")),
     angleBox, data.tau ? torqueBox : h("p", {}, "The dataset has no torque.")));
   const series = data.q.map((_, j) => ({ label: name(j), color: PALETTE[j % PALETTE.length] }));
-  lineChart(angleBox, { title: "Joint angles", xLabel: "t, s", yLabel: "rad", series, data: [data.t, ...data.q] });
-  if (data.tau) lineChart(torqueBox, { title: "Joint torques", xLabel: "t, s", yLabel: "N·m", series, data: [data.t, ...data.tau] });
+  // One axis for every joint: its unit names both when revolute and prismatic joints share it.
+  const unit = (revolute, prismaticUnit) => {
+    const kinds = new Set(data.q.map((_, j) => isPrismatic(joints[j])));
+    return kinds.size > 1 ? `${revolute} and ${prismaticUnit}` : kinds.has(true) ? prismaticUnit : revolute;
+  };
+  lineChart(angleBox, { title: "Joint angles", xLabel: "t, s", yLabel: `q, ${unit("rad", "m")}`, series, data: [data.t, ...data.q] });
+  if (data.tau) {
+    lineChart(torqueBox, { title: "Joint torques", xLabel: "t, s", yLabel: `τ, ${unit("N·m", "N")}`, series, data: [data.t, ...data.tau] });
+  }
 }
 
 function ratioInWords(estimate, prior) {
