@@ -44,6 +44,7 @@ function judgeInWords(judge) {
 function glance(job, result) {
   const joints = result.robot?.joints?.length ?? result.friction?.length ?? 0;
   const validation = result.validation;
+  const held = job.request?.validation_dataset_ids?.length || 1;
   const unexcited = result.unexcited || [];
   return section("glance", "At a glance",
     facts([
@@ -56,7 +57,7 @@ function glance(job, result) {
                      ` of the measured torque (‖τ̂ − τ‖ / ‖τ‖ over the fitted joints), ${judgeInWords(result.judge)}`]],
       ["Validation error", validation
         ? [h("span", { id: "validation-overall" }, percent(validation.overall_relative_error)),
-           ` on the validation run; the URDF's own values: ${percent(validation.prior?.overall_relative_error)}`]
+           ` on ${held > 1 ? `the ${held} validation runs` : "the validation run"}; the URDF's own values: ${percent(validation.prior?.overall_relative_error)}`]
         : "no validation run"],
       ["Physical consistency", h("span", { id: "consistency-glance" }, consistencyInWords(result))],
       ["Warnings", result.warnings?.length ? h("a", { href: "#identifiability" }, plural(result.warnings.length, "warning")) : "none"],
@@ -582,11 +583,12 @@ function validationVerdict(estimate, prior) {
 async function validationSection(body, job, result) {
   if (!job.validation_dataset_id) {
     body.append(section("validation", "Validation",
-      h("p", { id: "validation-none" }, "No validation run: give the identification a validation_dataset_id (a second run) " +
-        "to see how the estimate predicts data it was not fitted to.")));
+      h("p", { id: "validation-none" }, "No validation run: name a run \u201cvalidation (held out)\u201d in the robot page's " +
+        "Identify form (validation_dataset_ids in the API) to see how the estimate predicts data it was not fitted to.")));
     return;
   }
   const validation = await api(`/v1/jobs/${job.id}/validation?max_points=${JOINT_POINTS}`);
+  const held = job.request?.validation_dataset_ids?.length || 1;
   const prior = validation.prior?.relative_error || [];
   const widest = Math.max(...validation.joints.map((joint) => joint.relative_error || 0), ...prior.map((value) => value || 0),
                           validation.overall_relative_error || 0) || 1;
@@ -611,7 +613,8 @@ async function validationSection(body, job, result) {
   body.append(section("validation", "Validation: predicting a second run",
     h("p", { id: "validation-verdict" }, validationVerdict(overall, overallPrior)),
     h("p", { class: "muted", dataset: { maxPoints: String(JOINT_POINTS) } },
-      `Dataset ${job.validation_dataset_id}, through the identification's filters: ${validation.samples} filtered samples. ` +
+      `Dataset ${job.validation_dataset_id}${held > 1 ? ` (the first of ${held} validation runs; the error at a glance takes all ${held})` : ""}, ` +
+      `through the identification's filters: ${validation.samples} filtered samples. ` +
       "Error per joint: ‖τ̂ − τ‖ / ‖τ‖ and, in brackets, the RMS of τ̂ − τ, predicted by the estimate and by the URDF's own " +
       `inertial and friction values, ${judgeInWords(result.judge)}.`),
     h("div", { class: "scroll" }, h("table", { id: "validation-table", class: "data" },
