@@ -11,7 +11,7 @@
 import { mkdirSync, mkdtempSync, rmSync } from "node:fs";
 import { tmpdir } from "node:os";
 import path from "node:path";
-import { check, chromiumOrSkip, failed, json, launch, newPage, startServer, stopServer } from "./support.mjs";
+import { axisRange, check, chromiumOrSkip, dragAcross, failed, json, launch, newPage, startServer, stopServer } from "./support.mjs";
 
 const [binary, artifacts = path.join(tmpdir(), "manipid-dashboard-artifacts")] = process.argv.slice(2);
 if (!binary) { console.error("usage: dashboard_test.mjs path/to/manipid [ARTIFACT_DIR]"); process.exit(2); }
@@ -136,6 +136,16 @@ try {
   const later = Number(await page.getAttribute("#chart-cost", "data-total"));
   check(later > first, `the running job's charts follow it live (${first} → ${later} evaluations)`);
   check(await points("#chart-cost") <= 2002, "... drawn from at most about 2000 points");
+  // A live chart keeps the reader's zoom through its refreshes; one left alone follows the job.
+  await dragAcross(page, "#chart-cost", 0.2, 0.5);
+  const zoomedCost = await axisRange(page, "#chart-cost", "x");
+  const followed = await axisRange(page, "#chart-parameter-m2", "x");
+  const beforeRefresh = Number(await page.getAttribute("#chart-cost", "data-total"));
+  await page.waitForFunction((seen) => Number(document.querySelector("#chart-cost").dataset.total) > seen, beforeRefresh, { timeout: 60000 });
+  const afterRefresh = await axisRange(page, "#chart-cost", "x");
+  check(zoomedCost[1] < followed[1] && JSON.stringify(afterRefresh) === JSON.stringify(zoomedCost),
+        `a zoomed live chart keeps its window through a refresh (evaluations ${zoomedCost.map(Math.round).join("…")})`);
+  check((await axisRange(page, "#chart-parameter-m2", "x"))[1] > followed[1], "... and an unzoomed one follows the job as it grows");
   await page.focus("#cancel");
   await page.keyboard.press("Enter");
   await page.waitForSelector("body[data-ready=true]", { timeout: 120000 });

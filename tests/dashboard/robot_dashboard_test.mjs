@@ -1,12 +1,14 @@
 // robot_dashboard_test.mjs — the dashboard's robot pages end to end in headless Chromium:
 // make two runs of a 7-joint arm with the real binary (`manipid excitation`, `manipid torque`
 // with noise, seeds 1 and 2), start `manipid serve --port 0`, upload the URDF with the robots
-// page's form, the runs by the API, identify from the robot's page (keyboard), then check the
+// page's form, one run by the API and the other as a CSV file through the identify form, name
+// them training and validation run, identify from the robot's page (keyboard), then check the
 // identification's page against the API: the base-parameter table (rows, numbers, filter,
 // sort), the correlation map, friction, the consistency verdict, one fit chart per joint with
 // the API's point count, the friction curves (points and law against the API's), the validation
-// errors per joint beside the URDF's, the run's measured angles and torques, the identified URDF's
-// download; then the robots list and the robot's page from the header, an excitation designed
+// errors per joint beside the URDF's, the run's measured angles and torques, charts that keep
+// their axes (the legend, zoom across small multiples, the plot switch, a resize), the identified
+// URDF's download; then the robots list and the robot's page from the header, an excitation designed
 // from the robot's page, the home page's way to the robots and the job list's robot names,
 // keyboard reach, a narrow screen, a clean console, and that the binary serves the web/src it
 // was built from. Screenshots go to ARTIFACT_DIR.
@@ -18,7 +20,8 @@ import { execFileSync } from "node:child_process";
 import { mkdirSync, mkdtempSync, readFileSync, rmSync } from "node:fs";
 import { tmpdir } from "node:os";
 import path from "node:path";
-import { check, chromiumOrSkip, failed, json, launch, newPage, overflow, root, startServer, stopServer, tabUntil } from "./support.mjs";
+import { axisRange, check, chromiumOrSkip, dragAcross, failed, json, launch, newPage, overflow, root, startServer, stopServer,
+         tabUntil } from "./support.mjs";
 
 const [given, artifacts = path.join(tmpdir(), "manipid-dashboard-artifacts")] = process.argv.slice(2);
 const binary = given && path.resolve(given);
@@ -86,24 +89,43 @@ try {
   check((await page.textContent(`#robot-joints tr[data-joint="${firstJoint.name}"]`)).includes(`${firstJoint.limits.velocity} rad/s`),
         `... with their limits (${firstJoint.name}: ${firstJoint.limits.velocity} rad/s)`);
 
-  // ---- two runs by the API; identify from the robot's page -----------------------------------
-  const upload = (file, name) => json(`${url}/v1/datasets?name=${name}`, { method: "POST", headers: { "Content-Type": "text/csv" },
-                                                                           body: readFileSync(path.join(workdir, file)) });
-  const measured = await upload("run1.csv", "run1");
-  const validationRun = await upload("run2.csv", "run2");
-  await page.reload();  // the fragment address reloads the same view
+  // ---- one run stored by the API, one added from the disk; identify from the robot's page ------
+  const validationRun = await json(`${url}/v1/datasets?name=run2`, { method: "POST", headers: { "Content-Type": "text/csv" },
+                                                                    body: readFileSync(path.join(workdir, "run2.csv")) });
+  await page.reload();
   await page.waitForSelector("body[data-ready=true] #identify-form");
-  await page.selectOption("#i-dataset", measured.id);
-  await page.selectOption("#i-validation", validationRun.id);
+  const storedRow = `#i-runs tr[data-dataset-id="${validationRun.id}"]`;
+  check(await page.locator("#i-runs tbody tr").count() === 1 && (await page.textContent(`${storedRow} th`)).includes("run2") &&
+        (await page.textContent(storedRow)).includes(String(validationRun.samples)) &&
+        await page.inputValue(`${storedRow} select`) === "train",
+        `the identify form lists the stored run (run2, ${validationRun.samples} samples), a training run by default`);
+  // No training run: the form says so and submits nothing.
+  await page.selectOption(`${storedRow} select`, "unused");
+  await page.click("#identify-submit");
+  check(/at least one training run/.test(await page.textContent("#identify-form .form-status")) && page.url().endsWith(`/robots/${robotId}`) &&
+        await page.getAttribute(`${storedRow} select`, "aria-invalid") === "true",
+        `no training run: "${await page.textContent("#identify-form .form-status")}", nothing submitted`);
+  // A CSV from the disk (an in-memory file here): listed first, to be uploaded on Identify.
+  await page.setInputFiles("#i-files", { name: "run1.csv", mimeType: "text/csv", buffer: readFileSync(path.join(workdir, "run1.csv")) });
+  const fileRow = '#i-runs tr[data-file="run1.csv"]';
+  check(await page.locator("#i-runs tbody tr").count() === 2 && await page.getAttribute("#i-runs tbody tr:first-child", "data-file") === "run1.csv" &&
+        await page.inputValue(`${fileRow} select`) === "train" && (await page.textContent(fileRow)).includes("uploaded on Identify"),
+        "the added file is listed first, as a training run, to upload on Identify");
+  await page.selectOption(`${storedRow} select`, "validation");
+  await page.locator("#identify-form").screenshot({ path: shot("identify-form.png") });
   await page.focus("#identify-submit");
   await page.keyboard.press("Enter");
-  await page.waitForURL(/\/jobs\/job_[0-9a-f]+$/, { timeout: 30000 });
+  await page.waitForURL(/\/jobs\/job_[0-9a-f]+$/, { timeout: 60000 });
   const jobId = page.url().split("/").pop();
   await page.waitForSelector("body[data-ready=true]", { timeout: 240000 });
   const job = await json(`${url}/v1/jobs/${jobId}`);
-  check(job.request.robot_id === robotId && job.request.dataset_id === measured.id && job.request.validation_dataset_id === validationRun.id &&
+  const measured = await json(`${url}/v1/datasets/${job.request.dataset_ids?.[0]}`);
+  check(measured.name === "run1.csv" && measured.samples === validationRun.samples && measured.joints === JOINTS && measured.has_torque,
+        `the form uploaded the file as a dataset named run1.csv (${measured.samples} samples, 7 joints and torque)`);
+  check(job.request.robot_id === robotId && JSON.stringify(job.request.dataset_ids) === JSON.stringify([measured.id]) &&
+        JSON.stringify(job.request.validation_dataset_ids) === JSON.stringify([validationRun.id]) &&
         JSON.stringify(job.request.friction) === JSON.stringify(["viscous", "coulomb"]),
-        "the form asked for robot, run, validation run and viscous + Coulomb friction");
+        "the form asked for robot, the file as training run, the stored run as validation run, and viscous + Coulomb friction");
   check(await page.getAttribute("body", "data-job-state") === "succeeded" && job.state === "succeeded", `job ${jobId} reached succeeded on its page`);
   check((await page.textContent("#job-state")).trim() === "succeeded", "the state badge says succeeded");
   const result = job.result;
@@ -261,6 +283,61 @@ try {
   }
   await page.locator("#robot-data").screenshot({ path: shot("robot-job-measured-data.png") });
 
+  // ---- charts that keep their axes ----------------------------------------------------------------
+  // Zoom: a drag across one fit chart zooms the time axis of all seven (one time axis); y fits the window.
+  const fitBoxes = fit.joints.map((joint) => `#chart-robot-fit-${joint.joint}`);
+  const xRanges = () => Promise.all(fitBoxes.map((box) => axisRange(page, box, "x")));
+  const [fullX] = await xRanges();
+  await dragAcross(page, fitBoxes[0], 0.25, 0.5);
+  const zoomed = await xRanges();
+  const span = (range) => range[1] - range[0];
+  // Each chart turns the stretch dragged into times with its own width: the same to rounding.
+  const sameRange = (a, b) => a.every((value, k) => Math.abs(value - b[k]) <= 1e-9 * span(fullX));
+  check(zoomed.every((range) => sameRange(range, zoomed[0])) && span(zoomed[0]) < 0.4 * span(fullX) &&
+        zoomed[0][0] > fullX[0], `a drag across one fit chart zooms all 7 to the same stretch (t ${zoomed[0].map((v) => v.toFixed(2)).join("…")} s)`);
+  await page.locator("#robot-fit").screenshot({ path: shot("robot-job-fit-zoomed.png") });
+  const torqueY = await axisRange(page, fitBoxes[1], "y");
+  await page.check("#robot-fit input[value=residual]");
+  const residualY = await axisRange(page, fitBoxes[1], "y");
+  check(JSON.stringify(await xRanges()) === JSON.stringify(zoomed) && span(residualY) < 0.2 * span(torqueY),
+        `the plot switch keeps the zoom; y fits the residual (${fit.joints[1].name}: ±${(span(residualY) / 2).toPrecision(2)} N·m against ±${(span(torqueY) / 2).toPrecision(2)})`);
+  await page.check("#robot-fit input[value=torque]");
+  const width = () => page.$eval(fitBoxes[0], (box) => box.querySelector(".uplot").getBoundingClientRect().width);
+  const wide = await width();
+  await page.setViewportSize({ width: 1000, height: 800 });
+  await page.waitForFunction(([box, before]) => document.querySelector(box).querySelector(".uplot").getBoundingClientRect().width !== before,
+                             [fitBoxes[0], wide]);
+  check(JSON.stringify(await xRanges()) === JSON.stringify(zoomed), "a resize keeps the zoom");
+  await page.setViewportSize({ width: 1280, height: 800 });
+  await page.locator(`${fitBoxes[3]} .u-over`).dblclick();
+  check(JSON.stringify(await xRanges()) === JSON.stringify(fit.joints.map(() => fullX)), "a double-click on any of them shows the whole run again in all 7");
+  // The legend: hiding a joint leaves the axes where they are (the other curves do not jump).
+  const torques = "#chart-robot-torques";
+  const legendEntry = (k) => page.locator(`${torques} .u-legend .u-series:nth-child(${k + 2}) th`);  // k: 0-based joint
+  const peak = (values) => Math.max(...values.filter((v) => v !== null).map(Math.abs));
+  const largest = measuredData.tau.reduce((best, tau, j) => (peak(tau) > peak(measuredData.tau[best]) ? j : best), 0);
+  const allY = await axisRange(page, torques, "y");
+  const plotLeft = () => page.$eval(`${torques} .u-over`, (over) => over.style.left);
+  const plotLeftBefore = await plotLeft();
+  await legendEntry(largest).click();
+  check(await page.locator(`${torques} .u-legend .u-series:nth-child(${largest + 2}).u-off`).count() === 1 &&
+        JSON.stringify(await axisRange(page, torques, "y")) === JSON.stringify(allY),
+        `hiding ${robot.joints[largest].name} (the largest torque) from the legend keeps the y axis (${allY.join(" … ")} N·m)`);
+  await page.locator(`${torques} .u-over`).dblclick();
+  const restY = await axisRange(page, torques, "y");
+  check(span(restY) < span(allY), `... a double-click fits it to the joints left (${restY.join(" … ")} N·m)`);
+  await legendEntry(largest).click();
+  const backY = await axisRange(page, torques, "y");
+  const tauLargest = measuredData.tau[largest].filter((v) => v !== null);
+  check(backY[0] <= Math.min(...tauLargest) && backY[1] >= Math.max(...tauLargest) && backY[0] <= restY[0] && backY[1] >= restY[1],
+        `... shown again, y widens to hold it (${backY.join(" … ")} N·m), never narrows`);
+  for (let j = 0; j < JOINTS; j += 1) await legendEntry(j).click();
+  check(await page.locator(`${torques} .u-legend .u-series.u-off`).count() === JOINTS &&
+        JSON.stringify(await axisRange(page, torques, "y")) === JSON.stringify(backY) && await plotLeft() === plotLeftBefore,
+        "every joint hidden: the y axis stays, with its ticks and label, and the plot where it was");
+  await page.locator(torques).screenshot({ path: shot("robot-job-torques-all-hidden.png") });
+  for (let j = 0; j < JOINTS; j += 1) await legendEntry(j).click();
+
   // ---- the base parameters' correlation ------------------------------------------------------------
   const base = result.base_parameters.length;
   check(Number(await page.getAttribute("#correlation-map", "data-size")) === base &&
@@ -355,7 +432,8 @@ try {
   await page.click("#identify-physical");
   await page.waitForURL((address) => /\/jobs\/job_[0-9a-f]+$/.test(address.pathname) && !address.pathname.endsWith(jobId), { timeout: 30000 });
   const again = await json(`${url}/v1/jobs/${page.url().split("/").pop()}`);
-  check(again.request.physical === true && again.request.dataset_id === job.request.dataset_id &&
+  check(again.request.physical === true && JSON.stringify(again.request.dataset_ids) === JSON.stringify(job.request.dataset_ids) &&
+        JSON.stringify(again.request.validation_dataset_ids) === JSON.stringify(job.request.validation_dataset_ids) &&
         again.request.robot_id === robotId, "... its button asks for the same identification with physical: true");
   await page.unroute(`**/v1/jobs/${jobId}`);
   await page.goto(`${url}/jobs/${jobId}`);  // back where the rest of the test expects to be
@@ -465,6 +543,29 @@ try {
   await page.waitForSelector('#robot-upload .form-status[role="alert"]');
   check(page.url().endsWith("/robots") && (await page.textContent("#robot-upload .form-status")).length > 10,
         `a broken URDF: the form shows the server's reason ("${(await page.textContent("#robot-upload .form-status")).slice(0, 60)}…")`);
+
+  // A CSV the server refuses, beside a good one: the identify form names the file and the reason, and stays.
+  await page.goto(`${url}/robots/${robotId}`);
+  await page.waitForSelector("body[data-ready=true] #identify-form");
+  const datasetsBefore = (await json(`${url}/v1/datasets?page_size=100`)).items.length;
+  await page.setInputFiles("#i-files", [{ name: "notes.csv", mimeType: "text/csv", buffer: Buffer.from("time,position\n0,1\n0.1,2\n") },
+                                        { name: "run2-again.csv", mimeType: "text/csv", buffer: readFileSync(path.join(workdir, "run2.csv")) }]);
+  check(await page.inputValue('#i-runs tr[data-file="notes.csv"] select') === "train" &&
+        await page.inputValue('#i-runs tr[data-file="run2-again.csv"] select') === "validation" &&
+        (await page.$$eval("#i-runs tr[data-dataset-id] select", (selects) => selects.map((select) => select.value))).every((v) => v === "unused"),
+        "two files added: the first a training run, the second a validation run, the stored runs set to \"not used\"");
+  await page.click("#identify-submit");
+  await page.waitForSelector('#identify-form .form-status[role="alert"]');
+  await page.waitForFunction(() => !document.querySelector("#identify-submit").disabled);
+  const refusal = await page.textContent("#identify-form .form-status");
+  const why = await page.textContent('#i-runs tr[data-file="notes.csv"] .run-status');
+  check(page.url().endsWith(`/robots/${robotId}`) && refusal.includes("notes.csv") && !refusal.includes("run2-again.csv") &&
+        await page.getAttribute('#i-runs tr[data-file="notes.csv"]', "data-refused") === "true" && why.startsWith("refused: t: missing column t") &&
+        await page.getAttribute('#i-runs tr[data-file="run2-again.csv"]', "data-dataset-id") !== null,
+        `a refused CSV: the form names the file ("${refusal}") and its row the server's reason ("${why.slice(0, 60)}…"); ` +
+        "the good one is stored, nothing identified");
+  check((await json(`${url}/v1/datasets?page_size=100`)).items.length === datasetsBefore + 1, "... exactly one dataset was added");
+  await page.locator("#identify-form").screenshot({ path: shot("identify-form-refused.png") });
 
 } catch (error) {
   check(false, `unexpected: ${error.stack || error}`);

@@ -83,3 +83,21 @@ export async function tabUntil(page, predicate, argument, limit = 150) {
 export function overflow(page) {
   return page.evaluate(() => document.documentElement.scrollWidth - window.innerWidth);
 }
+
+/** The range a chart's axis shows ("x" or "y"), from its data-x-range / data-y-range: [min, max], or null. */
+export async function axisRange(page, selector, axis) {
+  const text = await page.getAttribute(selector, `data-${axis}-range`);
+  return text ? text.split(" ").map(Number) : null;
+}
+
+/** Drags the mouse across a chart's plot from `from` to `to` (fractions of its width), as a reader zooms. */
+export async function dragAcross(page, selector, from, to) {
+  const over = page.locator(`${selector} .u-over`);
+  await over.scrollIntoViewIfNeeded();
+  const box = await over.boundingBox();
+  const y = box.y + box.height / 2;
+  await page.mouse.move(box.x + from * box.width, y);
+  await page.mouse.down();
+  await page.mouse.move(box.x + to * box.width, y, { steps: 8 });
+  await page.mouse.up();
+}

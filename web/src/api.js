@@ -17,14 +17,19 @@ let askForToken = () => {};
 export function onTokenNeeded(callback) { askForToken = callback; }
 export function setToken(token) { sessionStorage.setItem(TOKEN_KEY, token); }
 
-export async function api(path, { method = "GET", body } = {}) {
+/**
+ * A call to the API. `body`: an object sent as JSON, or — with `type`, its media type — sent as it
+ * is (a File or a string: a CSV upload).
+ */
+export async function api(path, { method = "GET", body, type } = {}) {
   const headers = { Accept: "application/json" };
   const token = sessionStorage.getItem(TOKEN_KEY);
   if (token) headers.Authorization = `Bearer ${token}`;
-  if (body !== undefined) headers["Content-Type"] = "application/json";
-  const response = await fetch(path, { method, headers, body: body === undefined ? undefined : JSON.stringify(body) });
-  const type = response.headers.get("Content-Type") || "";
-  const payload = type.includes("json") ? await response.json() : await response.text();
+  if (body !== undefined) headers["Content-Type"] = type || "application/json";
+  const sent = body === undefined || type ? body : JSON.stringify(body);
+  const response = await fetch(path, { method, headers, body: sent });
+  const answered = response.headers.get("Content-Type") || "";
+  const payload = answered.includes("json") ? await response.json() : await response.text();
   if (response.status === 401) askForToken();
   if (!response.ok) throw new ApiProblem(typeof payload === "object" ? payload : { detail: payload }, response.status);
   return payload;

@@ -45,6 +45,7 @@ function judgeInWords(judge) {
 function glance(job, result) {
   const joints = result.robot?.joints?.length ?? result.friction?.length ?? 0;
   const validation = result.validation;
+  const held = job.request?.validation_dataset_ids?.length || 1;
   const unexcited = result.unexcited || [];
   return section("glance", "At a glance",
     facts([
@@ -57,7 +58,7 @@ function glance(job, result) {
                      ` of the measured torque (‖τ̂ − τ‖ / ‖τ‖ over the fitted joints), ${judgeInWords(result.judge)}`]],
       ["Validation error", validation
         ? [h("span", { id: "validation-overall" }, percent(validation.overall_relative_error)),
-           ` on the validation run; the URDF's own values: ${percent(validation.prior?.overall_relative_error)}`]
+           ` on ${held > 1 ? `the ${held} validation runs` : "the validation run"}; the URDF's own values: ${percent(validation.prior?.overall_relative_error)}`]
         : "no validation run"],
       ["Physical consistency", h("span", { id: "consistency-glance" }, consistencyInWords(result))],
       ["Warnings", result.warnings?.length ? h("a", { href: "#identifiability" }, plural(result.warnings.length, "warning")) : "none"],
@@ -469,7 +470,7 @@ function jointTorqueCharts(id, fit, joints, { measuredLabel, modelLabel }) {
     const meta = joints[joint.joint - 1];  // the fitted joints may be fewer than the robot's
     charts.push(lineChart(boxes[i], {
       title: `${joint.name}: error ${percent(joint.relative_error)}`,
-      xLabel: "t, s", yLabel: torqueUnit(meta), height: 200, sync: id, legend: false,
+      xLabel: "t, s", yLabel: `τ, ${torqueUnit(meta)}`, height: 200, sync: id, legend: false,
       series: [{ label: measuredLabel, color: "#333" }, { label: modelLabel, color: PALETTE[i % PALETTE.length], dash: [5, 3] },
                { label: "residual", color: "#b42318", show: false }],
       data: [fit.t, joint.measured, joint.model, joint.residual] }));
@@ -530,7 +531,7 @@ function frictionCurves(friction, joints, judge) {
     const qd = order.map((k) => joint.qd[k]);
     lineChart(boxes[i], {
       title: `${joint.name}: ${lawInWords(joint.law)}`,
-      xLabel: isPrismatic(meta) ? "q̇, m/s" : "q̇, rad/s", yLabel: torqueUnit(meta), height: 220, legend: false,
+      xLabel: isPrismatic(meta) ? "q̇, m/s" : "q̇, rad/s", yLabel: `τ, ${torqueUnit(meta)}`, height: 220, legend: false,
       series: [{ label: "measured − rigid body", color: "#7a7a7a", points: true },
                { label: "fitted law", color: PALETTE[i % PALETTE.length], width: 2 }],
       data: [qd, order.map((k) => joint.torque[k]), qd.map((v) => frictionLaw(joint.law, v))] });
@@ -553,8 +554,15 @@ async function measuredDataSection(body, job, result) {
       `${plural(data.q.length, "joint")}, drawn ${data.t.length} samples.` + (prismatic ? " Prismatic joints in m and N." : "")),
     angleBox, data.tau ? torqueBox : h("p", {}, "The dataset has no torque.")));
   const series = data.q.map((_, j) => ({ label: name(j), color: PALETTE[j % PALETTE.length] }));
-  lineChart(angleBox, { title: "Joint angles", xLabel: "t, s", yLabel: "rad", series, data: [data.t, ...data.q] });
-  if (data.tau) lineChart(torqueBox, { title: "Joint torques", xLabel: "t, s", yLabel: "N·m", series, data: [data.t, ...data.tau] });
+  // One axis for every joint: its unit names both when revolute and prismatic joints share it.
+  const unit = (revolute, prismaticUnit) => {
+    const kinds = new Set(data.q.map((_, j) => isPrismatic(joints[j])));
+    return kinds.size > 1 ? `${revolute} and ${prismaticUnit}` : kinds.has(true) ? prismaticUnit : revolute;
+  };
+  lineChart(angleBox, { title: "Joint angles", xLabel: "t, s", yLabel: `q, ${unit("rad", "m")}`, series, data: [data.t, ...data.q] });
+  if (data.tau) {
+    lineChart(torqueBox, { title: "Joint torques", xLabel: "t, s", yLabel: `τ, ${unit("N·m", "N")}`, series, data: [data.t, ...data.tau] });
+  }
 }
 
 function ratioInWords(estimate, prior) {
@@ -576,11 +584,12 @@ function validationVerdict(estimate, prior) {
 async function validationSection(body, job, result) {
   if (!job.validation_dataset_id) {
     body.append(section("validation", "Validation",
-      h("p", { id: "validation-none" }, "No validation run: give the identification a validation_dataset_id (a second run) " +
-        "to see how the estimate predicts data it was not fitted to.")));
+      h("p", { id: "validation-none" }, "No validation run: name a run \u201cvalidation (held out)\u201d in the robot page's " +
+        "Identify form (validation_dataset_ids in the API) to see how the estimate predicts data it was not fitted to.")));
     return;
   }
   const validation = await api(`/v1/jobs/${job.id}/validation?max_points=${JOINT_POINTS}`);
+  const held = job.request?.validation_dataset_ids?.length || 1;
   const prior = validation.prior?.relative_error || [];
   const widest = Math.max(...validation.joints.map((joint) => joint.relative_error || 0), ...prior.map((value) => value || 0),
                           validation.overall_relative_error || 0) || 1;
@@ -605,7 +614,8 @@ async function validationSection(body, job, result) {
   body.append(section("validation", "Validation: predicting a second run",
     h("p", { id: "validation-verdict" }, validationVerdict(overall, overallPrior)),
     h("p", { class: "muted", dataset: { maxPoints: String(JOINT_POINTS) } },
-      `Dataset ${job.validation_dataset_id}, through the identification's filters: ${validation.samples} filtered samples. ` +
+      `Dataset ${job.validation_dataset_id}${held > 1 ? ` (the first of ${held} validation runs; the error at a glance takes all ${held})` : ""}, ` +
+      `through the identification's filters: ${validation.samples} filtered samples. ` +
       "Error per joint: ‖τ̂ − τ‖ / ‖τ‖ and, in brackets, the RMS of τ̂ − τ, predicted by the estimate and by the URDF's own " +
       `inertial and friction values, ${judgeInWords(result.judge)}.`),
     h("div", { class: "scroll" }, h("table", { id: "validation-table", class: "data" },

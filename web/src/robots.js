@@ -1,6 +1,6 @@
 // robots.js — the URDF robots: the list (/robots) with an upload form, and one robot
 // (/robots/{id}) with its joints and limits, the jobs that used it, and forms that design an
-// excitation for it and identify it from uploaded runs.
+// excitation for it and identify it from measured runs (CSV files from the disk, or stored datasets).
 import { api, ApiProblem, downloadLink } from "./api.js";
 import { facts, h, number, plural, section, stateBadge, when } from "./dom.js";
 import { jobPath, robotPath } from "./paths.js";
@@ -245,48 +245,221 @@ function excitationForm(robot, navigate) {
   return form;
 }
 
+// ---- identify ------------------------------------------------------------------------------------
+
+// What each run is for: the role column of the identify form's run table.
+const ROLES = [["train", "training"], ["validation", "validation (held out)"], ["unused", "not used"]];
+
+/** A <select> of [value, label] pairs (or plain values). */
+function choices(id, name, options, attributes = {}) {
+  return h("select", { id, name, ...attributes },
+    options.map((option) => (Array.isArray(option) ? h("option", { value: option[0] }, option[1]) : h("option", { value: option }, option))));
+}
+
+/** "columns: no column named q1 …" — an API problem in one line. */
+function problemText(error) {
+  return error instanceof ApiProblem ? `${error.field ? error.field + ": " : ""}${error.message}` : String(error.message || error);
+}
+
+/** The seconds a dataset spans (its samples at its period), or "–". */
+function duration(dataset) {
+  return typeof dataset.dt === "number" && dataset.samples > 0 ? number((dataset.samples - 1) * dataset.dt, 4) : "–";
+}
+
+/**
+ * The identify form: the runs to identify from — CSV files from the user's disk, uploaded when the
+ * form is sent (POST /v1/datasets?name=<file name>, with the column map and units when given), and
+ * the stored datasets with this robot's joints and torque — each named a training run, a validation
+ * run (held out: the estimate predicts it) or not used; at least one training run. Then the friction
+ * terms, armature and physical consistency.
+ */
 async function identifyForm(robot, navigate) {
   const n = robot.joints.length;
   const page = await api("/v1/datasets?page_size=1000");
-  const runs = page.items.filter((dataset) => dataset.joints === n && dataset.has_torque);
+  const fits = (dataset) => dataset.joints === n && dataset.has_torque;
   const status = h("p", { class: "form-status", role: "status", "aria-live": "polite" });
-  const option = (dataset) => h("option", { value: dataset.id }, `${dataset.name || dataset.id} — ${dataset.samples} samples, ${when(dataset.created_at)}`);
+  const files = h("input", { id: "i-files", name: "files", type: "file", multiple: true, accept: ".csv,text/csv" });
+  const columns = textInput("i-columns", "columns", "", { placeholder: "time=t,position_{j}=q{j},effort_{j}=tau{j}", spellcheck: "false",
+                                                          "aria-describedby": "i-columns-hint" });
+  const format = h("details", { id: "i-format" },
+    h("summary", {}, "Columns and units, for files that are not t, q1…, tau1… in s and rad"),
+    h("div", { class: "fields" },
+      field("Column map", columns, ["FILE=MANIPID rules: ", h("code", {}, "{j}"), " a joint number, ",
+                                    h("code", {}, "{joint}"), " one of this robot's joint names"]),
+      field("Time unit", choices("i-time-unit", "time_unit", ["s", "ms", "us", "ns"])),
+      field("Angle unit", choices("i-angle-unit", "angle_unit", [["rad", "rad"], ["deg", "degrees"]]), "of q (and qd, qdd, ref)")));
+  const tbody = h("tbody");
+  const runs = [];  // in table order: {row, role (its select), file?, dataset?, touched, cells}
+  let serial = 0;
+
+  const setStatus = (run, text, bad = false) => {
+    run.statusCell.replaceChildren(bad ? h("span", { class: "flag" }, text) : text);
+    if (bad) run.row.dataset.refused = "true"; else delete run.row.dataset.refused;
+  };
+  const stored = (run, dataset) => {
+    run.dataset = dataset;
+    run.row.dataset.datasetId = dataset.id;
+    run.samplesCell.textContent = String(dataset.samples);
+    run.spanCell.textContent = duration(dataset);
+    run.idCell.replaceChildren(h("code", {}, dataset.id));
+  };
+  const newRun = ({ dataset, file, role }) => {
+    serial += 1;
+    const name = dataset ? dataset.name || dataset.id : file.name;
+    const select = choices(`i-role-${serial}`, "role", ROLES, { class: "role", "aria-label": `Role of ${name}` });
+    select.value = role;
+    const run = { role: select, file, touched: false, idCell: h("div", { class: "muted small" }, "from your disk"),
+                  samplesCell: h("td", { class: "number" }, "–"), spanCell: h("td", { class: "number" }, "–"), statusCell: h("td", { class: "run-status" }) };
+    select.addEventListener("change", () => { run.touched = true; select.removeAttribute("aria-invalid"); });
+    run.row = h("tr", { dataset: file ? { file: file.name } : {} },
+      h("th", { scope: "row" }, h("span", { class: "run-name" }, name), run.idCell),
+      h("td", {}, select), run.samplesCell, run.spanCell, run.statusCell);
+    if (dataset) {
+      stored(run, dataset);
+      setStatus(run, `stored ${when(dataset.created_at)}`);
+    } else {
+      setStatus(run, "uploaded on Identify");
+    }
+    return run;
+  };
+  const render = () => tbody.replaceChildren(...(runs.length ? runs.map((run) => run.row)
+    : [h("tr", {}, h("td", { colspan: 5, class: "muted" }, `No runs with ${n} joints and torque yet: add CSV files above.`))]));
+
+  // The stored runs, newest first: the newest trains and the next one validates.
+  page.items.filter(fits).forEach((dataset, i) => runs.push(newRun({ dataset, role: i === 0 ? "train" : i === 1 ? "validation" : "unused" })));
+  render();
+
+  // Files from the disk go first in the table. They become the runs: the stored runs whose role
+  // nobody chose are set to "not used", the first file trains, the second validates, more train.
+  files.addEventListener("change", () => {
+    const known = (file) => runs.some((run) => run.file && !run.dataset && run.file.name === file.name &&
+                                               run.file.size === file.size && run.file.lastModified === file.lastModified);
+    const chosen = [...files.files].filter((file) => !known(file));
+    files.value = "";
+    if (!chosen.length) return;
+    for (const run of runs) if (!run.touched && !run.file) run.role.value = "unused";
+    let train = runs.some((run) => run.role.value === "train"), validation = runs.some((run) => run.role.value === "validation");
+    const added = chosen.map((file) => {
+      const role = !train ? "train" : !validation ? "validation" : "train";
+      if (role === "train") train = true; else validation = true;
+      return newRun({ file, role });
+    });
+    runs.unshift(...added);
+    render();
+    clearProblems(form, status);
+    status.textContent = `Added ${added.map((run) => run.file.name).join(", ")}: ${plural(added.length, "file")} to upload on Identify.`;
+  });
+
+  const submit = h("button", { type: "submit", id: "identify-submit" }, "Identify");
   const form = h("form", { id: "identify-form", class: "card", "aria-labelledby": "identify-form-title", novalidate: true },
     h("h2", { id: "identify-form-title" }, "Identify"),
-    runs.length
-      ? h("p", { class: "muted" }, `The base parameters from a measured run: datasets with ${n} joints and torque (upload one with POST /v1/datasets).`)
-      : h("p", {}, `No dataset with ${n} joints and torque yet. Run an excitation on the robot, log t, q1..q${n} and tau1..tau${n}, ` +
-          "and upload the log (POST /v1/datasets, text/csv)."),
-    h("div", { class: "fields wide" },
-      field("Run", h("select", { id: "i-dataset", name: "dataset_id", disabled: !runs.length }, runs.map(option))),
-      field("Validation run", h("select", { id: "i-validation", name: "validation_dataset_id", disabled: !runs.length },
-        h("option", { value: "" }, "none"), runs.map(option)), "a second run the estimate should predict")),
+    h("p", { class: "muted" }, `The base parameters from measured runs of this robot: CSV logs of t, q1…q${n} and tau1…tau${n} ` +
+      "(or any columns, mapped below). Training runs are fitted together; validation runs are held out, and the page of the " +
+      "result shows how well the estimate predicts them beside the URDF's own values."),
+    h("div", { class: "runs-files" },
+      field("Add CSV files", files, "one or more runs; each is uploaded as a dataset named after its file"),
+      format),
+    h("h3", { id: "i-runs-title" }, "Runs"),
+    h("p", { class: "muted", id: "i-runs-note" }, `The files added and the stored datasets with ${n} joints and torque, ` +
+      "each used as a training run, a validation run or not at all. At least one training run."),
+    h("div", { class: "scroll" }, h("table", { id: "i-runs", class: "data runs", "aria-labelledby": "i-runs-title",
+                                                "aria-describedby": "i-runs-note" },
+      h("thead", {}, h("tr", {}, ["Run", "Use as", "Samples", "Duration, s", "Status"].map((label, i) =>
+        h("th", { scope: "col", class: i === 2 || i === 3 ? "number" : null }, label)))),
+      tbody)),
     h("fieldset", {}, h("legend", {}, "Estimate also"),
       checkbox("i-viscous", "friction", "viscous", "viscous friction fv", true),
       checkbox("i-coulomb", "friction", "coulomb", "Coulomb friction fc", true),
       checkbox("i-offset", "friction", "offset", "torque offset fo", false),
       checkbox("i-armature", "armature", "true", "rotor inertia Ia", false),
       checkbox("i-physical", "physical", "true", "physically consistent (every link a rigid body, friction ≥ 0)", false)),
-    h("div", { class: "actions" }, h("button", { type: "submit", id: "identify-submit", disabled: !runs.length }, "Identify"), status));
-  if (runs.length > 1) form.querySelector("#i-validation").value = runs[1].id;
+    h("div", { class: "actions" }, submit, status));
+
+  /** The run an identification problem names (dataset_ids[1], validation_dataset_id), if any. */
+  const runNamed = (field, training, validating) => {
+    const match = /^(validation_)?dataset_ids?(?:\[(\d+)\])?$/.exec(field || "");
+    return match ? (match[1] ? validating : training)[Number(match[2] || 0)] : undefined;
+  };
+  const uploadPath = (file) => {
+    const query = new URLSearchParams({ name: file.name });
+    const map = columns.value.trim();
+    if (map) {
+      query.set("columns", map);
+      query.set("robot_id", robot.id);  // what {joint} rules match: this robot's joint names
+    }
+    for (const name of ["time_unit", "angle_unit"]) {
+      const value = form.querySelector(`[name=${name}]`).value;
+      if (value !== "s" && value !== "rad") query.set(name, value);
+    }
+    return `/v1/datasets?${query}`;
+  };
+
   form.addEventListener("submit", async (event) => {
     event.preventDefault();
     clearProblems(form, status);
-    const body = {
-      robot_id: robot.id,
-      dataset_id: form.querySelector("[name=dataset_id]").value,
-      friction: [...form.querySelectorAll("input[name=friction]:checked")].map((box) => box.value),
-    };
-    const validation = form.querySelector("[name=validation_dataset_id]").value;
-    if (validation) body.validation_dataset_id = validation;
-    if (form.querySelector("[name=armature]").checked) body.armature = true;
-    if (form.querySelector("[name=physical]").checked) body.physical = true;
-    status.textContent = "Submitting…";
+    const training = runs.filter((run) => run.role.value === "train");
+    if (!training.length) {
+      status.textContent = runs.length ? "Choose at least one training run (Use as: training)." : "Add at least one CSV file: a run to identify from.";
+      status.setAttribute("role", "alert");
+      const culprit = runs.length ? runs[0].role : files;
+      culprit.setAttribute("aria-invalid", "true");
+      culprit.focus();
+      return;
+    }
+    submit.disabled = true;
     try {
-      const job = await api("/v1/identifications", { method: "POST", body });
-      navigate(jobPath(job.id));
-    } catch (error) {
-      showProblem(form, status, error);
+      // Upload the files that are used, one by one; each refusal is named by its file.
+      const refused = [];
+      for (const run of runs.filter((each) => each.file && !each.dataset && each.role.value !== "unused")) {
+        setStatus(run, "uploading…");
+        status.textContent = `Uploading ${run.file.name}…`;
+        try {
+          stored(run, await api(uploadPath(run.file), { method: "POST", body: run.file, type: "text/csv" }));
+          if (fits(run.dataset)) {
+            setStatus(run, "uploaded");
+          } else {
+            const why = run.dataset.joints !== n ? `${plural(run.dataset.joints, "joint")}, the robot has ${n}` : "no torque columns";
+            setStatus(run, `stored, but ${why}: not a run of this robot`, true);
+            run.role.setAttribute("aria-invalid", "true");
+            refused.push(run.file.name);
+          }
+        } catch (error) {
+          setStatus(run, `refused: ${problemText(error)}`, true);
+          refused.push(run.file.name);
+          const culprit = error.field && form.querySelector(`[name="${CSS.escape(error.field)}"]`);
+          if (culprit) { culprit.setAttribute("aria-invalid", "true"); culprit.closest("details")?.setAttribute("open", ""); }
+        }
+      }
+      if (refused.length) {
+        const names = refused.length === 1 ? refused[0] : `${refused.slice(0, -1).join(", ")} and ${refused.at(-1)}`;
+        status.textContent = `Not identified: ${names} ${refused.length === 1 ? "was" : "were"} not usable; ` +
+          `${refused.length === 1 ? "its row says" : "their rows say"} why.`;
+        status.setAttribute("role", "alert");
+        return;
+      }
+      const validating = runs.filter((run) => run.role.value === "validation");
+      const body = {
+        robot_id: robot.id,
+        dataset_ids: training.map((run) => run.dataset.id),
+        friction: [...form.querySelectorAll("input[name=friction]:checked")].map((box) => box.value),
+      };
+      if (validating.length) body.validation_dataset_ids = validating.map((run) => run.dataset.id);
+      if (form.querySelector("[name=armature]").checked) body.armature = true;
+      if (form.querySelector("[name=physical]").checked) body.physical = true;
+      status.textContent = "Submitting…";
+      try {
+        const job = await api("/v1/identifications", { method: "POST", body });
+        navigate(jobPath(job.id));
+      } catch (error) {
+        const run = runNamed(error.field, training, validating);
+        if (!run) { showProblem(form, status, error); return; }
+        status.textContent = `${run.file?.name || run.dataset.name || run.dataset.id}: ${problemText(error)}`;
+        status.setAttribute("role", "alert");
+        run.role.setAttribute("aria-invalid", "true");
+        run.role.focus();
+      }
+    } finally {
+      submit.disabled = false;
     }
   });
   return form;
