@@ -733,14 +733,14 @@ async function excitationCharts(body, result, design, names, robot) {
   const ramp = result.ramp_duration > 0 ? ` The first and last ${number(result.ramp_duration, 3)} s ramp from the start pose and back.` : "";
   const torque = result.torque;  // the limits' model's torque at ≤ 1000 samples (older results: none)
   const quantities = [
-    { key: "q", id: "excitation-angles", title: "Joint angles", values: data.q, t: data.t, unit: (joint) => (isPrismatic(joint) ? "m" : "rad"),
+    { key: "q", symbol: "q", id: "excitation-angles", title: "Joint angles", values: data.q, t: data.t, unit: (joint) => (isPrismatic(joint) ? "m" : "rad"),
       limits: (j) => [["lower", design.limits?.lower?.[j]], ["upper", design.limits?.upper?.[j]]],
       words: "each joint's angle; dashed: the design's limits (the URDF's, less a margin)." },
-    { key: "qd", id: "excitation-velocities", title: "Joint velocities", values: data.qd, t: data.t, unit: LIMIT_COLUMNS[0][2], symmetric: "velocity",
+    { key: "qd", symbol: "q̇", id: "excitation-velocities", title: "Joint velocities", values: data.qd, t: data.t, unit: LIMIT_COLUMNS[0][2], symmetric: "velocity",
       words: "each joint's velocity; dashed: ± its velocity limit." },
-    { key: "qdd", id: "excitation-accelerations", title: "Joint accelerations", values: data.qdd, t: data.t, unit: LIMIT_COLUMNS[1][2], symmetric: "acceleration",
+    { key: "qdd", symbol: "q̈", id: "excitation-accelerations", title: "Joint accelerations", values: data.qdd, t: data.t, unit: LIMIT_COLUMNS[1][2], symmetric: "acceleration",
       words: "each joint's acceleration; dashed: ± its acceleration limit." },
-    { key: "tau", id: "excitation-torques", title: "Joint torques", values: torque?.tau, t: torque?.t, unit: torqueUnit, symmetric: "torque",
+    { key: "tau", symbol: "τ", id: "excitation-torques", title: "Joint torques", values: torque?.tau, t: torque?.t, unit: torqueUnit, symmetric: "torque",
       words: `the torque ${design.limits?.torque_model === "given parameters" ? "the given model" : "the URDF's parameters"} ` +
              "predict for it; dashed: ± each joint's torque limit." },
   ];
@@ -762,7 +762,7 @@ async function excitationCharts(body, result, design, names, robot) {
         series.push({ label, color: "#777", dash: [4, 4], width: 1 });
         columns.push(quantity.t.map(() => value));
       }
-      lineChart(boxes[j], { title: names[j] || `joint ${j + 1}`, xLabel: "t, s", yLabel: quantity.unit(robot?.joints[j]),
+      lineChart(boxes[j], { title: names[j] || `joint ${j + 1}`, xLabel: "t, s", yLabel: `${quantity.symbol}, ${quantity.unit(robot?.joints[j])}`,
                             height: 200, sync: "excitation", legend: false, series, data: columns });
     });
   }
