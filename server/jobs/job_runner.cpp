@@ -250,7 +250,8 @@ JobOutcome run_robot_identification_job(const api::JobInfo& job, store::Store& s
   const auto robot = store.find_robot(spec.robot_id);
   const auto urdf = store.load_robot_urdf(spec.robot_id);
   if (!robot || !urdf) return fail_missing("robot " + spec.robot_id, "robot_id");
-  const api::ParsedRobot parsed = api::parse_robot({robot->name, *urdf, robot->base, robot->tip});
+  const std::shared_ptr<const api::ParsedRobot> stored = api::parsed_robot({robot->name, *urdf, robot->base, robot->tip});
+  const api::ParsedRobot& parsed = *stored;
   const auto load = [&](const std::vector<std::string>& ids, const std::string& field, std::vector<Trajectory>& runs)
       -> std::optional<JobOutcome> {
     for (std::size_t i = 0; i < ids.size(); ++i) {
@@ -314,7 +315,8 @@ JobOutcome run_excitation_job(const api::JobInfo& job, store::Store& store, Live
                                         "robot_id"})
                       .dump());
   }
-  const api::ParsedRobot parsed = api::parse_robot({robot->name, *urdf, robot->base, robot->tip});
+  const std::shared_ptr<const api::ParsedRobot> stored = api::parsed_robot({robot->name, *urdf, robot->base, robot->tip});
+  const api::ParsedRobot& parsed = *stored;
   robot::ExcitationOptions design_options = api::excitation_options(spec, parsed.model);
   design_options.max_seconds = std::min(design_options.max_seconds, options.job_time_limit_seconds);
   design_options.cancel = &live.cancel;

@@ -1444,6 +1444,29 @@ TEST_F(RoutesWithToken, StaticFilesAreNotBehindTheToken) {
   expect_problem(get("/assets/missing.js"), 404, "NOT_FOUND", "path");  // not 401
 }
 
+// A stored robot is parsed once per process: the same document, base and tip give the same parsed robot
+// (one object, not a new parse); another tip or document another one; a refusal is not kept.
+TEST(RobotCache, OneParsePerDocumentBaseAndTip) {
+  const RobotUpload upload{"two", kTwoJointUrdf, "", ""};
+  const std::shared_ptr<const ParsedRobot> first = parsed_robot(upload);
+  EXPECT_EQ(parsed_robot(upload).get(), first.get());
+  EXPECT_EQ(parsed_robot({"another name", kTwoJointUrdf, "", ""}).get(), first.get());  // the name is not the model's
+  const std::shared_ptr<const ParsedRobot> shorter = parsed_robot({"two", kTwoJointUrdf, "", "l1"});
+  EXPECT_NE(shorter.get(), first.get());
+  EXPECT_EQ(shorter->model.joint_count(), 1);
+  EXPECT_EQ(first->model.joint_count(), 2);
+  const RobotUpload broken{"two", std::string(kTwoJointUrdf).substr(0, 60), "", ""};
+  EXPECT_THROW((void)parsed_robot(broken), InputError);
+  EXPECT_THROW((void)parsed_robot(broken), InputError);
+  // Beyond kRobotCacheEntries other robots, the first is parsed afresh (an equal model, a new object).
+  for (std::size_t i = 0; i < kRobotCacheEntries; ++i) {
+    (void)parsed_robot({"two", std::string(kTwoJointUrdf) + "<!-- " + std::to_string(i) + " -->", "", ""});
+  }
+  const std::shared_ptr<const ParsedRobot> again = parsed_robot(upload);
+  EXPECT_NE(again.get(), first.get());
+  EXPECT_EQ(again->model.joint_count(), 2);
+}
+
 // The robot fit's friction view: on a noise-free run whose torque has viscous and Coulomb friction, what the
 // rigid-body model leaves of the measured torque lies on the point's law fv·q̇ + fc·sign(q̇) to 1 % wherever
 // |q̇| is over 80 % of its peak. Nearer its sign changes the judge's low-pass smooths (and rings after) the

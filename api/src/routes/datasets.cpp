@@ -138,7 +138,7 @@ void create_dataset(RouteState& state, const httplib::Request& request, httplib:
   const auto robot_joint_names = [&] {
     std::vector<std::string> names;
     if (request.has_param("robot_id")) {
-      for (const robot::Joint& joint : stored_robot(state, request.get_param_value("robot_id"), "robot_id").model.joints) {
+      for (const robot::Joint& joint : stored_robot(state, request.get_param_value("robot_id"), "robot_id")->model.joints) {
         names.push_back(joint.name);
       }
     }

@@ -45,7 +45,7 @@ void delete_robot(RouteState& state, const httplib::Request& request, httplib::R
 void submit_excitation(RouteState& state, const httplib::Request& request, httplib::Response& response);
 /// A stored robot parsed again (as a job does), for requests checked against it; InputError-like
 /// ApiError (422, `field`) when there is no such robot.
-ParsedRobot stored_robot(RouteState& state, const std::string& id, const std::string& field);
+std::shared_ptr<const ParsedRobot> stored_robot(RouteState& state, const std::string& id, const std::string& field);
 /// /v1/identifications with a robot_id (submissions.cpp hands those over): checked against the stored
 /// robot and datasets, then queued.
 void submit_robot_identification(RouteState& state, const nlohmann::json& body, const std::optional<IdempotencyKey>& key,

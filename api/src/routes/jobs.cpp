@@ -151,11 +151,11 @@ void job_history(RouteState& state, const httplib::Request& request, httplib::Re
 namespace {
 
 /// The robot a robot identification ran on, parsed as the job parsed it.
-ParsedRobot job_robot(RouteState& state, const JobInfo& job) {
+std::shared_ptr<const ParsedRobot> job_robot(RouteState& state, const JobInfo& job) {
   const auto robot = state.service.robot(job.robot_id);
   const auto urdf = state.service.robot_urdf(job.robot_id);
   if (!robot || !urdf) throw ApiError(ProblemKind::conflict, "the robot of job " + job.id + " was deleted", "robot_id");
-  return parse_robot({robot->name, *urdf, robot->base, robot->tip});
+  return parsed_robot({robot->name, *urdf, robot->base, robot->tip});
 }
 
 }  // namespace
@@ -178,7 +178,7 @@ void job_fit(RouteState& state, const httplib::Request& request, httplib::Respon
   if (!data) throw ApiError(ProblemKind::conflict, "the dataset of job " + id + " was deleted", "dataset_id");
   try {
     if (!job->robot_id.empty()) {
-      send_json(response, 200, robot_fit_to_json(job_robot(state, *job).model, job->request, job->result, *data, max_points, false));
+      send_json(response, 200, robot_fit_to_json(job_robot(state, *job)->model, job->request, job->result, *data, max_points, false));
       return;
     }
     send_json(response, 200, torque_fit_to_json(job->request, job->result, *data, max_points));
@@ -207,7 +207,7 @@ void job_validation(RouteState& state, const httplib::Request& request, httplib:
     throw ApiError(ProblemKind::conflict, "the validation dataset of job " + id + " was deleted", "validation_dataset_id");
   }
   try {
-    send_json(response, 200, robot_fit_to_json(job_robot(state, *job).model, job->request, job->result, *data, max_points, true));
+    send_json(response, 200, robot_fit_to_json(job_robot(state, *job)->model, job->request, job->result, *data, max_points, true));
   } catch (const nlohmann::json::exception&) {
     throw ApiError(ProblemKind::conflict, "job " + id + " has no usable stored result", "id");
   } catch (const InputError&) {
@@ -225,7 +225,8 @@ void job_urdf(RouteState& state, const httplib::Request& request, httplib::Respo
   const auto robot = state.service.robot(job->robot_id);
   const auto urdf = state.service.robot_urdf(job->robot_id);
   if (!robot || !urdf) throw ApiError(ProblemKind::conflict, "the robot of job " + id + " was deleted", "robot_id");
-  const ParsedRobot parsed = parse_robot({robot->name, *urdf, robot->base, robot->tip});
+  const std::shared_ptr<const ParsedRobot> stored = parsed_robot({robot->name, *urdf, robot->base, robot->tip});
+  const ParsedRobot& parsed = *stored;
   // The result's point names its layout (fv…, fc…, fo…, Ia…).
   const nlohmann::json result = nlohmann::json::parse(job->result);
   const ParameterValues point = parameters_from_json(parsed.model, result, "result");

@@ -11,11 +11,11 @@
 
 namespace manipid::api::http {
 
-ParsedRobot stored_robot(RouteState& state, const std::string& id, const std::string& field) {
+std::shared_ptr<const ParsedRobot> stored_robot(RouteState& state, const std::string& id, const std::string& field) {
   const auto robot = state.service.robot(id);
   const auto urdf = state.service.robot_urdf(id);
   if (!robot || !urdf) throw ApiError(ProblemKind::invalid_field, "no robot " + id, field);
-  return parse_robot({robot->name, *urdf, robot->base, robot->tip});
+  return parsed_robot({robot->name, *urdf, robot->base, robot->tip});
 }
 
 void create_robot(RouteState& state, const httplib::Request& request, httplib::Response& response) {
@@ -39,7 +39,8 @@ void create_robot(RouteState& state, const httplib::Request& request, httplib::R
   } else {
     upload = robot_from_json(json_body(request));  // refuses other media types with 415
   }
-  const ParsedRobot parsed = parse_robot(upload);
+  const std::shared_ptr<const ParsedRobot> parsed_upload = parsed_robot(upload);  // kept for its jobs
+  const ParsedRobot& parsed = *parsed_upload;
   if (upload.name.empty()) upload.name = parsed.model.name;
   const std::string description = robot_description(parsed.model, parsed.warnings).dump();
   const RobotCreated created = state.service.create_robot(upload, parsed.model.joint_count(), description, key);
@@ -89,7 +90,7 @@ void submit_excitation(RouteState& state, const httplib::Request& request, httpl
   const auto key = idempotency_key(request);
   const nlohmann::json body = json_body(request);
   const ExcitationSpec spec = excitation_from_json(body);
-  check_excitation(spec, stored_robot(state, spec.robot_id, "robot_id").model);
+  check_excitation(spec, stored_robot(state, spec.robot_id, "robot_id")->model);
   const SubmitResult submitted = state.service.submit({JobKind::excitation, body.dump(), "", spec.robot_id, ""}, key);
   response.set_header("Location", "/v1/jobs/" + submitted.job.id);
   if (submitted.replayed) response.set_header("Idempotent-Replayed", "true");
@@ -99,7 +100,8 @@ void submit_excitation(RouteState& state, const httplib::Request& request, httpl
 void submit_robot_identification(RouteState& state, const nlohmann::json& body, const std::optional<IdempotencyKey>& key,
                                  httplib::Response& response) {
   const RobotIdentificationSpec spec = robot_identification_from_json(body);
-  const ParsedRobot robot = stored_robot(state, spec.robot_id, "robot_id");
+  const std::shared_ptr<const ParsedRobot> stored = stored_robot(state, spec.robot_id, "robot_id");
+  const ParsedRobot& robot = *stored;
   const int joints = robot.model.joint_count();
   for (const auto& [ids, field] : {std::pair{spec.dataset_ids, std::string("dataset_id")},
                                    std::pair{spec.validation_dataset_ids, std::string("validation_dataset_id")}}) {

@@ -10,7 +10,9 @@
 #include <Eigen/Geometry>
 
 #include <algorithm>
+#include <cctype>
 #include <cmath>
+#include <cstring>
 #include <map>
 #include <mutex>
 #include <regex>
@@ -346,9 +348,99 @@ Eigen::Vector3d gravity_in_base(const Tree& tree, const UrdfOptions& options, co
 
 }  // namespace
 
+void check_urdf_shape(const std::string& xml) {
+  const std::size_t n = xml.size();
+  const auto starts = [&xml](std::size_t at, const char* text) { return xml.compare(at, std::strlen(text), text) == 0; };
+  // Where an element starts, for the message: line and column (1-based).
+  const auto where = [&xml](std::size_t at) {
+    const long line = 1 + std::count(xml.begin(), xml.begin() + static_cast<std::ptrdiff_t>(at), '\n');
+    const std::size_t newline = xml.rfind('\n', at == 0 ? 0 : at - 1);
+    const std::size_t column = newline == std::string::npos || at == 0 ? at + 1 : at - newline;
+    return "line " + std::to_string(line) + ", column " + std::to_string(column);
+  };
+  const auto name_at = [&xml, n](std::size_t at) {
+    std::size_t end = at;
+    while (end < n && end - at < 64 && !std::isspace(static_cast<unsigned char>(xml[end])) && xml[end] != '>' &&
+           xml[end] != '/') {
+      ++end;
+    }
+    return xml.substr(at, end - at);
+  };
+  int depth = 0;
+  std::size_t i = 0;
+  while (i < n) {
+    if (xml[i] != '<') {
+      ++i;
+      continue;
+    }
+    // Skipped wholesale: what holds no elements. Unterminated: the parser says so.
+    const auto skip_to = [&](const char* end, std::size_t from) {
+      const std::size_t found = xml.find(end, from);
+      return found == std::string::npos ? n : found + std::strlen(end);
+    };
+    if (starts(i, "<!--")) {
+      i = skip_to("-->", i + 4);
+    } else if (starts(i, "<![CDATA[")) {
+      i = skip_to("]]>", i + 9);
+    } else if (starts(i, "<?")) {
+      i = skip_to("?>", i + 2);
+    } else if (starts(i, "<!")) {  // <!DOCTYPE …>, with an internal subset in [ ] that may hold '>'
+      int brackets = 0;
+      char quote = 0;
+      for (++i; i < n; ++i) {
+        const char c = xml[i];
+        if (quote) {
+          if (c == quote) quote = 0;
+        } else if (c == '"' || c == '\'') {
+          quote = c;
+        } else if (c == '[') {
+          ++brackets;
+        } else if (c == ']') {
+          --brackets;
+        } else if (c == '>' && brackets <= 0) {
+          break;
+        }
+      }
+      ++i;
+    } else if (starts(i, "</")) {
+      depth = std::max(0, depth - 1);
+      i = skip_to(">", i + 2);
+    } else {
+      // A start tag: attributes are the '=' outside quoted values; "/>" closes it at once.
+      const std::size_t tag = i;
+      int attributes = 0;
+      char quote = 0;
+      bool closed = false;
+      for (++i; i < n; ++i) {
+        const char c = xml[i];
+        if (quote) {
+          if (c == quote) quote = 0;
+        } else if (c == '"' || c == '\'') {
+          quote = c;
+        } else if (c == '=') {
+          if (++attributes > kMaxUrdfAttributes) {
+            throw InputError("urdf", "the element <" + name_at(tag + 1) + "> at " + where(tag) + " has more than " +
+                                         std::to_string(kMaxUrdfAttributes) + " attributes; no URDF element needs that many");
+          }
+        } else if (c == '>') {
+          closed = xml[i - 1] == '/';
+          break;
+        }
+      }
+      ++i;
+      if (!closed && ++depth > kMaxUrdfDepth) {
+        throw InputError("urdf", "the element <" + name_at(tag + 1) + "> at " + where(tag) + " is nested " +
+                                     std::to_string(depth) + " deep, more than the " + std::to_string(kMaxUrdfDepth) +
+                                     " any URDF needs (robot > link > visual > geometry > mesh is 5)");
+      }
+    }
+  }
+}
+
 ParsedUrdf parse_urdf(const std::string& xml, const UrdfOptions& options) {
   ParsedUrdf result;
   std::vector<std::string>& warnings = result.warnings;
+  check_urdf_shape(xml);  // before the parser, which recurses per level and checks attributes pairwise
   const urdf::ModelInterfaceSharedPtr urdf = parse_quietly(xml, warnings);
   // urdfdom's links hold their children through shared_ptr: in a URDF with a kinematic loop (refused
   // below) they form a cycle that would never be freed. Cut the links' pointers when done, whatever happens.

@@ -401,6 +401,59 @@ TEST(UrdfRefuses, MalformedXml) {
   expect_refused("<robot name='x'><link name='a'/><link name='a'/></robot>", "link a", {"not unique"});
 }
 
+/// arm7 with `extra` inside <robot>, before its first link.
+std::string arm7_with(const std::string& extra) {
+  std::string xml = arm7_urdf();
+  const std::size_t link = xml.find("<link ");
+  return xml.insert(link, extra);
+}
+
+/// `depth` elements <x> nested in each other.
+std::string nested(int depth) {
+  std::string open, close;
+  for (int i = 0; i < depth; ++i) {
+    open += "<x>";
+    close += "</x>";
+  }
+  return open + close;
+}
+
+TEST(UrdfRefuses, NestingTheXmlParserWouldRecurseThroughBeforeItSeesIt) {
+  // 40,000 levels overflowed the stack inside the XML parser (SIGSEGV); refused in one pass instead.
+  expect_refused(arm7_with(nested(40000)), "urdf", {"<x>", "nested 101 deep", "more than the 100", "line "});
+  // The bound itself (the robot element is level 1): 99 more levels are still a URDF (urdfdom ignores <x>).
+  EXPECT_NO_THROW((void)parse_urdf(arm7_with(nested(99))));
+  expect_refused(arm7_with(nested(100)), "urdf", {"nested 101 deep"});
+}
+
+TEST(UrdfRefuses, MoreAttributesOnOneElementThanAnyUrdfNeeds) {
+  std::string many = "<x";
+  for (int i = 0; i < 100'000; ++i) many += " a" + std::to_string(i) + "=\"1\"";
+  expect_refused(arm7_with(many + "/>"), "urdf", {"<x>", "more than 100 attributes"});
+  std::string hundred = "<x";
+  for (int i = 0; i < 100; ++i) hundred += " a" + std::to_string(i) + "=\"1\"";
+  EXPECT_NO_THROW((void)parse_urdf(arm7_with(hundred + "/>")));
+}
+
+TEST(UrdfRefuses, NothingButElementsCountsTowardTheBounds) {
+  // Comments, CDATA, processing instructions, a DOCTYPE with an internal subset, self-closing tags and
+  // '>', '/' and '=' inside quoted values open no level and add no attribute.
+  std::string noise = "<!DOCTYPE robot [ <!ENTITY e \"<x><x>\"> ]>";
+  std::string body;
+  for (int i = 0; i < 300; ++i) {
+    body += "<!-- <x><x a=1 b=2> --><![CDATA[<x><x>]]><?pi <x> ?><y a=\"/>=>\" b='=='/>";
+  }
+  const std::string xml = arm7_urdf();
+  const std::size_t robot = xml.find("<robot");
+  std::string document = xml.substr(0, robot) + noise + xml.substr(robot);
+  document.insert(document.find("<link "), body);
+  EXPECT_NO_THROW(check_urdf_shape(document));
+  // What the XML parser itself takes of it (not the internal subset): still the same arm.
+  std::string plain = xml;
+  plain.insert(plain.find("<link "), body);
+  EXPECT_EQ(parse_urdf(plain).model.joint_count(), parse_urdf(xml).model.joint_count());
+}
+
 TEST(UrdfRefuses, WhatUrdfdomRejectsNamingTheElement) {
   expect_refused(with_replaced(arm7_urdf(), R"(effort="12" velocity="2.6")", R"(effort="12x" velocity="2.6")"), "joint j5",
                  {"invalid URDF", "12x", "joint [j5]"});

@@ -68,8 +68,22 @@ struct ParsedUrdf {
   std::vector<std::string> warnings;
 };
 
+/// The deepest element nesting and the most attributes on one element a URDF may have. Real URDFs nest
+/// 5 deep (robot > link > visual > geometry > mesh; vendors' extensions a few more) and put at most ~10
+/// attributes on an element; the XML parser underneath recurses per level (40,000 levels overflowed the
+/// stack) and checks attributes pairwise (100,000 on one element took 50 s), so documents beyond these
+/// bounds are refused before it sees them.
+inline constexpr int kMaxUrdfDepth = 100;
+inline constexpr int kMaxUrdfAttributes = 100;
+
+/// Throws InputError("urdf") when `xml` nests elements deeper than kMaxUrdfDepth or puts more than
+/// kMaxUrdfAttributes attributes on one element, naming the element and where it starts. One pass over
+/// the text (comments, CDATA, processing instructions, the DOCTYPE and quoted attribute values skipped);
+/// anything else malformed is left to the parser.
+void check_urdf_shape(const std::string& xml);
+
 /// Parses a URDF document (its text) into a Model. Throws InputError (one line, naming the element) for:
-/// malformed XML or URDF, a kinematic loop, a floating or planar joint or a mimic joint on the chain (or a
+/// a document beyond check_urdf_shape's bounds, malformed XML or URDF, a kinematic loop, a floating or planar joint or a mimic joint on the chain (or a
 /// mimic tag on a merged fixed joint), an unknown base or tip, a tip not below the base, no moving joint
 /// between them, a zero or non-finite axis, a negative mass, an inertia about the centre of mass that is not
 /// positive semi-definite, lower limit above upper, non-finite numbers.
