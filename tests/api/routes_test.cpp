@@ -1435,13 +1435,18 @@ TEST_F(RoutesWithToken, TheApiNeedsTheBearerToken) {
   EXPECT_EQ(posted->status, 202);
 }
 
-TEST_F(RoutesWithToken, StaticFilesAreNotBehindTheToken) {
-  for (const char* path : {"/", "/jobs/job_0123456789abcdef", "/robots", "/robots/rb_1", "/healthz", "/metrics", "/openapi.json"}) {
+TEST_F(RoutesWithToken, StaticFilesAreNotBehindTheTokenMetricsAre) {
+  for (const char* path : {"/", "/jobs/job_0123456789abcdef", "/robots", "/robots/rb_1", "/healthz", "/openapi.json"}) {
     const auto result = get(path);
     ASSERT_TRUE(result) << path;
     EXPECT_EQ(result->status, 200) << path;
   }
   expect_problem(get("/assets/missing.js"), 404, "NOT_FOUND", "path");  // not 401
+  // /metrics tells the lab's job counts, memory and request rates: behind the token like /v1.
+  expect_problem(get("/metrics"), 401, "UNAUTHORIZED", "Authorization");
+  const auto metrics = get("/metrics", {{"Authorization", "Bearer s3cret"}});
+  ASSERT_TRUE(metrics);
+  EXPECT_EQ(metrics->status, 200);
 }
 
 // A stored robot is parsed once per process: the same document, base and tip give the same parsed robot

@@ -440,7 +440,7 @@ expect_error "excitation: --start-pose with the wrong count" 2 "--start-pose: st
 expect_error "excitation: --start-pose outside the URDF's limits" 2 "--start-pose: the start pose puts joint 4 (panda_joint4) at 0 rad, outside its URDF limits" \
   "$manipid" excitation --robot "$robots/panda_like.urdf" --start-pose 0,0,0,0,0,0,0
 # Found by the design, so after the URDF's warnings: the error is the last line.
-"$manipid" excitation --robot "$robots/panda_like.urdf" --max-torque 0.001 --max-evaluations 20 --out weak.csv 2>weak.err
+"$manipid" excitation --robot "$robots/panda_like.urdf" --max-torque 0.01 --max-evaluations 20 --out weak.csv 2>weak.err
 check "excitation: --max-torque that cannot hold the arm: exit 2, said, nothing written" bash -c "
   test $? -eq 2 && tail -1 weak.err | grep -q '^manipid: error: --max-torque: the torque limits cannot hold the arm at rest' && test ! -e weak.csv"
 expect_error "excitation: --max-jerk not positive" 2 "--max-jerk: max_jerk must be positive and finite" \
@@ -699,6 +699,23 @@ damaged_before=$(sha256sum <damaged.db)
 check "doctor: a damaged file exits 1" test $? -eq 1
 check "doctor: a damaged file lists the page" grep -q "^  - Page [0-9]*: " doctor.txt
 check "doctor: reads only" test "$(sha256sum <damaged.db)" = "$damaged_before"
+# Rows stored before the service refused text that is not UTF-8 (?name=%FF): sound, but named to mend.
+python3 - <<'PY'
+import sqlite3
+database = sqlite3.connect("latin1.db")
+database.execute("CREATE TABLE datasets (id TEXT PRIMARY KEY, name TEXT)")
+database.execute("CREATE TABLE robots (id TEXT PRIMARY KEY, name TEXT, base TEXT, tip TEXT, urdf TEXT)")
+database.execute("INSERT INTO datasets VALUES ('ds_1', 'run one'), ('ds_2', CAST(X'6CFF' AS TEXT))")
+database.execute("INSERT INTO robots VALUES ('rb_1', 'arm', NULL, NULL, '<robot/>'), "
+                 "('rb_2', CAST(X'FF' AS TEXT), NULL, NULL, '<robot/>')")
+database.commit()
+database.close()
+PY
+"$manipid" doctor --db latin1.db >doctor.txt 2>&1
+check "doctor: rows whose text is not UTF-8 exit 1" test $? -eq 1
+check "doctor: ... and are named, the file sound" bash -c "grep -q '^latin1.db: sound (schema version 0), but 2 row(s) hold text that is not UTF-8' doctor.txt &&
+  grep -q '^  - dataset ds_2: its name is not UTF-8' doctor.txt && grep -q '^  - robot rb_2: its name is not UTF-8' doctor.txt &&
+  ! grep -q 'ds_1\|rb_1' doctor.txt"
 expect_error "doctor: a missing file" 2 "no database file 'missing.db'" "$manipid" doctor --db missing.db
 check "doctor: a missing file is not created" test ! -e missing.db
 expect_error "serve: a damaged database is refused at start" 2 "the database file is damaged (PRAGMA quick_check: Page" \

@@ -1,10 +1,11 @@
 """urdf_test.py — hostile-client suite: URDF documents shaped to hurt the XML parser, against the real
 `manipid serve` on port 0.
 
-Item 1 of hardening round 3: a 2-joint URDF with an element nested 40,000 deep (280 KB) crashed the
+Items 1, 7 and 8 of hardening round 3: a 2-joint URDF with an element nested 40,000 deep (280 KB) crashed the
 process (the XML parser recursed per level on the HTTP thread: SIGSEGV); 100,000 attributes on one
 element took 44–56 s (a pairwise check) while every other robot request waited. Both are refused with
-422 naming the document before the parser sees them, at once, and the server goes on answering.
+422 naming the document before the parser sees them, at once, and the server goes on answering. Numbers no link has (a mass of
+1e-300 kg, negative damping) are refused at upload; an axis whose norm overflows is normalised.
 
 Run: MANIPID_BIN=build/release/server/manipid python3 tests/hostile/urdf_test.py -v
 """
@@ -73,6 +74,29 @@ class HostileUrdf(SharedServerTestCase):
         self.assert_refused_quickly(urdf(wide), ["more than 100 attributes"])
         thread.join(30)
         self.assertEqual(answers.get("other"), 201)
+
+    def test_absurd_numbers_are_refused_at_upload_not_fitted(self):
+        # Item 7: masses of 1e-300 "succeeded" with physical and wrote inertias of 1e146; item 8: negative
+        # damping was accepted at upload and refused only later.
+        for document, element, words in [
+                (urdf().replace(b'<mass value="1"/>', b'<mass value="1e-300"/>', 1), "l1", "mass of 1e-300 kg"),
+                (urdf().replace(b'<axis xyz="0 0 1"/>', b'<axis xyz="0 0 1"/><dynamics damping="-1"/>', 1), "j1",
+                 "negative <dynamics> damping")]:
+            status, _, problem = self.upload(document)
+            self.assertEqual(status, 422, problem)
+            self.assertEqual(problem["field"], "urdf")
+            self.assertIn(element, problem["detail"])
+            self.assertIn(words, problem["detail"])
+        # An axis of (1e200 1e200 0) overflowed to (0 0 0) and was accepted: now the direction it names.
+        status, _, robot = self.upload(urdf().replace(b'<axis xyz="0 0 1"/>', b'<axis xyz="1e200 1e200 0"/>', 1))
+        self.assertEqual(status, 201, robot)
+        self.assertAlmostEqual(robot["joints"][0]["axis"][0], 0.5 ** 0.5, places=12)
+        self.assertTrue(any("normalised" in warning for warning in robot["warnings"]), robot["warnings"])
+        # An excitation whose acceleration limit leaves no motion "succeeded" with a condition number of ∞.
+        status, _, problem = self.server.request("POST", "/v1/excitations",
+                                                 {"robot_id": robot["id"], "max_acceleration": 1e-300})
+        self.assertEqual(status, 422, problem)
+        self.assertEqual(problem["field"], "max_acceleration")
 
     def test_the_bound_leaves_room_for_real_documents(self):
         status, _, robot = self.upload(urdf("<x>" * 90 + "</x>" * 90))

@@ -254,7 +254,7 @@ class PaperExperiment(unittest.TestCase):
 
 
 class Authentication(unittest.TestCase):
-    def test_token_guards_v1_only(self):
+    def test_token_guards_v1_and_metrics(self):
         with temporary_directory() as directory:
             with Server(os.path.join(directory, "jobs.db"), "--token", "s3cret") as server:
                 status, answer, problem = server.request("GET", "/v1/jobs")
@@ -264,6 +264,9 @@ class Authentication(unittest.TestCase):
                 self.assertEqual(server.request("GET", "/v1/jobs", headers={"Authorization": "Bearer wrong"})[0], 401)
                 self.assertEqual(server.request("GET", "/v1/jobs", headers={"Authorization": "Bearer s3cret"})[0], 200)
                 self.assertEqual(server.request("GET", "/healthz")[0], 200)
+                # /metrics tells job counts and memory: the token's too (it was open).
+                self.assertEqual(server.request("GET", "/metrics")[0], 401)
+                self.assertEqual(server.request("GET", "/metrics", headers={"Authorization": "Bearer s3cret"})[0], 200)
 
 
 class Shutdown(unittest.TestCase):

@@ -152,10 +152,11 @@ httplib::Server::HandlerResponse before_routing(RouteState& state, const httplib
   HttpServer::head_received(request.has_header("Content-Length")
                                 ? std::stoull(request.get_header_value("Content-Length"))
                                 : 0);
-  // The bearer token guards the API only: the dashboard's static files stay outside its reach
-  // (the page asks for the token and sends it with its own API calls).
-  const bool versioned = request.path.rfind("/v1/", 0) == 0 || request.path == "/v1";
-  if (versioned && !state.options.token.empty()) {
+  // The bearer token guards the API and /metrics (job counts, memory, request rates are the lab's
+  // business; Prometheus sends a bearer token with `authorization`): the dashboard's static files and
+  // /healthz stay outside its reach (the page asks for the token and sends it with its own API calls).
+  const bool needs_token = request.path.rfind("/v1/", 0) == 0 || request.path == "/v1" || request.path == "/metrics";
+  if (needs_token && !state.options.token.empty()) {
     const std::string header = request.get_header_value("Authorization");
     const std::string prefix = "Bearer ";
     if (header.rfind(prefix, 0) != 0 || !token_matches(header.substr(prefix.size()), state.options.token)) {

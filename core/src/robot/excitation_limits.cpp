@@ -36,6 +36,9 @@ using manipid::detail::kInfinity;
 
 std::string joint_field(const Model& model, int k) { return "joint " + model.joints[static_cast<std::size_t>(k)].name; }
 
+/// The smallest velocity, acceleration, jerk or torque limit accepted: below it nothing moves measurably.
+constexpr double kSmallestLimit = 1e-3;
+
 /// Per-joint limits given as nothing, one value for every joint, or one per joint: each positive and finite.
 /// Returns n values (+∞ where none was given).
 Eigen::VectorXd per_joint(const Eigen::VectorXd& given, int n, const std::string& field, const std::string& unit) {
@@ -46,6 +49,11 @@ Eigen::VectorXd per_joint(const Eigen::VectorXd& given, int n, const std::string
   for (Eigen::Index i = 0; i < given.size(); ++i) {
     if (!(std::isfinite(given[i]) && given[i] > 0.0)) {
       throw InputError(field, field + " must be positive and finite, " + unit + ", got " + format_number(given[i]));
+    }
+    // 1e-300 rad/s² "succeeded" with a motionless trajectory and a condition number of ∞.
+    if (given[i] < kSmallestLimit) {
+      throw InputError(field, field + " of " + format_number(given[i]) + " " + unit +
+                                  " leaves a joint no motion to measure; give at least " + format_number(kSmallestLimit));
     }
   }
   if (given.size() == 0) return Eigen::VectorXd::Constant(n, kInfinity);

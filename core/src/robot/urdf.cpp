@@ -22,6 +22,11 @@
 namespace manipid::robot {
 namespace {
 
+/// The range of a link's mass (kg) and the largest inertia entry (kg·m²) a manipulator's URDF may give.
+constexpr double kLightestLink = 1e-6;
+constexpr double kHeaviestLink = 1e6;
+constexpr double kLargestInertia = 1e6;
+
 // ---- urdfdom's messages -------------------------------------------------------------------------------
 
 std::string one_line(std::string text) {
@@ -140,6 +145,16 @@ InertialParameters inertial_parameters(const urdf::Link& link, std::vector<std::
   if (inertial.mass < 0.0) {
     throw InputError(field, field + " has a negative mass, " + format(inertial.mass) + " kg");
   }
+  // Beyond any link a manipulator has (a milligram, a thousand tonnes; 0 is a massless link): such a
+  // number is a slip, and as a prior it scales every fit absurdly (1e-300 kg gave inertias of 1e146).
+  if (inertial.mass != 0.0 && !(inertial.mass >= kLightestLink && inertial.mass <= kHeaviestLink)) {
+    throw InputError(field, field + " has a mass of " + format(inertial.mass) + " kg: a link weighs " +
+                                format(kLightestLink) + " to " + format(kHeaviestLink) + " kg (0 for a massless link)");
+  }
+  if (inertia.cwiseAbs().maxCoeff() > kLargestInertia) {
+    throw InputError(field, field + " has an inertia entry of " + format(inertia.cwiseAbs().maxCoeff()) +
+                                " kg·m², beyond any manipulator link's (" + format(kLargestInertia) + ")");
+  }
   const Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> eigen(inertia, Eigen::EigenvaluesOnly);
   const Eigen::Vector3d moments = eigen.eigenvalues();  // ascending
   const double tolerance = 1e-9 * moments.cwiseAbs().maxCoeff();
@@ -199,7 +214,7 @@ Joint model_joint(const urdf::Joint& source, const Placement& placement, std::ve
 
   const Eigen::Vector3d axis(source.axis.x, source.axis.y, source.axis.z);
   if (!finite(axis)) throw InputError(field, field + " has a non-finite axis");
-  const double norm = axis.norm();
+  const double norm = axis.stableNorm();  // (1e200 1e200 0): norm() overflows to ∞ and the axis to 0
   if (norm == 0.0) throw InputError(field, field + " has a zero axis");
   if (std::abs(norm - 1.0) > 1e-6) {
     warnings.push_back(field + ": axis (" + format(axis.x()) + " " + format(axis.y()) + " " + format(axis.z()) +
@@ -233,6 +248,18 @@ Joint model_joint(const urdf::Joint& source, const Placement& placement, std::ve
     if (!std::isfinite(joint.damping) || !std::isfinite(joint.friction)) {
       throw InputError(field, field + " has a non-finite <dynamics> damping or friction");
     }
+    if (joint.damping < 0.0 || joint.friction < 0.0) {
+      throw InputError(field, field + " has a negative <dynamics> " + (joint.damping < 0.0 ? "damping, " + format(joint.damping)
+                                                                                          : "friction, " + format(joint.friction)) +
+                                  ": friction takes energy out, never puts it in");
+    }
+  }
+  if (joint.limits.velocity < 0.0) {
+    throw InputError(field, field + " has a negative velocity limit, " + format(joint.limits.velocity));
+  }
+  if (source.limits && joint.limits.velocity == 0.0) {
+    warnings.push_back(field + ": its <limit> velocity is 0: an excitation cannot move it (identification is not "
+                       "affected); give the joint's real velocity limit");
   }
   return joint;
 }

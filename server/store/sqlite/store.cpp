@@ -8,6 +8,8 @@
 #include "store/sqlite/rows.h"
 #include "store/sqlite/schema.h"
 #include "store/sqlite/store.h"
+
+#include "manipid/api/problem.h"
 #include "store/rules.h"
 
 #include <cstdint>
@@ -677,10 +679,32 @@ FileCheck check_file(const std::string& path) {
   Connection connection(path);
   FileCheck check;
   check.findings = integrity_findings(connection, true, 100);
-  if (check.findings.empty()) {
-    auto version = connection.prepare("PRAGMA user_version");
-    if (version.step()) check.schema_version = static_cast<int>(version.integer(0));
-  }
+  if (!check.findings.empty()) return check;
+  auto version = connection.prepare("PRAGMA user_version");
+  if (version.step()) check.schema_version = static_cast<int>(version.integer(0));
+  // Text that is not UTF-8, stored before the service refused it at the door (a ?name=%FF): the
+  // service shows it with U+FFFD; the user should rename or delete the row.
+  const auto has_table = [&connection](const char* table) {
+    auto statement = connection.prepare("SELECT 1 FROM sqlite_master WHERE type = 'table' AND name = ?1");
+    statement.bind_text(1, table);
+    return statement.step();
+  };
+  const auto scan = [&](const char* table, const char* noun, std::initializer_list<const char*> columns) {
+    if (!has_table(table)) return;
+    std::string sql = "SELECT id";
+    for (const char* column : columns) sql += std::string(", ") + column;
+    auto rows = connection.prepare(sql + " FROM " + table + " ORDER BY id");
+    while (rows.step() && check.text_findings.size() < 100) {
+      int index = 1;
+      for (const char* column : columns) {
+        if (!api::is_valid_utf8(rows.text(index++))) {
+          check.text_findings.push_back(std::string(noun) + " " + rows.text(0) + ": its " + column + " is not UTF-8");
+        }
+      }
+    }
+  };
+  scan("datasets", "dataset", {"name"});
+  scan("robots", "robot", {"name", "base", "tip", "urdf"});
   return check;
 }
 

@@ -19,6 +19,9 @@ std::unique_ptr<Store> open_store(const std::string& path, const StoreOptions& o
 struct FileCheck {
   int schema_version = 0;             ///< PRAGMA user_version; 0 when unreadable
   std::vector<std::string> findings;  ///< PRAGMA integrity_check and foreign_key_check, at most 100
+  /// For a sound file: rows whose text is not UTF-8 ("robot rb_…: its name is not UTF-8"), at most 100 —
+  /// stored before the service refused such text; it shows them with U+FFFD. Not damage: serve runs.
+  std::vector<std::string> text_findings;
 };
 /// Throws StoreError when the file does not exist or cannot be opened at all.
 FileCheck check_file(const std::string& path);

@@ -519,6 +519,33 @@ TEST(UrdfRefuses, NegativeMass) {
                  {"link link4 has a negative mass, -2.1 kg"});
 }
 
+TEST(UrdfRefuses, MassesAndInertiasNoLinkHas) {
+  // 1e-300 kg "succeeded" as a prior with inertias of 1e146 written back out.
+  expect_refused(with_replaced(arm7_urdf(), R"(<mass value="2.1"/>)", R"(<mass value="1e-300"/>)"), "link link4",
+                 {"link link4 has a mass of 1e-300 kg", "(0 for a massless link)"});
+  expect_refused(with_replaced(arm7_urdf(), R"(<mass value="2.1"/>)", R"(<mass value="1e9"/>)"), "link link4", {"1e+09 kg"});
+  EXPECT_NO_THROW((void)parse_urdf(with_replaced(arm7_urdf(), R"(<mass value="2.1"/>)", R"(<mass value="0"/>)")));
+  expect_refused(one_joint("revolute", "0 0 0", "0 0 0", "0 0 1",
+                           inertial_xml(1.0, "0 0 0", "0 0 0", R"(ixx="1e200" ixy="0" ixz="0" iyy="1e200" iyz="0" izz="1e200")")),
+                 "link body", {"inertia entry of 1e+200"});
+}
+
+TEST(UrdfRefuses, NegativeFrictionAndVelocityLimits) {
+  expect_refused(with_replaced(arm7_urdf(), R"(damping="0.9")", R"(damping="-0.9")"), "joint j1",
+                 {"negative <dynamics> damping, -0.9"});
+  expect_refused(with_replaced(arm7_urdf(), R"(friction="1.2")", R"(friction="-1.2")"), "joint j1",
+                 {"negative <dynamics> friction, -1.2"});
+}
+
+TEST(Urdf, AHugeAxisIsNormalisedNotZeroed) {
+  // (1e200 1e200 0): its norm overflowed to ∞ and the axis became (0 0 0), accepted.
+  const ParsedUrdf parsed = parse_urdf(one_joint("revolute", "0 0 0", "0 0 0", "1e200 1e200 0", ""));
+  EXPECT_NEAR(parsed.model.joints[0].axis.x(), std::sqrt(0.5), 1e-15);
+  EXPECT_NEAR(parsed.model.joints[0].axis.y(), std::sqrt(0.5), 1e-15);
+  ASSERT_FALSE(parsed.warnings.empty());
+  EXPECT_NE(parsed.warnings[0].find("normalised"), std::string::npos);
+}
+
 TEST(UrdfRefuses, InertiaThatIsNotPositiveSemiDefinite) {
   // Eigenvalues of [[0.01, 0.02], [0.02, 0.01]] are 0.03 and −0.01.
   expect_refused(one_joint("revolute", "0 0 0", "0 0 0", "0 0 1",

@@ -85,8 +85,10 @@ void check_urdf_shape(const std::string& xml);
 /// Parses a URDF document (its text) into a Model. Throws InputError (one line, naming the element) for:
 /// a document beyond check_urdf_shape's bounds, malformed XML or URDF, a kinematic loop, a floating or planar joint or a mimic joint on the chain (or a
 /// mimic tag on a merged fixed joint), an unknown base or tip, a tip not below the base, no moving joint
-/// between them, a zero or non-finite axis, a negative mass, an inertia about the centre of mass that is not
-/// positive semi-definite, lower limit above upper, non-finite numbers.
+/// between them, a zero or non-finite axis, a mass that is negative or outside 1e-6..1e6 kg (0 is a massless
+/// link), an inertia entry beyond 1e6 kg·m² or about the centre of mass not positive semi-definite, negative
+/// <dynamics> damping or friction, a negative velocity limit, lower limit above upper, non-finite numbers.
+/// A velocity limit of 0 is a warning (an excitation cannot move the joint).
 ParsedUrdf parse_urdf(const std::string& xml, const UrdfOptions& options = {});
 
 }  // namespace manipid::robot
