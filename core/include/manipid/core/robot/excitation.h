@@ -158,12 +158,12 @@ struct ExcitationOptions {
   /// max_seconds cuts the run short: time depends on the machine, evaluations do not).
   std::uint64_t seed = 1;
   /// Budget, s of wall time, checked at each evaluation. A backstop only: the evaluation budget ends a
-  /// 7-joint design in 6–15 s, 20× within it even on a loaded machine (at 30 s, a loaded machine stopped
+  /// 7-joint design in 6–16 s, far within it even on a loaded machine (at 30 s, a loaded machine stopped
   /// designs early, so their result depended on its speed).
   double max_seconds = 300.0;
-  /// Budget of criterion evaluations, random starts included. 8000 take about 6 s for a 7-joint arm with 5
-  /// harmonics (Release, one core; about 0.75 ms each); twice as many improve the condition number by a few
-  /// per cent at most.
+  /// Budget of criterion evaluations, random starts included. 8000 take 6–16 s for a 7-joint arm with 5
+  /// harmonics (Release, one core; 0.75–2 ms each, by the machine and by how often the torque limits bind:
+  /// docs/performance.md); twice as many improve the condition number by a few per cent at most.
   int max_evaluations = 8000;
   /// Checked at each evaluation; when it becomes true the design stops and returns the best trajectory
   /// found so far (always within the limits), with termination `cancelled`.
