@@ -77,6 +77,19 @@ JobShape excitation_shape(const nlohmann::json& request, const RobotJointsLookup
   shape.joints = robots(spec.robot_id).value_or(0);
   shape.bytes_per_sample_joint = kExcitation;
   shape.work = "excitation";
+  // The criterion's workspace (robot/excitation_internal.h: CriterionWorkspace): the regressor Y and its
+  // base columns Y_b stacked over N instants (N·n rows, P = layout.size(n) columns at most each), and for
+  // the reported figures a column-scaled copy of Y_b and the SVD's own copy of it; the Gram matrix, its
+  // scaled copy and the eigensolver's (P² each). Y alone is 768 MB for 100 joints and 20 harmonics, which
+  // the per-sample rule did not see: a design estimated at 31 MiB peaked at 3.0 GB (this rule: 2.9 GiB).
+  const double n = shape.joints;
+  const double N = spec.options.samples > 0 ? spec.options.samples : std::max(200, 40 * spec.options.harmonics);
+  const double P = spec.options.layout.size(shape.joints);
+  shape.extra_bytes = 8.0 * (4.0 * N * n * P + 4.0 * P * P);
+  char what[160];
+  std::snprintf(what, sizeof what, "its criterion stacks a regressor of %.0f instants x %.0f joints x %.0f columns", N, n, P);
+  shape.extra_what = what;
+  shape.extra_field = "harmonics";
   return shape;
 }
 
@@ -98,13 +111,19 @@ JobShape job_shape(JobKind kind, const nlohmann::json& request, const DatasetLoo
 }
 
 std::size_t job_memory_bytes(const JobShape& shape) {
-  return static_cast<std::size_t>(kFixedBytes +
+  return static_cast<std::size_t>(kFixedBytes + shape.extra_bytes +
                                   static_cast<double>(shape.samples) * shape.joints * shape.bytes_per_sample_joint);
 }
 
 void check_job_memory(const JobShape& shape, std::size_t budget) {
   const std::size_t need = job_memory_bytes(shape);
   if (need <= budget) return;
+  if (shape.extra_bytes > static_cast<double>(shape.samples) * shape.joints * shape.bytes_per_sample_joint) {
+    throw InputError(shape.extra_field, "this " + shape.work + " would hold about " + describe_bytes(need) +
+                                            " of memory while it runs (" + shape.extra_what +
+                                            "); this server runs jobs within " + describe_bytes(budget) +
+                                            " (--job-memory): use fewer harmonics, or ask for a larger --job-memory");
+  }
   throw InputError(shape.field, "this " + shape.work + " would hold about " + describe_bytes(need) +
                                     " of memory while it runs (" + std::to_string(shape.samples) + " samples of " +
                                     std::to_string(shape.joints) + " joints); this server runs jobs within " +

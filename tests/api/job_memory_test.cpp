@@ -26,6 +26,7 @@ std::optional<DatasetInfo> dataset(const std::string& id) {
 
 std::optional<int> robot(const std::string& id) {
   if (id == "rb_7") return 7;
+  if (id == "rb_100") return 100;
   return std::nullopt;
 }
 
@@ -74,6 +75,26 @@ TEST(JobShape, ExcitationCountsItsPeriodsAtItsStep) {
   EXPECT_EQ(excitation.samples, 30001);
   EXPECT_EQ(excitation.joints, 7);
   EXPECT_EQ(excitation.field, "duration");
+  // Its criterion's regressor: N = 200 instants (5 harmonics) × 7 joints × 84 columns (10 per link,
+  // viscous and Coulomb per joint) four times (Y, Y_b, and for the SVD a scaled copy and its own), and
+  // four 84² matrices.
+  EXPECT_DOUBLE_EQ(excitation.extra_bytes, 8.0 * (4.0 * 200 * 7 * 84 + 4.0 * 84 * 84));
+}
+
+TEST(JobMemory, AnExcitationOfManyJointsAndHarmonicsCountsItsCriterion) {
+  // 100 joints, 20 harmonics: the regressor alone is 800 × 100 × 1200 doubles (768 MB); it peaked at
+  // 3.0 GB while the per-sample rule said 31 MiB. Now estimated near what it peaked at, and refused at the
+  // door under a 1 GiB budget, naming harmonics.
+  const JobShape wide = shape(JobKind::excitation, {{"robot_id", "rb_100"}, {"harmonics", 20}});
+  EXPECT_GT(job_memory_bytes(wide), 2.8e9);
+  EXPECT_LT(job_memory_bytes(wide), 3.4e9);
+  try {
+    check_job_memory(wide, std::size_t{1} << 30);
+    FAIL() << "no error";
+  } catch (const InputError& error) {
+    EXPECT_EQ(error.field(), "harmonics");
+    EXPECT_NE(std::string(error.what()).find("800 instants x 100 joints x 1200 columns"), std::string::npos) << error.what();
+  }
 }
 
 TEST(JobMemory, GrowsWithSamplesJointsAndParametersAndIsRefusedBeyondTheBudget) {

@@ -24,6 +24,12 @@ struct JobShape {
   double bytes_per_sample_joint = 0.0;
   std::string work;   ///< what it does, for messages: "simulation", "two-stage identification"
   std::string field;  ///< the request's field that sets the size: "duration", "dataset_id", "dt"
+  /// Working memory that does not grow with the samples (an excitation's criterion: its stacked regressor
+  /// grows with joints² and harmonics), bytes, and what it is, for messages; `extra_field` the request's
+  /// field that sets it ("harmonics").
+  double extra_bytes = 0.0;
+  std::string extra_what;
+  std::string extra_field;
 };
 
 /// A dataset's description by id (the store's or the service's), or nullopt when there is none.
@@ -37,8 +43,8 @@ using RobotJointsLookup = std::function<std::optional<int>(const std::string& id
 JobShape job_shape(JobKind kind, const nlohmann::json& request, const DatasetLookup& datasets,
                    const RobotJointsLookup& robots);
 
-/// Bytes the job holds at its peak, at most: samples × joints × bytes_per_sample_joint plus a
-/// fixed part. bench/job_memory.py measures the release build's peak against it.
+/// Bytes the job holds at its peak, at most: samples × joints × bytes_per_sample_joint, the shape's
+/// extra_bytes and a fixed part. bench/job_memory.py measures the release build's peak against it.
 std::size_t job_memory_bytes(const JobShape& shape);
 
 /// Throws InputError(shape.field, …) when the job's estimate is above `budget` (--job-memory):
