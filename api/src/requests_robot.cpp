@@ -80,7 +80,12 @@ ParsedRobot parse_robot(const RobotUpload& upload) {
   options.tip = upload.tip;
   try {
     robot::ParsedUrdf parsed = robot::parse_urdf(upload.urdf, options);
-    limits::check_joints(parsed.model.joint_count(), "urdf", "the URDF chain");
+    if (parsed.model.joint_count() > limits::max_robot_joints) {
+      throw InputError("urdf", "the URDF chain has " + std::to_string(parsed.model.joint_count()) +
+                                   " moving joints; the service takes chains of at most " +
+                                   std::to_string(limits::max_robot_joints) +
+                                   " (a manipulator has 6 or 7): name a sub-chain with base and tip");
+    }
     return {std::move(parsed.model), std::move(parsed.warnings)};
   } catch (const InputError& error) {
     // The core names the element ("joint j3", "link l4"): the request's field is the document, and the

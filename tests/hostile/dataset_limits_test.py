@@ -77,8 +77,9 @@ class DatasetLimits(SharedServerTestCase):
                             "the CSV has 201 joints; at most 200 are allowed", {"Content-Type": "text/csv"})
 
     def test_a_robot_with_more_joints_than_the_limit_is_refused(self):
+        # A stored robot's own, lower limit (tests/hostile/urdf_test.py: its base parameters cost joints³).
         self.assert_refused("POST", "/v1/robots", chain_urdf(MAX_JOINTS + 1), "urdf",
-                            "the URDF chain has 201 joints; at most 200 are allowed",
+                            "the URDF chain has 201 moving joints; the service takes chains of at most 50",
                             {"Content-Type": "application/xml"})
 
     def test_a_dataset_at_the_joint_limit_exports_as_csv_and_reads_back(self):

@@ -98,6 +98,18 @@ class HostileUrdf(SharedServerTestCase):
         self.assertEqual(status, 422, problem)
         self.assertEqual(problem["field"], "max_acceleration")
 
+    def test_a_chain_longer_than_any_manipulator_is_refused_at_once(self):
+        # Item 4: a 100-joint upload computed its base parameters on the HTTP thread for 21 s and 367 MiB.
+        links = ['<link name="l0"/>']
+        for k in range(1, 101):
+            links.append(f'<joint name="j{k}" type="revolute"><parent link="l{k - 1}"/><child link="l{k}"/>'
+                         f'<origin xyz="0 0 0.1"/><axis xyz="0 {k % 2} {1 - k % 2}"/>'
+                         '<limit lower="-2" upper="2" effort="50" velocity="2"/></joint>')
+            links.append(f'<link name="l{k}"><inertial><mass value="1"/><origin xyz="0.01 0.02 0.05"/>'
+                         '<inertia ixx="0.01" ixy="0" ixz="0" iyy="0.02" iyz="0" izz="0.03"/></inertial></link>')
+        document = ('<robot name="snake">' + "".join(links) + "</robot>").encode()
+        self.assert_refused_quickly(document, ["100 moving joints", "at most 50", "base and tip"])
+
     def test_the_bound_leaves_room_for_real_documents(self):
         status, _, robot = self.upload(urdf("<x>" * 90 + "</x>" * 90))
         self.assertEqual(status, 201, robot)

@@ -28,8 +28,8 @@ struct JobShape {
   /// grows with joints² and harmonics), bytes, and what it is, for messages; `extra_field` the request's
   /// field that sets it ("harmonics").
   double extra_bytes = 0.0;
-  std::string extra_what;
-  std::string extra_field;
+  std::string extra_what{};
+  std::string extra_field{};
 };
 
 /// A dataset's description by id (the store's or the service's), or nullopt when there is none.

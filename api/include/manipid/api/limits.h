@@ -13,8 +13,12 @@
 
 namespace manipid::api::limits {
 
-/// Most joints of a dataset, a simulation or a robot.
+/// Most joints of a dataset or a simulation (a stored robot: max_robot_joints).
 inline constexpr int max_joints = 200;
+/// Most moving joints of a stored robot's chain. Manipulators have 6 or 7, dual arms with a torso about
+/// 15, snake arms up to 30; the upload computes the base parameters, whose cost grows as joints³
+/// (50 joints: 1.9 s and 105 MB at the door; 100 joints took 21 s and 367 MiB on an HTTP thread).
+inline constexpr int max_robot_joints = 50;
 /// Most samples (time steps) of a dataset, a simulation or an excitation.
 inline constexpr long long max_samples = 10'000'000;
 /// Most numbers one dataset holds: samples × (1 + blocks × joints).
