@@ -9,6 +9,7 @@
 #include "manipid/core/robot/link_table.h"
 #include "manipid/core/robot/urdf_writer.h"
 
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <numbers>
@@ -127,9 +128,27 @@ void print_table(const robot::Model& model, const robot::IdentificationResult& r
                 row.consistent ? "" : " (not a real body)");
   }
   if (!result.unidentifiable.empty()) {
-    std::string list;
-    for (const std::string& name : result.unidentifiable) list += (list.empty() ? "" : ", ") + name;
-    std::printf("\nnever in the torque (not identifiable; kept at the URDF's values): %s\n", list.c_str());
+    // Kept at the URDF's values — unless the physical fit had to move one to make its link a real body
+    // (a link's mass must hold the first moments and inertia the data determine): said, so the text and
+    // the written URDF agree.
+    std::string kept, moved;
+    for (const std::string& name : result.unidentifiable) {
+      const auto at = std::find(result.standard_names.begin(), result.standard_names.end(), name);
+      const Eigen::Index i = at - result.standard_names.begin();
+      const bool same = at == result.standard_names.end() ||
+                        std::abs(result.point[i] - result.prior[i]) <= 1e-9 * std::max(1.0, std::abs(result.prior[i]));
+      if (same) {
+        kept += (kept.empty() ? "" : ", ") + name;
+      } else {
+        moved += (moved.empty() ? "" : ", ") + name + " " + format(result.prior[i], 4) + " -> " + format(result.point[i], 4);
+      }
+    }
+    std::printf("\nnever in the torque (not identifiable):\n");
+    if (!kept.empty()) std::printf("  kept at the URDF's values: %s\n", kept.c_str());
+    if (!moved.empty()) {
+      std::printf("  moved by the physical fit, to make their links real bodies nearest the URDF's values: %s\n",
+                  moved.c_str());
+    }
   }
   if (result.consistency.consistent()) {
     std::printf("\nphysically consistent: every link a real rigid body%s\n",

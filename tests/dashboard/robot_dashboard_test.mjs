@@ -196,6 +196,11 @@ try {
   check(close(shown(await page.textContent("#condition-number")), result.condition_number, 1e-3), "the condition number is the result's");
   check((await page.textContent("#unidentifiable summary")).startsWith(`${result.unidentifiable.length} standard parameters`),
         `${result.unidentifiable.length} standard parameters that never enter the torque, listed`);
+  // Those the physical fit moved (to make their links real bodies) are marked with both values, so the page
+  // and the written URDF agree; the rest are the URDF's.
+  const movedNames = result.unidentifiable.filter((name) => Math.abs(result.point[name] - result.prior[name]) > 1e-9 * Math.max(1, Math.abs(result.prior[name])));
+  check(await page.locator("#unidentifiable li[data-moved=true]").count() === movedNames.length,
+        `the ${movedNames.length} moved by the physical fit are marked, with the URDF's value and the point's`);
 
   // ---- fit: one chart per joint ---------------------------------------------------------------
   const maxPoints = Number(await page.getAttribute("#robot-fit [data-max-points]", "data-max-points"));

@@ -393,6 +393,14 @@ function consistencySection(result) {
   return section("consistency", "Physical consistency", parts);
 }
 
+/** The names among `names` whose point differs from the prior (the physical fit moved them), with both values. */
+function moved(result, names) {
+  const point = result.point || {}, prior = result.prior || {};
+  return names.filter((name) => typeof point[name] === "number" && typeof prior[name] === "number" &&
+                                Math.abs(point[name] - prior[name]) > 1e-9 * Math.max(1, Math.abs(prior[name])))
+              .map((name) => ({ name, prior: prior[name], point: point[name] }));
+}
+
 function identifiabilitySection(result) {
   const unidentifiable = result.unidentifiable || [];
   const unexcited = result.unexcited || [];
@@ -408,8 +416,15 @@ function identifiabilitySection(result) {
       ["Not excited", unexcited.length ? h("ul", { id: "unexcited", class: "names" }, unexcited.map((name) => h("li", {}, h("code", {}, name)))) : "none"],
       ["Never in the torque", unidentifiable.length
         ? h("details", { id: "unidentifiable" },
-            h("summary", {}, `${plural(unidentifiable.length, "standard parameter")}: kept at the URDF's values`),
-            h("ul", { class: "names" }, unidentifiable.map((name) => h("li", {}, h("code", {}, name)))))
+            h("summary", {}, `${plural(unidentifiable.length, "standard parameter")}: kept at the URDF's values` +
+              (moved(result, unidentifiable).length
+                ? `, but ${moved(result, unidentifiable).length} moved by the physical fit to make their links real bodies nearest the URDF's values`
+                : "")),
+            h("ul", { class: "names" }, unidentifiable.map((name) => {
+              const shift = moved(result, [name])[0];
+              return h("li", { dataset: shift ? { moved: "true" } : {} }, h("code", {}, name),
+                shift ? ` ${number(shift.prior, 4)} → ${number(shift.point, 4)}` : null);
+            })))
         : "none"],
       ["Differentiation filter", filter(filters.differentiation)],
       ["Comparison low-pass", filters.comparison
