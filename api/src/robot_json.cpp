@@ -361,9 +361,17 @@ nlohmann::ordered_json excitation_to_json(const robot::Model& model, const robot
                       {"limit", limit.limit}});
   }
   const robot::ParameterLayout& layout = design_options.layout;
-  // Per joint, what the design reaches and the share of each limit it uses (LimitKind's order).
+  // Per joint, what the design reaches and the share of each limit it uses: one column per LimitKind,
+  // named by it.
   const auto column = [](const Eigen::MatrixXd& m, Eigen::Index c) {
     return c < m.cols() ? vector_json(m.col(c)) : Json::array();
+  };
+  const auto by_kind = [&column](const Eigen::MatrixXd& m) {
+    nlohmann::ordered_json kinds = nlohmann::ordered_json::object();
+    for (int kind = 0; kind < robot::kLimitKinds; ++kind) {
+      kinds[robot::to_string(static_cast<robot::LimitKind>(kind))] = column(m, kind);
+    }
+    return kinds;
   };
   nlohmann::ordered_json ramp = nullptr;
   if (design.ramp) {
@@ -406,20 +414,8 @@ nlohmann::ordered_json excitation_to_json(const robot::Model& model, const robot
         {"torque", vector_json(limits.torque)},
         {"torque_model", design_options.torque_parameters.size() ? "given parameters" : "the URDF's"},
         {"position_margin", design_options.position_margin}}},
-      {"peaks",
-       {{"lower", column(summary.peaks, 0)},
-        {"upper", column(summary.peaks, 1)},
-        {"velocity", column(summary.peaks, 2)},
-        {"acceleration", column(summary.peaks, 3)},
-        {"jerk", column(summary.peaks, 4)},
-        {"torque", column(summary.peaks, 5)}}},
-      {"usage",
-       {{"lower", column(summary.usage, 0)},
-        {"upper", column(summary.usage, 1)},
-        {"velocity", column(summary.usage, 2)},
-        {"acceleration", column(summary.usage, 3)},
-        {"jerk", column(summary.usage, 4)},
-        {"torque", column(summary.usage, 5)}}},
+      {"peaks", by_kind(summary.peaks)},
+      {"usage", by_kind(summary.usage)},
       {"torque_scale", summary.torque_scale},
       {"active_limits", active},
       {"ramp", ramp},

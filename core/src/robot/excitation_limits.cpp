@@ -139,7 +139,9 @@ TorqueGuard::TorqueGuard(const Model& model, const ExcitationLimits& limits, dou
 double TorqueGuard::ratio(double gamma) {
   const Eigen::Index n = q0_.size();
   double worst = 0.0;
-  for (Eigen::Index j = 0; j < p_.cols(); ++j) {
+  // At rest (γ = 0) every instant is the same pose: one is enough.
+  const Eigen::Index instants = gamma == 0.0 ? std::min<Eigen::Index>(1, p_.cols()) : p_.cols();
+  for (Eigen::Index j = 0; j < instants; ++j) {
     q_ = q0_ + gamma * p_.col(j);
     qd_ = gamma * v_.col(j);
     qdd_ = gamma * a_.col(j);
@@ -159,15 +161,9 @@ double TorqueGuard::largest_factor(const Eigen::VectorXd& q0, const Eigen::Matri
   a_.noalias() = K * table_.acceleration;
   double high = 1.0, f_high = ratio(1.0) - 1.0;
   if (f_high <= 0.0) return 1.0;
-  // At rest at q0: with Coulomb friction's sign(0) = 0, only gravity and the offset.
-  p_.setZero();
-  v_.setZero();
-  a_.setZero();
-  double low = 0.0, f_low = ratio(1.0) - 1.0;
+  // At rest at q0 (γ = 0): with Coulomb friction's sign(0) = 0, only gravity and the offset.
+  double low = 0.0, f_low = ratio(0.0) - 1.0;
   if (f_low > 0.0) return -1.0;
-  p_.noalias() = K * table_.position;
-  v_.noalias() = K * table_.velocity;
-  a_.noalias() = K * table_.acceleration;
   if (!std::isfinite(f_high)) f_high = 1e6;
   // Regula falsi with the Illinois rule: f(γ) = ratio − 1 changes sign on [low, high]; low stays feasible.
   int side = 0;

@@ -393,6 +393,22 @@ void check_urdf_shape(const std::string& xml) {
     }
     return xml.substr(at, end - at);
   };
+  // From the '<' at `from`, the index just past the character at which `ends` (seeing every character
+  // outside quoted values) returns true; n + 1 when the text ends first.
+  const auto past_markup = [&xml, n](std::size_t from, auto&& ends) {
+    char quote = 0;
+    for (std::size_t at = from + 1; at < n; ++at) {
+      const char c = xml[at];
+      if (quote) {
+        if (c == quote) quote = 0;
+      } else if (c == '"' || c == '\'') {
+        quote = c;
+      } else if (ends(c)) {
+        return at + 1;
+      }
+    }
+    return n + 1;
+  };
   int depth = 0;
   std::size_t i = 0;
   while (i < n) {
@@ -413,22 +429,10 @@ void check_urdf_shape(const std::string& xml) {
       i = skip_to("?>", i + 2);
     } else if (starts(i, "<!")) {  // <!DOCTYPE …>, with an internal subset in [ ] that may hold '>'
       int brackets = 0;
-      char quote = 0;
-      for (++i; i < n; ++i) {
-        const char c = xml[i];
-        if (quote) {
-          if (c == quote) quote = 0;
-        } else if (c == '"' || c == '\'') {
-          quote = c;
-        } else if (c == '[') {
-          ++brackets;
-        } else if (c == ']') {
-          --brackets;
-        } else if (c == '>' && brackets <= 0) {
-          break;
-        }
-      }
-      ++i;
+      i = past_markup(i, [&brackets](char c) {
+        brackets += c == '[' ? 1 : c == ']' ? -1 : 0;
+        return c == '>' && brackets <= 0;
+      });
     } else if (starts(i, "</")) {
       depth = std::max(0, depth - 1);
       i = skip_to(">", i + 2);
@@ -436,25 +440,14 @@ void check_urdf_shape(const std::string& xml) {
       // A start tag: attributes are the '=' outside quoted values; "/>" closes it at once.
       const std::size_t tag = i;
       int attributes = 0;
-      char quote = 0;
-      bool closed = false;
-      for (++i; i < n; ++i) {
-        const char c = xml[i];
-        if (quote) {
-          if (c == quote) quote = 0;
-        } else if (c == '"' || c == '\'') {
-          quote = c;
-        } else if (c == '=') {
-          if (++attributes > kMaxUrdfAttributes) {
-            throw InputError("urdf", "the element <" + name_at(tag + 1) + "> at " + where(tag) + " has more than " +
-                                         std::to_string(kMaxUrdfAttributes) + " attributes; no URDF element needs that many");
-          }
-        } else if (c == '>') {
-          closed = xml[i - 1] == '/';
-          break;
+      i = past_markup(i, [&](char c) {
+        if (c == '=' && ++attributes > kMaxUrdfAttributes) {
+          throw InputError("urdf", "the element <" + name_at(tag + 1) + "> at " + where(tag) + " has more than " +
+                                       std::to_string(kMaxUrdfAttributes) + " attributes; no URDF element needs that many");
         }
-      }
-      ++i;
+        return c == '>';
+      });
+      const bool closed = i <= n && xml[i - 2] == '/';  // "/>": no level opened
       if (!closed && ++depth > kMaxUrdfDepth) {
         throw InputError("urdf", "the element <" + name_at(tag + 1) + "> at " + where(tag) + " is nested " +
                                      std::to_string(depth) + " deep, more than the " + std::to_string(kMaxUrdfDepth) +
