@@ -17,9 +17,12 @@
 #include <algorithm>
 #include <chrono>
 #include <cmath>
+#include <condition_variable>
 #include <exception>
+#include <mutex>
 #include <new>
 #include <sstream>
+#include <thread>
 
 namespace manipid::server::jobs {
 
@@ -58,11 +61,57 @@ struct JobClock {
   bool expired() const { return elapsed() >= limit_seconds; }
 };
 
+/// How long past --job-timeout a job that does not stop by itself at the limit may go on before its cancel
+/// flag is set (kinds that stop at the limit themselves — an identification's max_seconds, a simulation's
+/// should_stop — end first, with their own outcome).
+constexpr double kTimeLimitGrace = 0.5;
+
+/// Sets a job's cancel flag (and timed_out) once its time limit and kTimeLimitGrace have passed. Every job
+/// kind checks that flag inside its long steps, so the limit holds also where a kind has no clock of its
+/// own (a URDF robot's identification) or one step outlasts it (a many-joint excitation's evaluation).
+class TimeLimit {
+ public:
+  TimeLimit(LiveJob& live, double seconds)
+      : thread_([this, &live, seconds] {
+          const auto deadline = Clock::now() + std::chrono::duration_cast<Clock::duration>(
+                                                   std::chrono::duration<double>(std::min(seconds + kTimeLimitGrace, 1e9)));
+          std::unique_lock lock(mutex_);
+          if (ended_.wait_until(lock, deadline, [this] { return done_; })) return;
+          if (!live.cancel.load()) {
+            live.timed_out = true;
+            live.cancel = true;
+          }
+        }) {}
+  ~TimeLimit() {
+    {
+      std::lock_guard lock(mutex_);
+      done_ = true;
+    }
+    ended_.notify_all();
+    thread_.join();
+  }
+  TimeLimit(const TimeLimit&) = delete;
+  TimeLimit& operator=(const TimeLimit&) = delete;
+
+ private:
+  std::mutex mutex_;
+  std::condition_variable ended_;
+  bool done_ = false;
+  std::thread thread_;  // last: started once the members it waits on exist
+};
+
+/// A job stopped by its TimeLimit: failed, saying which limit and while doing what.
+JobOutcome timed_out(const JobClock& clock, const char* doing) {
+  std::ostringstream detail;
+  detail << "the job reached its time limit (--job-timeout " << clock.limit_seconds << " s) while " << doing;
+  return failed(job_failed(detail.str()));
+}
+
 /// A simulation stopped by its should_stop, ended the way an identification's stop is: a shutdown's
 /// cancel requeues the job, a user's cancel cancels it, and otherwise the time limit ran out.
 JobOutcome stopped_simulation(const LiveJob& live, const JobClock& clock, const SimulationStopped& stopped) {
   JobOutcome outcome;
-  if (live.cancel.load()) {
+  if (live.cancel.load() && !live.timed_out.load()) {
     outcome.requeue = live.shutdown.load();
     outcome.state = api::JobState::cancelled;
     return outcome;
@@ -318,7 +367,9 @@ JobOutcome run_excitation_job(const api::JobInfo& job, store::Store& store, Live
   const std::shared_ptr<const api::ParsedRobot> stored = api::parsed_robot({robot->name, *urdf, robot->base, robot->tip});
   const api::ParsedRobot& parsed = *stored;
   robot::ExcitationOptions design_options = api::excitation_options(spec, parsed.model);
-  design_options.max_seconds = std::min(design_options.max_seconds, options.job_time_limit_seconds);
+  // Four fifths of the job's time for the search: the rest is for the final figures (two SVDs and the
+  // limits' checks: milliseconds for an arm, seconds for a 50-joint design with 20 harmonics).
+  design_options.max_seconds = std::min(design_options.max_seconds, 0.8 * options.job_time_limit_seconds);
   design_options.cancel = &live.cancel;
   design_options.progress = [&live](const robot::ExcitationProgress& progress) {
     live.evaluations.store(progress.evaluation + 1, std::memory_order_relaxed);
@@ -381,8 +432,10 @@ api::JobShape job_shape(api::JobKind kind, const std::string& request_json, stor
       });
 }
 
-JobOutcome run_job(const api::JobInfo& job, store::Store& store, LiveJob& live, const RunnerOptions& options) {
-  const JobClock clock{Clock::now(), options.job_time_limit_seconds};
+namespace {
+
+JobOutcome run_kind(const api::JobInfo& job, store::Store& store, LiveJob& live, const RunnerOptions& options,
+                    const JobClock& clock) {
   try {
     if (job.kind == api::JobKind::simulation) return run_simulation_job(job, store, live, clock);
     if (job.kind == api::JobKind::excitation) return run_excitation_job(job, store, live, options);
@@ -415,6 +468,31 @@ JobOutcome run_job(const api::JobInfo& job, store::Store& store, LiveJob& live, 
   } catch (...) {
     return failed(job_failed("unknown error"));
   }
+}
+
+const char* what_it_does(const api::JobInfo& job) {
+  if (job.kind == api::JobKind::simulation) return "simulating";
+  if (job.kind == api::JobKind::excitation) return "designing the excitation";
+  if (!job.robot_id.empty()) return "identifying the robot";
+  return "identifying";
+}
+
+}  // namespace
+
+JobOutcome run_job(const api::JobInfo& job, store::Store& store, LiveJob& live, const RunnerOptions& options) {
+  const JobClock clock{Clock::now(), options.job_time_limit_seconds};
+  JobOutcome outcome;
+  {
+    const TimeLimit limit(live, options.job_time_limit_seconds);
+    outcome = run_kind(job, store, live, options, clock);
+  }
+  // Stopped by its time limit (not by a user or a shutdown, and not finished first): failed, saying so.
+  if (live.timed_out.load() && !outcome.requeue && outcome.state == api::JobState::cancelled) {
+    JobOutcome ended = timed_out(clock, what_it_does(job));
+    ended.dataset_id = outcome.dataset_id;
+    return ended;
+  }
+  return outcome;
 }
 
 }  // namespace manipid::server::jobs

@@ -19,16 +19,18 @@ namespace manipid::server::jobs {
 /// What other threads may see of, or do to, a running job.
 struct LiveJob {
   store::Lease lease;                 ///< set before the job runs; every write of it carries this
-  std::atomic<bool> cancel{false};    ///< checked at every cost evaluation and simulation step
+  std::atomic<bool> cancel{false};    ///< checked at every cost evaluation and simulation step, and inside long steps
   std::atomic<bool> shutdown{false};  ///< the cancel came from a shutdown: requeue, don't cancel
+  std::atomic<bool> timed_out{false};  ///< the cancel came from --job-timeout: the job fails saying so
   std::atomic<bool> lost{false};      ///< the lease is gone (another process took the job over): write nothing more
   std::atomic<long> evaluations{0};
   std::atomic<double> best_cost{std::numeric_limits<double>::infinity()};
 };
 
 struct RunnerOptions {
-  /// Longest a job may run, s: ends a simulation (the job fails) and caps an identification's
-  /// max_seconds (less what a simulation before it took).
+  /// Longest a job may run, s: caps an identification's max_seconds (less what a simulation before it
+  /// took) and an excitation's (four fifths of it: the rest is for the design's final figures); a job
+  /// still running kTimeLimitGrace after it is stopped like a cancel, and fails naming the limit.
   double job_time_limit_seconds = 3600.0;
   int history_batch = 512;                  ///< entries per store write
   double history_flush_seconds = 0.5;       ///< or sooner than a full batch, while running

@@ -5,7 +5,6 @@
 #include "manipid/core/robot/data.h"
 #include "manipid/core/robot/regressor.h"
 
-#include <Eigen/QR>
 
 #include <algorithm>
 #include <cmath>
@@ -59,21 +58,32 @@ BaseParameters base_parameters(const Model& model, const ParameterLayout& layout
   BaseParameters base;
   base.standard_count = p;
   const double zero_norm = 1e-10 * std::sqrt(static_cast<double>(Y.rows()));
-  Eigen::MatrixXd basis(Y.rows(), 0);  // orthonormal, spans the kept columns
-  basis.resize(Y.rows(), p);
+  // Y's kept columns = basis · R: the orthonormal basis and, recorded as the columns are orthogonalised,
+  // the upper-triangular R (column c = its norm × (its projections on the basis + what stays outside)).
+  Eigen::MatrixXd basis(Y.rows(), p);
+  Eigen::MatrixXd R = Eigen::MatrixXd::Zero(p, p);
+  Eigen::VectorXd projection(p);
   int kept = 0;
   for (int c = 0; c < p; ++c) {
+    checkpoint(options.cancel, "the base parameters' computation");  // ~2 ms a column for 50 joints
     const double norm = Y.col(c).norm();
     if (norm <= zero_norm) {
       base.absent.push_back(c);
       continue;
     }
     Eigen::VectorXd v = Y.col(c) / norm;
+    projection.head(kept).setZero();
     for (int pass = 0; pass < 2; ++pass) {  // modified Gram–Schmidt, repeated once for orthogonality
-      for (int b = 0; b < kept; ++b) v -= basis.col(b).dot(v) * basis.col(b);
+      for (int b = 0; b < kept; ++b) {
+        const double along = basis.col(b).dot(v);
+        v -= along * basis.col(b);
+        projection[b] += along;
+      }
     }
     const double rest = v.norm();
     if (rest > options.tolerance) {
+      R.col(kept).head(kept) = norm * projection.head(kept);
+      R(kept, kept) = norm * rest;
       basis.col(kept++) = v / rest;
       base.independent.push_back(c);
     } else {
@@ -82,20 +92,24 @@ BaseParameters base_parameters(const Model& model, const ParameterLayout& layout
   }
 
   // Regrouping: each dependent column as a combination of the independent ones (unscaled, so the
-  // coefficients carry the robot's lengths and units).
+  // coefficients carry the robot's lengths and units): the least-squares K of Y_indep K = Y_dep, which with
+  // Y_indep = basis R is R⁻¹ basisᵀ Y_dep (exact to round-off: the dependent columns lie in the span).
   const int b = base.size();
   base.combination = Eigen::MatrixXd::Zero(b, p);
   for (int i = 0; i < b; ++i) base.combination(i, base.independent[static_cast<std::size_t>(i)]) = 1.0;
   if (!base.dependent.empty() && b > 0) {
-    Eigen::MatrixXd independent(Y.rows(), b), dependent(Y.rows(), static_cast<Eigen::Index>(base.dependent.size()));
-    for (int i = 0; i < b; ++i) independent.col(i) = Y.col(base.independent[static_cast<std::size_t>(i)]);
-    for (std::size_t d = 0; d < base.dependent.size(); ++d) dependent.col(static_cast<Eigen::Index>(d)) = Y.col(base.dependent[d]);
-    const Eigen::MatrixXd K = independent.colPivHouseholderQr().solve(dependent);  // b × dependent
+    const auto dependents = static_cast<Eigen::Index>(base.dependent.size());
+    Eigen::MatrixXd K(b, dependents);
+    for (Eigen::Index d = 0; d < dependents; ++d) {
+      checkpoint(options.cancel, "the base parameters' computation");
+      K.col(d).noalias() = basis.leftCols(b).transpose() * Y.col(base.dependent[static_cast<std::size_t>(d)]);
+    }
+    R.topLeftCorner(b, b).triangularView<Eigen::Upper>().solveInPlace(K);
     const double largest = K.cwiseAbs().maxCoeff();
-    for (std::size_t d = 0; d < base.dependent.size(); ++d) {
+    for (Eigen::Index d = 0; d < dependents; ++d) {
       for (int i = 0; i < b; ++i) {
-        const double value = K(i, static_cast<Eigen::Index>(d));
-        if (std::abs(value) > 1e-9 * largest) base.combination(i, base.dependent[d]) = value;
+        const double value = K(i, d);
+        if (std::abs(value) > 1e-9 * largest) base.combination(i, base.dependent[static_cast<std::size_t>(d)]) = value;
       }
     }
   }

@@ -6,6 +6,7 @@
 #include "manipid/core/robot/regressor.h"
 #include "numbers.h"
 
+#include <Eigen/QR>
 #include <Eigen/SVD>
 
 #include <algorithm>
@@ -29,7 +30,8 @@ constexpr double kUnseenLogDet = -1e6;
 }  // namespace
 
 CriterionWorkspace::CriterionWorkspace(const Model& model, const ParameterLayout& layout,
-                                       const BaseParameters& base, double period, int harmonics, int samples)
+                                       const BaseParameters& base, double period, int harmonics, int samples,
+                                       const std::atomic<bool>* cancel)
     : model_(model),
       layout_(layout),
       base_(base),
@@ -45,7 +47,14 @@ CriterionWorkspace::CriterionWorkspace(const Model& model, const ParameterLayout
       gram_(base.size(), base.size()),
       scaled_gram_(base.size(), base.size()),
       norms_(base.size()),
-      eigen_(base.size()) {}
+      eigen_(base.size()),
+      cancel_(cancel) {}
+
+Eigen::Index CriterionWorkspace::rows_between_checkpoints(Eigen::Index columns) const {
+  const double work = static_cast<double>(Yb_.rows()) * static_cast<double>(columns) * static_cast<double>(columns);
+  if (work <= kCheckpointWork) return Yb_.rows();
+  return std::max<Eigen::Index>(columns, static_cast<Eigen::Index>(kCheckpointWork / (static_cast<double>(columns) * static_cast<double>(columns))));
+}
 
 void CriterionWorkspace::stack(const Eigen::VectorXd& q0, const Eigen::MatrixXd& K) {
   q_.noalias() = K * table_.position;
@@ -58,8 +67,13 @@ void CriterionWorkspace::stack(const Eigen::VectorXd& q0, const Eigen::MatrixXd&
 
 void CriterionWorkspace::fast_criteria(double& log_condition, double& log_det) {
   gram_.setZero();
-  gram_.selfadjointView<Eigen::Lower>().rankUpdate(Yb_.transpose());
   const Eigen::Index b = gram_.rows();
+  const Eigen::Index block = rows_between_checkpoints(b);
+  for (Eigen::Index row = 0; row < Yb_.rows(); row += block) {
+    if (row > 0) checkpoint(cancel_, "the excitation's criterion");
+    const Eigen::Index count = std::min(block, Yb_.rows() - row);
+    gram_.selfadjointView<Eigen::Lower>().rankUpdate(Yb_.middleRows(row, count).transpose());
+  }
   for (Eigen::Index i = 0; i < b; ++i) norms_[i] = std::sqrt(gram_(i, i));
   // A base column that is zero over the whole trajectory (a joint frozen at its limit: a parameter it
   // cannot see), or anything not finite: the worst value, never a NaN into the eigensolver.
@@ -98,9 +112,29 @@ ExcitationQuality CriterionWorkspace::exact_quality() const {
     quality.log_det = -kInfinity;
     return quality;
   }
-  const Eigen::MatrixXd scaled = Yb_ * norms.cwiseInverse().asDiagonal();
-  const Eigen::BDCSVD<Eigen::MatrixXd> svd(scaled);
-  const Eigen::VectorXd& sigma = svd.singularValues();  // descending
+  Eigen::VectorXd sigma;  // descending
+  const Eigen::Index block = rows_between_checkpoints(b);
+  if (block >= Yb_.rows()) {
+    const Eigen::MatrixXd scaled = Yb_ * norms.cwiseInverse().asDiagonal();
+    sigma = Eigen::BDCSVD<Eigen::MatrixXd>(scaled).singularValues();
+  } else {
+    // In row blocks: the R of a QR has the singular values of the matrix, and the R of [R; next rows] is
+    // that of every row so far. Each block of at least 4b rows, so the b×b R is a small part of the work.
+    const Eigen::Index rows = std::max(block, 4 * b);
+    Eigen::MatrixXd stacked(b + rows, b);
+    Eigen::MatrixXd R = Eigen::MatrixXd::Zero(b, b);
+    for (Eigen::Index row = 0; row < Yb_.rows(); row += rows) {
+      checkpoint(cancel_, "the excitation's condition number");
+      const Eigen::Index count = std::min(rows, Yb_.rows() - row);
+      stacked.topRows(b) = R;
+      stacked.middleRows(b, count) = Yb_.middleRows(row, count) * norms.cwiseInverse().asDiagonal();
+      Eigen::Ref<Eigen::MatrixXd> rows_so_far(stacked.topRows(b + count));
+      const Eigen::HouseholderQR<Eigen::Ref<Eigen::MatrixXd>> qr(rows_so_far);  // in place
+      R = qr.matrixQR().topRows(b).triangularView<Eigen::Upper>();
+    }
+    checkpoint(cancel_, "the excitation's condition number");
+    sigma = Eigen::BDCSVD<Eigen::MatrixXd>(R).singularValues();
+  }
   const double smallest = sigma[b - 1];
   quality.condition_number = smallest > 0.0 ? sigma[0] / smallest : kInfinity;
   if (smallest > 0.0) {

@@ -93,7 +93,8 @@ class DesignProblem {
         L_(options.harmonics),
         period_(options.period),
         grid_(options.period, options.harmonics),
-        criterion_(model, options.layout, base, options.period, options.harmonics, detail::resolved_samples(options)),
+        criterion_(model, options.layout, base, options.period, options.harmonics, detail::resolved_samples(options),
+                   options.cancel),
         torque_(model, limits, options.period, options.harmonics, detail::resolved_samples(options)),
         q0_(n_),
         K_(n_, 2 * L_),
@@ -388,10 +389,14 @@ std::string ExcitationSummary::brief_report() const {
   return text;
 }
 
-ExcitationDesign design_excitation(const Model& model, const ExcitationOptions& options) {
+namespace {
+
+ExcitationDesign design(const Model& model, const ExcitationOptions& options) {
   const Clock::time_point started = Clock::now();
   const ExcitationLimits limits = excitation_limits(model, options);
-  const BaseParameters base = base_parameters(model, options.layout);
+  BaseParameterOptions base_options;
+  base_options.cancel = options.cancel;
+  const BaseParameters base = base_parameters(model, options.layout, base_options);
   if (base.size() == 0) throw InputError("model", "the model's torques determine no parameter to identify");
 
   DesignProblem problem(model, options, limits, base);
@@ -539,6 +544,24 @@ ExcitationDesign design_excitation(const Model& model, const ExcitationOptions& 
   if (options.start_pose.size() != 0) design.ramp = plan_ramp(model, limits, options.start_pose, design.trajectory.start());
   summary.wall_seconds = std::chrono::duration<double>(Clock::now() - started).count();
   return design;
+}
+
+}  // namespace
+
+ExcitationDesign design_excitation(const Model& model, const ExcitationOptions& options) {
+  const Clock::time_point started = Clock::now();
+  try {
+    return design(model, options);
+  } catch (const Interrupted& interrupted) {
+    // Inside a long step (the base parameters, an evaluation or the final figures of a many-joint design):
+    // the evaluation under way is not finished, so there is no figure to report beside a trajectory.
+    ExcitationDesign cancelled;
+    cancelled.summary.criterion = options.criterion;
+    cancelled.summary.termination = ExcitationTermination::cancelled;
+    cancelled.summary.message = std::string("cancelled: ") + interrupted.what() + "; no trajectory is returned";
+    cancelled.summary.wall_seconds = std::chrono::duration<double>(Clock::now() - started).count();
+    return cancelled;
+  }
 }
 
 }  // namespace manipid::robot

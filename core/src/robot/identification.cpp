@@ -386,7 +386,10 @@ IdentificationResult identify(const Model& model, const Trajectory& data, const 
   return identify(model, std::vector<Trajectory>{data}, options);
 }
 
-IdentificationResult identify(const Model& model, const std::vector<Trajectory>& measured, const IdentificationOptions& options) {
+namespace {
+
+IdentificationResult identify_runs(const Model& model, const std::vector<Trajectory>& measured,
+                                   const IdentificationOptions& options) {
   const auto started = Clock::now();
   const int n = model.joint_count();
   IdentificationResult result;
@@ -474,14 +477,16 @@ IdentificationResult identify(const Model& model, const std::vector<Trajectory>&
 
   // Step 3: the friction models and the candidates.
   std::vector<FrictionCandidate> frictions;
-  frictions.push_back(friction_candidate(model, full_layout, full_layout, prior, options.base));
+  BaseParameterOptions base_options = options.base;
+  base_options.cancel = options.cancel;
+  frictions.push_back(friction_candidate(model, full_layout, full_layout, prior, base_options));
   if (options.friction_auto) {
     for (const auto& [viscous, coulomb] : {std::pair{false, false}, {true, false}, {true, true}}) {
       ParameterLayout layout = full_layout;
       layout.viscous = viscous;
       layout.coulomb = coulomb;
       layout.offset = false;
-      frictions.push_back(friction_candidate(model, layout, full_layout, prior, options.base));
+      frictions.push_back(friction_candidate(model, layout, full_layout, prior, base_options));
     }
   }
   const FrictionCandidate& full = frictions.front();
@@ -519,6 +524,7 @@ IdentificationResult identify(const Model& model, const std::vector<Trajectory>&
     double best = std::numeric_limits<double>::infinity();
     estimation::BinnedSums chosen_sums;
     for (std::size_t c = 0; c < cutoffs.size(); ++c) {
+      checkpoint(options.cancel, "the filter choice");
       StackedRows rows = cutoffs[c] == options.judge.cutoff_hz ? target : rows_at(cutoffs[c]);
       estimation::BinnedSums sums =
           estimation::bin_rows(rows.W, rows.tau, bins_of_rows(rows, bins), bins.count());
@@ -534,6 +540,7 @@ IdentificationResult identify(const Model& model, const std::vector<Trajectory>&
       }
     }
     for (std::size_t f = 1; f < frictions.size(); ++f) {
+      checkpoint(options.cancel, "the friction choice");
       const estimation::CrossValidation cv =
           score(chosen_sums, target_sums, bins, guard_for(cutoffs[chosen_cutoff]), frictions[f], full, ridges);
       result.candidates.push_back({cutoffs[chosen_cutoff], friction_text(frictions[f].layout),
@@ -667,6 +674,23 @@ IdentificationResult identify(const Model& model, const std::vector<Trajectory>&
   result.fit = combine(fits);
   result.wall_seconds = std::chrono::duration<double>(Clock::now() - started).count();
   return result;
+}
+
+}  // namespace
+
+IdentificationResult identify(const Model& model, const std::vector<Trajectory>& measured, const IdentificationOptions& options) {
+  const auto started = Clock::now();
+  try {
+    return identify_runs(model, measured, options);
+  } catch (const Interrupted&) {
+    // Inside a long step (the base parameters, a candidate's filtering): as a cancel between steps ends.
+    IdentificationResult result;
+    result.judge = options.judge;
+    result.runs = static_cast<int>(measured.size());
+    result.cancelled = true;
+    result.wall_seconds = std::chrono::duration<double>(Clock::now() - started).count();
+    return result;
+  }
 }
 
 ValidationReport validate(const Model& model, const IdentificationResult& result, const std::vector<Trajectory>& runs,

@@ -567,11 +567,49 @@ TEST(ExcitationDesign, CancellationStopsItWithAFeasibleTrajectory) {
   EXPECT_TRUE(std::isfinite(design.summary.condition_number));
   EXPECT_FALSE(first_limit_violation(excitation_limits(ur5(), options), sample_excitation(design.trajectory, 0.001)).has_value());
 
-  // Set before the start: one evaluation (there is always a trajectory to return), then it stops.
+  // Set before the start: the base parameters' first checkpoint stops it, with no trajectory and no figures.
   options.progress = nullptr;
   const ExcitationDesign early = design_excitation(ur5(), options);
   EXPECT_EQ(early.summary.termination, ExcitationTermination::cancelled);
-  EXPECT_EQ(early.summary.evaluations, 1);
+  EXPECT_EQ(early.summary.evaluations, 0);
+  EXPECT_EQ(early.trajectory.q0.size(), 0);
+  EXPECT_NE(early.summary.message.find("base parameters"), std::string::npos) << early.summary.message;
+}
+
+/// A serial chain of `joints` revolute joints about alternating y and z axes, 0.1 m apart.
+std::string chain_urdf(int joints) {
+  std::string text = "<robot name='chain'><link name='l0'/>";
+  for (int k = 1; k <= joints; ++k) {
+    const std::string axis = k % 2 ? "0 1 0" : "0 0 1";
+    text += "<joint name='j" + std::to_string(k) + "' type='revolute'><parent link='l" + std::to_string(k - 1) +
+            "'/><child link='l" + std::to_string(k) + "'/><origin xyz='0 0 0.1'/><axis xyz='" + axis +
+            "'/><limit lower='-2' upper='2' effort='5000' velocity='2'/></joint><link name='l" + std::to_string(k) +
+            "'><inertial><mass value='1'/><origin xyz='0.01 0.02 0.05'/><inertia ixx='0.01' ixy='0' ixz='0' "
+            "iyy='0.02' iyz='0' izz='0.03'/></inertial></link>";
+  }
+  return text + "</robot>";
+}
+
+TEST(ExcitationQuality, RowBlocksOfALargeProblemGiveTheFiguresOfOneSvd) {
+  // 10 joints at 3000 instants: Y_b is 30,000 rows × ~80 columns, over the work the criterion does whole,
+  // so the condition number comes from the R of a QR taken in row blocks (with checkpoints between them).
+  const Model model = parse_urdf(chain_urdf(10)).model;
+  const FourierTrajectory f = random_trajectory(3, 10, 5, 10.0);
+  ExcitationOptions options;
+  options.samples = 3000;
+  const ExcitationQuality quality = excitation_quality(model, f, options);
+  const double independent = independent_condition_number(model, f, options.layout, options.samples);
+  ASSERT_GT(static_cast<double>(options.samples) * 10 * quality.base_parameters * quality.base_parameters, 1e8);
+  EXPECT_NEAR(quality.condition_number, independent, 1e-8 * independent);
+}
+
+TEST(BaseParametersOptions, ACancelStopsTheComputation) {
+  std::atomic<bool> cancel{true};
+  BaseParameterOptions options;
+  options.cancel = &cancel;
+  EXPECT_THROW(base_parameters(ur5(), ParameterLayout{}, options), Interrupted);
+  cancel = false;
+  EXPECT_EQ(base_parameters(ur5(), ParameterLayout{}, options).size(), 48);
 }
 
 TEST(ExcitationDesign, TimeBudgetStopsIt) {

@@ -14,7 +14,8 @@
 // Gram–Schmidt, twice). Columns that are zero for every motion (norm ≤ 1e-10 per row) are set aside first:
 // rescaled to unit norm, round-off would pass for an extra rank. Dependent parameters are regrouped into
 // the independent ones: β_i = π_{independent_i} + Σ_d K_{i,d} π_{dependent_d}, the coefficients K from
-// least squares on the unscaled columns (exact to round-off; |K| ≤ 1e-9 of the largest is set to 0).
+// least squares on the unscaled columns, through the Gram–Schmidt factors Y_indep = Q R (exact to
+// round-off; |K| ≤ 1e-9 of the largest is set to 0).
 // Scanning in π's order keeps the earlier bodies' parameters and regroups later ones into them, as
 // Gautier & Khalil's symbolic regrouping does (for a 7-joint arm: Izz1 absorbs the parameters body 2's
 // rotation hides).
@@ -25,6 +26,7 @@
 
 #include <Eigen/Core>
 
+#include <atomic>
 #include <cstdint>
 #include <string>
 #include <vector>
@@ -39,6 +41,8 @@ struct BaseParameterOptions {
   /// robot ≥ 1e-4; 1e-8 sits between with six orders of room on each side.
   double tolerance = 1e-8;
   std::uint64_t seed = 1;
+  /// Checked once per column (O(n³) in all: 2.4 s for 50 joints): when set, Interrupted is thrown.
+  const std::atomic<bool>* cancel = nullptr;
 };
 
 struct BaseParameters {
@@ -55,7 +59,7 @@ struct BaseParameters {
 };
 
 /// The base parameters of `model` with the layout's friction and armature blocks (see the file comment).
-/// Throws InputError("random_states"/"tolerance") for bad options.
+/// Throws InputError("random_states"/"tolerance") for bad options, Interrupted when options.cancel is set.
 BaseParameters base_parameters(const Model& model, const ParameterLayout& layout, const BaseParameterOptions& options = {});
 
 }  // namespace manipid::robot

@@ -165,8 +165,10 @@ struct ExcitationOptions {
   /// harmonics (Release, one core; 0.75–2 ms each, by the machine and by how often the torque limits bind:
   /// docs/performance.md); twice as many improve the condition number by a few per cent at most.
   int max_evaluations = 8000;
-  /// Checked at each evaluation; when it becomes true the design stops and returns the best trajectory
-  /// found so far (always within the limits), with termination `cancelled`.
+  /// Checked between evaluations and inside the long steps (the base parameters; the criterion of a
+  /// many-joint design, in blocks of about 0.05 s): when it becomes true the design stops with termination
+  /// `cancelled` — between evaluations with the best trajectory found so far (always within the limits),
+  /// inside a step with none (an empty trajectory).
   const std::atomic<bool>* cancel = nullptr;
   /// Called after each evaluation, in the calling thread.
   std::function<void(const ExcitationProgress&)> progress;
@@ -276,7 +278,8 @@ struct ExcitationDesign {
 /// Designs an excitation for `model` (see the file comment): random starts, then `local_starts`
 /// derivative-free local optimisations (NLopt's LN_SBPLX) of the criterion over q0 and the coefficients
 /// that keep (R), every candidate scaled joint by joint to its largest amplitude within the limits. Throws InputError for bad options (ExcitationOptions::validate). Never returns
-/// a trajectory outside the limits: a cancelled or failed run returns the best one evaluated.
+/// a trajectory outside the limits: a failed run returns the best one evaluated, a cancelled one the best
+/// one or none (ExcitationOptions::cancel).
 ExcitationDesign design_excitation(const Model& model, const ExcitationOptions& options = {});
 
 /// The ramp from `pose` to `target` (n each) for `model`'s limits: the shortest D (s) whose quintic keeps

@@ -87,7 +87,8 @@ struct IdentificationOptions {
   /// (standard_parameters(model, layout)).
   Eigen::VectorXd prior;
   BaseParameterOptions base;
-  /// Checked while the rows are built; when it becomes true identify() returns with `cancelled` set.
+  /// Checked while the rows are built, per base-parameter column, per candidate and in the physical fit; when
+  /// it becomes true identify() returns with `cancelled` set (and nothing else).
   const std::atomic<bool>* cancel = nullptr;
 };
 
