@@ -35,6 +35,7 @@ ProblemEntry entry_of(ProblemKind kind) {
     case ProblemKind::insufficient_storage: return {507, "INSUFFICIENT_STORAGE", "The server has no room to store the request"};
     case ProblemKind::memory_busy: return {503, "MEMORY_BUSY", "The server has no memory for this request now"};
     case ProblemKind::store_unavailable: return {503, "STORE_UNAVAILABLE", "The database cannot be reached now"};
+    case ProblemKind::uploads_busy: return {503, "UPLOADS_BUSY", "The server is receiving too many request bodies now"};
     case ProblemKind::job_failed: return {500, "JOB_FAILED", "The job could not be completed"};
     case ProblemKind::not_computable: return {422, "NOT_COMPUTABLE", "The identification has no finite cost to minimise"};
     case ProblemKind::worker_lost: return {500, "WORKER_LOST", "The job's worker stopped before it finished, too often"};

@@ -52,8 +52,28 @@ CLI::App* add_serve_command(CLI::App& app, ServeOptions& options) {
       ->capture_default_str();
   command->add_option("--token", options.token, "Bearer token every /v1 request must carry (or MANIPID_TOKEN)")
       ->envname("MANIPID_TOKEN");
-  command->add_option("--http-threads", options.http_threads, "Connections served at once")
+  command->add_option("--http-threads", options.http_threads,
+                      "Requests served at once (connections waiting for a request, and bodies being received, "
+                      "hold no thread of these)")
       ->check(integer_between(2, 1024))
+      ->capture_default_str();
+  command->add_option("--max-connections-per-client", options.max_connections_per_client,
+                      "Connections from one client address that may wait for a request (new, or idle between "
+                      "requests); a new one beyond closes that address's oldest waiting one")
+      ->check(integer_between(1, 1'000'000))
+      ->capture_default_str();
+  command->add_option("--max-connections", options.max_connections,
+                      "Connections that may wait for a request, from all clients (at most half the open-file "
+                      "limit); a new one beyond closes the oldest waiting one")
+      ->check(integer_between(1, 10'000'000))
+      ->capture_default_str();
+  command->add_option("--max-uploads-per-client", options.max_uploads_per_client,
+                      "Request bodies from one client address received at once; more get 503 and Retry-After")
+      ->check(integer_between(1, 100'000))
+      ->capture_default_str();
+  command->add_option("--max-uploads", options.max_uploads,
+                      "Request bodies received at once, from all clients; more get 503 and Retry-After")
+      ->check(integer_between(1, 100'000))
       ->capture_default_str();
   return command;
 }
@@ -82,6 +102,10 @@ int run_serve(const ServeOptions& options) {
 
   api::HttpSettings http;
   http.threads = static_cast<std::size_t>(std::max(options.http_threads, 1));
+  http.max_connections_per_client = static_cast<std::size_t>(options.max_connections_per_client);
+  http.max_connections = static_cast<std::size_t>(options.max_connections);
+  http.max_uploads_per_client = static_cast<std::size_t>(options.max_uploads_per_client);
+  http.max_uploads = static_cast<std::size_t>(options.max_uploads);
   http.routes.max_body = max_body;
   http.routes.memory_budget = memory_budget;
   http.routes.token = options.token;

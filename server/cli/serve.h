@@ -22,6 +22,10 @@ struct ServeOptions {
   std::string memory_budget = "1GiB";  ///< request bodies at once, 3 bytes per body byte (api::RouteOptions)
   std::string token;
   int http_threads = 32;
+  int max_connections_per_client = 64;  ///< connections waiting for a request head, per client address
+  int max_connections = 4096;           ///< the same in all (at most half the open-file limit)
+  int max_uploads_per_client = 16;      ///< request bodies being received at once, per client address
+  int max_uploads = 256;                ///< the same in all
 };
 CLI::App* add_serve_command(CLI::App& app, ServeOptions& options);
 int run_serve(const ServeOptions& options);

@@ -36,6 +36,7 @@ const std::vector<ExpectedRow>& table() {
       {ProblemKind::insufficient_storage, 507, "INSUFFICIENT_STORAGE"},
       {ProblemKind::memory_busy, 503, "MEMORY_BUSY"},
       {ProblemKind::store_unavailable, 503, "STORE_UNAVAILABLE"},
+      {ProblemKind::uploads_busy, 503, "UPLOADS_BUSY"},
       {ProblemKind::internal, 500, "INTERNAL"},
       {ProblemKind::job_failed, 500, "JOB_FAILED"},
       {ProblemKind::not_computable, 422, "NOT_COMPUTABLE"},

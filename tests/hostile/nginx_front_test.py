@@ -1,14 +1,13 @@
 """nginx_front_test.py — hostile-client suite: the same probes through nginx (docker/nginx.conf) in front of manipid.
 
-What cpp-httplib 0.11.4 cannot mend from outside (a connection holds one of manipid's HTTP
-threads for its whole life) is answered by a proxy that reads requests in an event loop. This
+A proxy that reads requests in an event loop hands manipid only whole requests (manipid itself
+now holds no HTTP thread for a connection waiting for its head: connections_test.py). This
 test runs Debian's nginx with docker/nginx.conf itself — only its ports, pid file, temporary
 directories and user are pointed at the test's own — in front of the real `manipid serve` on
 port 0, and sends the hostile probes through it: trickling heads and bodies, a 10 GB
 Content-Length, two Content-Lengths, a smuggled request in a refused body, 50 long-polls. manipid
-runs with 4 HTTP threads, fewer than the trickling clients: straight to manipid /healthz then
-waits up to 10 s (slow_clients_test.py); through nginx it answers at once. Times printed are
-measurements; the bounds asserted are generous behaviour checks, not benchmarks.
+runs with 4 HTTP threads, fewer than the trickling clients; through nginx /healthz answers at once.
+Times printed are measurements; the bounds asserted are generous behaviour checks, not benchmarks.
 
 Skips (exit 77) when nginx is not installed (Debian package nginx, in [test]).
 
@@ -166,7 +165,7 @@ class ThroughNginx(unittest.TestCase):
 
     def test_stalled_bodies_are_held_and_cut_off_by_nginx(self):
         # Head and half a body, then nothing: nginx's client_body_timeout (10 s) ends each; manipid
-        # never sees them (its 4 threads stay free; straight to manipid each would hold one).
+        # never sees them (straight to manipid each would hold a thread, outside its 4, until its deadline).
         body = b'{"name": "stalled", "dt": 0.01, "q": [[0, 0.1, 0.2]], "tau": [[1, 1, 1]]}'
         head = (b"POST /v1/datasets HTTP/1.1\r\nHost: x\r\nContent-Type: application/json\r\n"
                 b"Content-Length: %d\r\n\r\n" % len(body))

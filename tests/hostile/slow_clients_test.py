@@ -3,12 +3,14 @@ the real `manipid serve` on port 0 (raw sockets).
 
 Item 5 of the hardening issue, the part our code can mend around cpp-httplib 0.11.4: a request
 head trickling a byte at a time is cut off 10 s after its first byte, a body when it is slower
-than 256 KiB/s after that (0.11.4's per-read timeouts never fire for either); SIGTERM with 20 trickling clients exits within 10 s (0.11.4's stop() waited
-for each of them: still running after 90 s); the listen backlog is 128 (0.11.4 listens with 5)
-and 64 simultaneous connects are all served; an idle keep-alive connection gives its thread up
-to a connection waiting for one. With more trickling clients than HTTP threads,
-another client waits for a head's deadline: the limit of 0.11.4's thread per connection. The
-times printed are measurements; the bounds asserted are generous ones, not benchmarks.
+than 256 KiB/s after that (0.11.4's per-read timeouts never fire for either); SIGTERM with 20
+trickling clients exits within 10 s (0.11.4's stop() waited for each of them: still running after
+90 s); the listen backlog is 128 (0.11.4 listens with 5) and 64 simultaneous connects are all
+served. A connection holds no HTTP thread while it waits for a head (0.11.4 kept a thread per
+connection): more trickling clients than HTTP threads delay no one (they delayed everyone until a
+head's deadline, 9.6 s), nor do idle keep-alive connections (each held its thread until its
+keep-alive timeout). connections_test.py takes the same to 1,000 connections. The times printed
+are measurements; the bounds asserted are generous ones, not benchmarks.
 
 Run: MANIPID_BIN=build/debug/server/manipid python3 tests/hostile/slow_clients_test.py -v
 """
@@ -23,7 +25,9 @@ import time
 import unittest
 
 sys.path.insert(0, os.path.join(os.path.dirname(__file__), "..", "service"))
-from harness import Server, temporary_directory  # noqa: E402
+from harness import Server, sanitized, temporary_directory  # noqa: E402
+
+BOUND = 3.0 if sanitized() else 1.0  # seconds /healthz may take under a load that holds no thread
 
 HEAD = b"GET /healthz HTTP/1.1\r\nHost: x\r\nX-Padding: " + b"a" * 200 + b"\r\n\r\n"
 
@@ -67,6 +71,25 @@ class Trickler(threading.Thread):
         self.stopped.set()
         self.join(5)
         self.socket.close()
+
+
+def read_answer(connection):
+    """The next whole answer on a kept-alive connection (its head and body come in two writes)."""
+    answer = b""
+    while b"\r\n\r\n" not in answer:
+        chunk = connection.recv(65536)
+        if not chunk:
+            return answer
+        answer += chunk
+    head, _, body = answer.partition(b"\r\n\r\n")
+    length = int(next((line.split(b":", 1)[1] for line in head.split(b"\r\n")
+                       if line.lower().startswith(b"content-length:")), b"0"))
+    while len(body) < length:
+        chunk = connection.recv(65536)
+        if not chunk:
+            break
+        body += chunk
+    return head + b"\r\n\r\n" + body
 
 
 def healthz_seconds(server):
@@ -117,7 +140,7 @@ class SlowClients(unittest.TestCase):
                 trickler.start()
             try:
                 time.sleep(2.0)
-                status, seconds = healthz_seconds(server)  # 12 threads are still free
+                status, seconds = healthz_seconds(server)  # the heads hold no thread
                 self.assertEqual(status, 200)
                 print(f"\n  /healthz with 20 trickling clients: {seconds * 1000:.0f} ms", file=sys.stderr)
                 started = time.monotonic()
@@ -134,9 +157,10 @@ class SlowClients(unittest.TestCase):
                 if server.process is not None and server.process.poll() is None:
                     server.kill()
 
-    def test_more_trickling_clients_than_threads_delay_others_at_most_the_header_deadline(self):
-        # The limit cpp-httplib 0.11.4 leaves: one thread per connection. With every thread held
-        # by a trickling head, the next client waits for the first head's deadline (10 s).
+    def test_more_trickling_clients_than_threads_delay_no_one(self):
+        # cpp-httplib 0.11.4 kept a thread per connection: with every thread held by a trickling
+        # head, the next client waited for the first head's deadline (9.6 s). Heads are now read
+        # by the reactor, and a connection gets a thread once its head is whole.
         with temporary_directory() as directory, Server(os.path.join(directory, "jobs.db"),
                                                         "--http-threads", "4") as server:
             tricklers = [Trickler(server) for _ in range(6)]
@@ -145,39 +169,34 @@ class SlowClients(unittest.TestCase):
             try:
                 time.sleep(1.0)
                 status, seconds = healthz_seconds(server)
-                print(f"\n  /healthz with 6 trickling clients on 4 threads: {seconds:.1f} s", file=sys.stderr)
+                print(f"\n  /healthz with 6 trickling clients on 4 threads: {seconds * 1000:.1f} ms", file=sys.stderr)
                 self.assertEqual(status, 200)
-                self.assertLess(seconds, 15.0)
+                self.assertLess(seconds, BOUND)
+                self.assertTrue(all(trickler.closed_after is None for trickler in tricklers))  # none cut short
             finally:
                 for trickler in tricklers:
                     trickler.stop()
 
-    def test_idle_keep_alive_connections_give_their_threads_to_a_waiting_client(self):
+    def test_idle_keep_alive_connections_hold_no_thread(self):
         # 0.11.4 kept an idle keep-alive connection's thread for its whole timeout (2 s here),
-        # while a new connection waited for a thread.
+        # while a new connection waited for a thread. Now an idle connection waits in the reactor:
+        # /healthz is answered at once, and the idle connections still serve their next request.
         with temporary_directory() as directory, Server(os.path.join(directory, "jobs.db"),
                                                         "--http-threads", "2") as server:
             idle = []
             try:
-                for _ in range(2):
+                for _ in range(3):
                     connection = socket.create_connection((server.host, server.port), timeout=10)
                     connection.sendall(b"GET /healthz HTTP/1.1\r\nHost: x\r\n\r\n")
-                    self.assertTrue(connection.recv(65536).startswith(b"HTTP/1.1 200"))
-                    idle.append(connection)  # kept alive, idle, each holding a thread
+                    self.assertTrue(read_answer(connection).startswith(b"HTTP/1.1 200"))
+                    idle.append(connection)  # kept alive, idle
                 status, seconds = healthz_seconds(server)
-                print(f"\n  /healthz with both threads held by idle keep-alives: {seconds * 1000:.0f} ms", file=sys.stderr)
+                print(f"\n  /healthz with 3 idle keep-alives on 2 threads: {seconds * 1000:.1f} ms", file=sys.stderr)
                 self.assertEqual(status, 200)
-                self.assertLess(seconds, 1.0)  # not the 2 s keep-alive timeout
-                closed = 0
+                self.assertLess(seconds, BOUND)  # not the 2 s keep-alive timeout
                 for connection in idle:
-                    connection.settimeout(0.5)
-                    try:
-                        while connection.recv(65536):  # the rest of its answer, then the end
-                            pass
-                        closed += 1
-                    except socket.timeout:
-                        pass
-                self.assertGreaterEqual(closed, 1)  # one gave its thread up
+                    connection.sendall(b"GET /healthz HTTP/1.1\r\nHost: x\r\n\r\n")
+                    self.assertTrue(read_answer(connection).startswith(b"HTTP/1.1 200"))
             finally:
                 for connection in idle:
                     connection.close()

@@ -105,6 +105,13 @@ class Server:
         raise AssertionError(f"job {job_id} did not finish in {timeout} s")
 
 
+def sanitized():
+    """Whether MANIPID_BIN is a sanitizer build (the debug preset): several times slower, so
+    timing bounds are looser there."""
+    with open(binary(), "rb") as stream:
+        return b"__asan_init" in stream.read()
+
+
 def postgres_template():
     """The libpq URI of the private PostgreSQL cluster the ctest fixture "postgres" runs
     (tests/server/postgres_cluster.sh), with %s where a database name goes; None without one."""

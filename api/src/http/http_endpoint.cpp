@@ -17,6 +17,9 @@ class ServedEndpoint final : public HttpEndpoint {
  public:
   ServedEndpoint(Service& service, const HttpSettings& settings) {
     server_.set_http_threads(settings.threads);
+    server_.set_connection_limits(settings.max_connections_per_client, settings.max_connections);
+    server_.set_upload_limits(settings.max_uploads_per_client, settings.max_uploads);
+    server_.set_log(settings.routes.log);
     // Without TCP_NODELAY, Nagle plus delayed ACKs hold each keep-alive answer (headers and
     // body are two writes) for ~40 ms: 360 status requests/s instead of thousands.
     server_.set_tcp_nodelay(true);
@@ -24,8 +27,9 @@ class ServedEndpoint final : public HttpEndpoint {
     server_.set_keep_alive_timeout(2);
     server_.set_read_timeout(30);
     server_.set_write_timeout(30);
-    // A request's line and headers must arrive within 10 s of their first byte: a client
-    // trickling a byte a second holds a thread 10 s, not for ever (per-read timeouts never fire).
+    // A request's line and headers must arrive within 10 s of their first byte, or the
+    // connection is closed (per-read timeouts never fire for a byte a second); a connection
+    // that sends nothing is closed after the keep-alive timeout. Neither holds a thread meanwhile.
     server_.set_header_deadline(std::chrono::seconds(10));
     server_.set_listen_backlog(128);  // 0.11.4 listens with 5
     register_routes(server_, service, settings.routes);

@@ -128,11 +128,32 @@ std::optional<Problem> memory_problem(RouteState& state, const httplib::Request&
                  "body"};
 }
 
+/// Takes one of the places for bodies being received at once (HttpServer::admit_body) for a
+/// request with a body; the refusal when every place is taken. A body trickled a byte a second
+/// holds the thread reading it until its deadline (10 s + length / 256 KiB/s: 48 s for 10 MB),
+/// so those threads do not count toward --http-threads; their number is bounded here instead,
+/// per client address first, so that one client cannot take every place.
+std::optional<Problem> upload_problem(const httplib::Request& request) {
+  if (!request.has_header("Content-Length") ||
+      request.get_header_value("Content-Length").find_first_not_of('0') == std::string::npos) {
+    return std::nullopt;
+  }
+  const auto refusal = HttpServer::admit_body();
+  if (!refusal) return std::nullopt;
+  const std::string limit = std::to_string(refusal->limit);
+  return Problem{ProblemKind::uploads_busy,
+                 refusal->per_client
+                     ? "this address is sending " + limit + " request bodies at once already (--max-uploads-per-client " + limit + "); try again later"
+                     : "the server is receiving " + limit + " request bodies at once already (--max-uploads " + limit + "); try again later",
+                 "body"};
+}
+
 }  // namespace
 
 int before_continue(RouteState& state, const httplib::Request& request, httplib::Response& response) {
   HttpServer::head_received();
   auto problem = length_problem(state, request);
+  if (!problem) problem = upload_problem(request);
   if (!problem) problem = memory_problem(state, request);
   if (problem) {
     refuse(response, *problem, request.path);
@@ -193,6 +214,7 @@ httplib::Server::HandlerResponse before_routing(RouteState& state, const httplib
                   {ProblemKind::unsupported_media, "compressed request bodies are not accepted", "Content-Encoding"},
                   request.path);
   }
+  if (const auto problem = upload_problem(request)) return refuse(response, *problem, request.path);
   if (const auto problem = memory_problem(state, request)) return refuse(response, *problem, request.path);
   return httplib::Server::HandlerResponse::Unhandled;
 }

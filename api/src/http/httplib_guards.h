@@ -23,14 +23,17 @@ void refuse_brotli(const httplib::Request& request);
 /// Content-Lengths, Content-Length beside Transfer-Encoding, a body on a GET: 400) and a
 /// declared length over --max-body (413), Brotli strike, bearer token on /v1, bodiless POST,
 /// PUT or PATCH (411, but a bodiless cancel is answered), chunked (411) and compressed (415)
-/// bodies refused; then the body's memory reserved (RouteOptions::memory_budget; 503 when
-/// there is no room). Every refusal closes the connection (HttpServer::close_after_answer).
+/// bodies refused; then one of the places for bodies being received at once taken
+/// (HttpServer::admit_body: 503 UPLOADS_BUSY beyond them) and the body's memory reserved
+/// (RouteOptions::memory_budget; 503 when there is no room). Every refusal closes the
+/// connection (HttpServer::close_after_answer).
 httplib::Server::HandlerResponse before_routing(RouteState& state, const httplib::Request& request,
                                                 httplib::Response& response);
 
 /// The "Expect: 100-continue" hook: 0.11.4 answers "100 Continue" before the pre-routing hook
-/// runs, so a body that will be refused (bad framing, over --max-body, no room in the memory
-/// budget) is refused here, before the client sends it (curl asks so for bodies over 1 MiB).
+/// runs, so a body that will be refused (bad framing, over --max-body, no upload place or no
+/// room in the memory budget) is refused here, before the client sends it (curl asks so for
+/// bodies over 1 MiB).
 /// Returns 100 or the refusal's status.
 int before_continue(RouteState& state, const httplib::Request& request, httplib::Response& response);
 

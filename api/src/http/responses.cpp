@@ -20,7 +20,7 @@ void send_problem(httplib::Response& response, const Problem& problem, const std
   response.set_content(problem_to_json(problem, instance).dump(), "application/problem+json");
   if (problem.kind == ProblemKind::queue_full || problem.kind == ProblemKind::shutting_down ||
       problem.kind == ProblemKind::insufficient_storage || problem.kind == ProblemKind::memory_busy ||
-      problem.kind == ProblemKind::store_unavailable) {
+      problem.kind == ProblemKind::store_unavailable || problem.kind == ProblemKind::uploads_busy) {
     response.set_header("Retry-After", "5");
   }
   if (problem.kind == ProblemKind::unauthorized) response.set_header("WWW-Authenticate", "Bearer");

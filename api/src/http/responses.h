@@ -21,7 +21,7 @@ namespace manipid::api::http {
 void send_json(httplib::Response& response, int status, const nlohmann::ordered_json& body);
 
 /// The problem as application/problem+json with its status; Retry-After for queue_full,
-/// shutting_down, memory_busy and store_unavailable, WWW-Authenticate for unauthorized.
+/// shutting_down, memory_busy, store_unavailable and uploads_busy, WWW-Authenticate for unauthorized.
 void send_problem(httplib::Response& response, const Problem& problem, const std::string& instance);
 
 /// What a request that ran out of memory is answered (memory_busy: it may succeed later).

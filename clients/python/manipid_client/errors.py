@@ -15,7 +15,8 @@ class ManipidError(Exception):
     Attributes (None when the answer did not carry them): `status` (HTTP status), `code`
     (e.g. "INVALID_FIELD", "NOT_FOUND"), `title`, `detail`, `field` (the input at fault, e.g.
     "q[2]" or "max_evaluations"), `type`, `instance`; `problem` is the whole parsed body and
-    `retry_after` the Retry-After header in seconds (429 QUEUE_FULL, 503 SHUTTING_DOWN, 503 MEMORY_BUSY).
+    `retry_after` the Retry-After header in seconds (429 QUEUE_FULL, 503 SHUTTING_DOWN, 503 MEMORY_BUSY,
+    503 UPLOADS_BUSY).
     """
 
     def __init__(self, message: Optional[str] = None, *, status: Optional[int] = None,

@@ -23,7 +23,15 @@ namespace manipid::api {
 /// timeouts, the header deadline, the backlog) is fixed in the module and argued there
 /// (api/src/http/http_endpoint.cpp).
 struct HttpSettings {
-  std::size_t threads = 32;  ///< connections served at once
+  std::size_t threads = 32;  ///< requests served at once (besides the bodies being received)
+  /// Connections waiting for a request head (new, or idle between requests), from one client
+  /// address and in all; beyond, the oldest waiting one is closed (HttpServer::set_connection_limits).
+  std::size_t max_connections_per_client = 64;
+  std::size_t max_connections = 4096;
+  /// Request bodies being received at once, from one client address and in all; beyond, 503
+  /// UPLOADS_BUSY before the body is read (HttpServer::set_upload_limits).
+  std::size_t max_uploads_per_client = 16;
+  std::size_t max_uploads = 256;
   RouteOptions routes;
 };
 
@@ -46,7 +54,7 @@ inline constexpr const char* http_module_name = "manipid-http.so";
 
 /// Raised by each change of the module's entry point or of the types it takes: the executable
 /// refuses, when it loads it, a module built with another.
-inline constexpr int http_module_interface = 1;
+inline constexpr int http_module_interface = 2;
 
 /// Loads the module, once per process: looked for beside the executable, then in ../lib/manipid/
 /// from it. std::runtime_error saying where it looked and why each place failed. A server calls

@@ -33,6 +33,7 @@ enum class ProblemKind {
   insufficient_storage,  ///< 507 the server's disk is full: nothing was stored (with Retry-After)
   memory_busy,           ///< 503 no memory for this request now: over --memory-budget, or it ran out (with Retry-After)
   store_unavailable,     ///< 503 the database cannot be reached now: nothing was done (with Retry-After)
+  uploads_busy,          ///< 503 too many bodies being received now, from this address or in all (with Retry-After)
   internal,              ///< 500 a bug; the detail never carries internals
   // A job's `error` (the request was accepted; the run could not finish):
   job_failed,            ///< 500 the computation could not finish (a diverging simulation, a store failure)
