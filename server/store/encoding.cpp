@@ -39,6 +39,16 @@ std::vector<unsigned char> encode_doubles(const double* values, std::size_t coun
   return bytes;
 }
 
+std::span<const unsigned char> doubles_as_stored(const double* values, std::size_t count,
+                                                 std::vector<unsigned char>& scratch) {
+  if constexpr (std::endian::native == std::endian::little) {
+    return {reinterpret_cast<const unsigned char*>(values), count * sizeof(double)};
+  } else {
+    scratch = encode_doubles(values, count);
+    return scratch;
+  }
+}
+
 bool decode_doubles(std::span<const unsigned char> bytes, double* values, std::size_t count) {
   if (bytes.size() != count * sizeof(double)) return false;
   for (std::size_t i = 0; i < count; ++i) {

@@ -19,6 +19,10 @@ namespace manipid::server::store {
 
 /// Raw IEEE-754 little-endian doubles, in the given order.
 std::vector<unsigned char> encode_doubles(const double* values, std::size_t count);
+/// The same bytes without a copy where the machine is little-endian (the values' own memory, valid
+/// while they are); elsewhere encoded into `scratch`. A dataset's blobs are as large as the dataset.
+std::span<const unsigned char> doubles_as_stored(const double* values, std::size_t count,
+                                                 std::vector<unsigned char>& scratch);
 /// Fills `count` doubles; false when the blob does not hold exactly that many.
 bool decode_doubles(std::span<const unsigned char> bytes, double* values, std::size_t count);
 

@@ -3,7 +3,8 @@ real `manipid serve` on port 0.
 
 Large bodies are admitted against --memory-budget before a byte of them is read, 3 bytes per
 body byte (api::memory_per_body_byte): beyond it a body gets 503 MEMORY_BUSY with Retry-After
-and its connection closes, unread; the reservation is given back when the answer is made, the
+and its connection closes, unread; a dataset of short numbers tops its reservation up to 32
+bytes per number before it is parsed (503 when there is no room now, 413 when there never is); the reservation is given back when the answer is made, the
 body complete or not. A JSON upload is read without a document of the whole body (SAX), with
 the same answers as before for what is wrong in it. How much memory an upload takes is
 measured, not asserted: bench/upload_memory.py (VmHWM).
@@ -149,6 +150,44 @@ class MemoryBudget(unittest.TestCase):
         first.sendall(body[100:])
         self.assertEqual(answer_of(first)[0], 201)
         first.close()
+        self.wait_reserved(0)
+
+
+    def test_short_numbers_reserve_what_they_take_once_parsed(self):
+        # Item 6 of hardening round 3: 3 bytes per body byte undercounts a body of short numbers
+        # ("0," is 2 bytes, 8 as a double, 8 more as the store's copy): a 40 MB JSON body of zeros
+        # peaked at 1,000 MiB, six at once passed a 1 GiB budget. Such a body now tops its reservation
+        # up to api::memory_per_dataset_number (32) per number before it is parsed.
+        def zeros(count):
+            return ('{"dt": 0.001, "q": [[' + ",".join(["0"] * count) + "]]}").encode()
+
+        # One that no budget of this server could ever hold: 413 naming --memory-budget, at once.
+        body = zeros(400000)  # 800 kB: under --max-body, 13 MB once parsed and stored
+        self.assertLess(len(body), MAX_BODY)
+        status, _, problem = self.server.request("POST", "/v1/datasets", body)
+        self.assertEqual(status, 413, problem)
+        self.assertEqual(problem["field"], "body")
+        self.assertIn("400003 numbers", problem["detail"])  # separators + 1: an upper bound
+        self.assertIn("--memory-budget (3 MiB)", problem["detail"])
+        self.wait_reserved(0)
+        # One that fits alone but not beside another upload in progress: 503, then 201 once alone.
+        small = zeros(50000)  # 100 kB: 1.7 MB with its numbers
+        large = upload_body(15000)  # ~600 kB, 1.8 MB reserved while it is read
+        first = socket.create_connection((self.server.host, self.server.port), timeout=30)
+        first.sendall(head(len(large)) + large[:1000])
+        self.wait_reserved(3 * len(large))
+        status, headers, problem = self.server.request("POST", "/v1/datasets", small)
+        self.assertEqual(status, 503, problem)
+        self.assertEqual(problem["code"], "MEMORY_BUSY")
+        self.assertEqual(headers.get("Retry-After") or headers.get("retry-after"), "5")
+        self.assertIn("50003 numbers", problem["detail"])
+        first.sendall(large[1000:])
+        self.assertEqual(answer_of(first)[0], 201)
+        first.close()
+        self.wait_reserved(0)
+        status, _, created = self.server.request("POST", "/v1/datasets", small)
+        self.assertEqual(status, 201, created)
+        self.assertEqual(created["samples"], 50000)
         self.wait_reserved(0)
 
 

@@ -128,6 +128,41 @@ void send_json_samples(httplib::Response& response, std::shared_ptr<const Trajec
 
 }  // namespace
 
+namespace {
+
+/// At most how many numbers a CSV or JSON body holds: one more than its separators (',', '\n', '[').
+std::size_t numbers_at_most(const std::string& body) {
+  std::size_t separators = 0;
+  for (const char c : body) separators += static_cast<std::size_t>(c == ',' || c == '\n' || c == '[');
+  return separators + 1;
+}
+
+/// Tops the request's memory reservation up to what a text dataset of `body` takes at its peak
+/// (memory_per_dataset_number per number it may hold): the pre-routing hook reserved
+/// memory_per_body_byte per body byte, which a body of short numbers ("0,0,0,...") outgrows
+/// eightfold. Refused before parsing: 413 when the budget could never hold it, 503 when not now.
+void reserve_for_numbers(RouteState& state, const std::string& body) {
+  const std::size_t numbers = numbers_at_most(body);
+  const std::size_t need = body.size() + numbers * memory_per_dataset_number;
+  if (need <= body.size() * memory_per_body_byte) return;  // what the hook reserved holds it
+  const auto mib = [](std::size_t bytes) { return std::to_string((bytes + (1u << 20) - 1) >> 20) + " MiB"; };
+  const std::string what = "this body holds up to " + std::to_string(numbers) + " numbers, which take up to " +
+                           mib(need) + " while parsed and stored (" + std::to_string(memory_per_dataset_number) +
+                           " bytes each)";
+  if (need > state.memory.budget()) {
+    throw ApiError(ProblemKind::payload_too_large,
+                   what + ", more than this server's --memory-budget (" + mib(state.memory.budget()) +
+                       "): upload the run in shorter pieces, or ask for a larger --memory-budget",
+                   "body");
+  }
+  if (!state.memory.reserve(need)) {
+    throw ApiError(ProblemKind::memory_busy, what + ", and other requests hold the rest of --memory-budget now; try again later",
+                   "body");
+  }
+}
+
+}  // namespace
+
 void create_dataset(RouteState& state, const httplib::Request& request, httplib::Response& response) {
   const auto key = idempotency_key(request);
   const std::string type = media_type(request);
@@ -156,6 +191,7 @@ void create_dataset(RouteState& state, const httplib::Request& request, httplib:
     require_utf8(upload.name, "name");
     if (upload.name.size() > 200) throw ApiError(ProblemKind::invalid_field, "name is longer than 200 bytes", "name");
   } else if (type == "text/csv" || (unlabelled && !looks_like_json(request.body))) {
+    reserve_for_numbers(state, request.body);
     // A lab's own log: its column map and units from the query (and a robot's joint names for {joint}).
     LogFormat format;
     format.columns = request.get_param_value("columns");
@@ -174,7 +210,9 @@ void create_dataset(RouteState& state, const httplib::Request& request, httplib:
     require_utf8(upload.name, "name");
     if (upload.name.size() > 200) throw ApiError(ProblemKind::invalid_field, "name is longer than 200 bytes", "name");
   } else {
-    upload = dataset_from_json_text(json_text(request));  // refuses other media types with 415; no document
+    const auto text = json_text(request);  // refuses other media types with 415
+    reserve_for_numbers(state, request.body);
+    upload = dataset_from_json_text(text);  // no document of the body: numbers straight into arrays
   }
   const DatasetCreated created = state.service.create_dataset(upload, key);
   response.set_header("Location", "/v1/datasets/" + created.dataset.id);

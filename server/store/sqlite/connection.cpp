@@ -72,9 +72,9 @@ Statement& Statement::bind_real_or_null(int index, std::optional<double> value) 
   return value ? bind_real(index, *value) : bind_null(index);
 }
 
-Statement& Statement::bind_blob_or_null(int index, const std::vector<unsigned char>& bytes) {
+Statement& Statement::bind_blob_or_null(int index, std::span<const unsigned char> bytes) {
   if (bytes.empty()) return bind_null(index);
-  check_bind(sqlite3_bind_blob64(statement_, index, bytes.data(), bytes.size(), SQLITE_TRANSIENT));
+  check_bind(sqlite3_bind_blob64(statement_, index, bytes.data(), bytes.size(), SQLITE_STATIC));
   return *this;
 }
 

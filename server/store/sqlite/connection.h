@@ -51,7 +51,9 @@ class Statement {
   Statement& bind_integer(int index, std::int64_t value);
   Statement& bind_real(int index, double value);
   Statement& bind_real_or_null(int index, std::optional<double> value);
-  Statement& bind_blob_or_null(int index, const std::vector<unsigned char>& bytes);  ///< NULL when empty
+  /// NULL when empty. Not copied (a dataset's blobs are as large as the dataset): the bytes must
+  /// outlive the statement, which clears its bindings when it goes.
+  Statement& bind_blob_or_null(int index, std::span<const unsigned char> bytes);
   Statement& bind_null(int index);
 
   bool step();  ///< true: a row is ready; false: the statement is done

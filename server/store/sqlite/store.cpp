@@ -36,13 +36,14 @@ class SqliteStore final : public Store {
   DatasetOutcome insert_dataset(const std::string& name, const Trajectory& data, const std::string& source_job,
                                 const std::optional<api::IdempotencyKey>& key) override {
     api::DatasetInfo dataset = describe_dataset(name, data, source_job);
-    // Encoded before the transaction: the write lock is held only for the insert itself.
-    const auto t = encode_doubles(data.t.data(), static_cast<std::size_t>(data.t.size()));
-    const auto q = encode_doubles(data.q.data(), static_cast<std::size_t>(data.q.size()));
-    const auto tau = encode_doubles(data.tau.data(), static_cast<std::size_t>(data.tau.size()));
-    const auto ref = encode_doubles(data.ref.data(), static_cast<std::size_t>(data.ref.size()));
-    const auto qd = encode_doubles(data.qd.data(), static_cast<std::size_t>(data.qd.size()));
-    const auto qdd = encode_doubles(data.qdd.data(), static_cast<std::size_t>(data.qdd.size()));
+    // Encoded before the transaction (the write lock is held only for the insert itself); on a
+    // little-endian machine the dataset's own memory, bound without a copy.
+    std::vector<unsigned char> scratch[6];
+    const auto stored = [&](const auto& block, int i) {
+      return doubles_as_stored(block.data(), static_cast<std::size_t>(block.size()), scratch[i]);
+    };
+    const auto t = stored(data.t, 0), q = stored(data.q, 1), tau = stored(data.tau, 2), ref = stored(data.ref, 3),
+               qd = stored(data.qd, 4), qdd = stored(data.qdd, 5);
 
     const std::string keys_not_before = rfc3339_ago(options_.idempotency_ttl);
     auto connection = pool_.checkout();
