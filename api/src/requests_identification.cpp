@@ -2,6 +2,7 @@
 // identify` builds from its command line, built from JSON with the same defaults, and the
 // checks that need the data (joint count, samples for the filter, tau/ref columns).
 #include "json_fields.h"
+#include "manipid/core/signal/filters.h"
 
 #include <algorithm>
 #include <cmath>
@@ -195,6 +196,7 @@ IdentificationSpec identification_from_json(const nlohmann::json& body) {
       options.band = 0.0;
     } else if (band->is_number()) {
       options.band = fields::read_positive(*band, "band", std::numbers::pi, " rad/sample");
+      validate_band(options.band, "band");
     } else {
       throw InputError("band", "band must be \"auto\" or a number in (0, pi] rad/sample, got " + fields::describe(*band));
     }

@@ -3,6 +3,7 @@
 #include "manipid/api/robot_json.h"
 #include "manipid/api/robot_requests.h"
 #include "manipid/core/robot/urdf.h"
+#include "manipid/core/signal/filters.h"
 
 #include <numbers>
 
@@ -29,7 +30,11 @@ int half_length_field(const fields::Json& value, const std::string& field) {
 
 double band_field(const fields::Json& value, const std::string& field) {
   if (value.is_string() && value.get_ref<const std::string&>() == "auto") return 0.0;
-  if (value.is_number()) return fields::read_positive(value, field, std::numbers::pi, " rad/sample");
+  if (value.is_number()) {
+    const double band = fields::read_positive(value, field, std::numbers::pi, " rad/sample");
+    validate_band(band, field);
+    return band;
+  }
   throw InputError(field, field + " must be \"auto\" or a number in (0, pi] rad/sample, got " + fields::describe(value));
 }
 

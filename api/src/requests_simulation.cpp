@@ -2,6 +2,7 @@
 // with optional overrides, checked up front so an accepted job can run, and the run itself —
 // the same core calls as `manipid simulate`, so equal settings give equal data.
 #include "json_fields.h"
+#include "manipid/core/signal/filters.h"
 
 #include <cmath>
 #include <numbers>
@@ -29,6 +30,7 @@ void read_reference(const Json& value, const std::string& path, int joints, Step
   }
   if (const Json* band = object.find("band")) {
     reference.band = read_positive(*band, object.path("band"), std::numbers::pi, " rad/sample");
+    validate_band(reference.band, object.path("band"));
   }
   if (const Json* duration = object.find("duration")) {
     reference.duration = read_positive(*duration, object.path("duration"), max_duration, " s");

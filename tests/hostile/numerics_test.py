@@ -93,6 +93,29 @@ class StartingValues(SharedServerTestCase):
         self.assertNotIn("result", job)
 
 
+class AbsurdButWellFormed(SharedServerTestCase):
+    """Round 3, item 8: values that parse but mean nothing are refused at the door, naming themselves."""
+
+    def test_a_band_the_filters_cannot_hold_is_refused_naming_band(self):
+        # band 1e-300 underflowed every filter coefficient; the job then failed naming m1.
+        for body in ({"simulation": {}, "band": 1e-300, "half_length": 50}, {"simulation": {}, "band": 1e-300},
+                     {"simulation": {"reference": {"band": 1e-300}}}):
+            with self.subTest(body=body):
+                status, _, problem = self.server.request("POST", "/v1/identifications", body)
+                self.assertEqual(status, 422, problem)
+                self.assertTrue(problem["field"].endswith("band"), problem)
+                self.assertIn("underflow", problem["detail"])
+
+    def test_an_overlong_idempotency_key_is_named(self):
+        # 10,000 characters were "the request could not be read".
+        status, _, problem = self.server.request("POST", "/v1/datasets", {"dt": 0.01, "q": [[0, 1, 2]]},
+                                                 headers={"Idempotency-Key": "k" * 10000})
+        self.assertEqual(status, 400, problem)
+        self.assertIn("Idempotency-Key", problem["detail"])
+        self.assertIn("8192", problem["detail"])
+        self.assertEqual(self.server.request("GET", "/healthz")[0], 200)
+
+
 class CommandLine(unittest.TestCase):
     def test_identify_refuses_the_same_values_with_exit_status_2(self):
         with temporary_directory() as directory:

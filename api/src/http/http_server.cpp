@@ -460,6 +460,13 @@ void HttpServer::body_received() {
   if (current_server != nullptr && current_connection != nullptr) current_server->release_upload(*current_connection);
 }
 
+std::string_view HttpServer::current_head() {
+  if (current_connection == nullptr) return {};
+  // begin_head() dropped what came before the head, and the reactor handed the head over whole, so
+  // the buffer starts with it (a body read from the socket afterwards replaces it: that is no head error).
+  return current_connection->buffer;
+}
+
 std::optional<HttpServer::UploadRefusal> HttpServer::admit_body() {
   if (current_server == nullptr || current_connection == nullptr) return std::nullopt;
   HttpServer& server = *current_server;

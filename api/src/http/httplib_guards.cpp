@@ -252,6 +252,30 @@ std::string allowed_methods(const RouteState& state, const std::string& path) {
   return allow;
 }
 
+/// Why httplib could not read `head`, in words: a header line longer than it reads names its header
+/// (a 10,000-character Idempotency-Key was only "the request could not be read").
+std::string unreadable_head(std::string_view head) {
+  constexpr std::size_t line_limit = 8192;  // cpp-httplib 0.11.4's CPPHTTPLIB_HEADER_MAX_LENGTH
+  std::size_t begin = head.find('\n');  // past the request line (its own limit answers 414)
+  while (begin != std::string_view::npos && begin + 1 < head.size()) {
+    ++begin;
+    const std::size_t end = head.find('\n', begin);
+    const std::string_view line = head.substr(begin, end == std::string_view::npos ? std::string_view::npos : end + 1 - begin);
+    if (line == "\r\n" || line == "\n") break;  // the end of the head
+    if (line.size() >= line_limit) {
+      std::string name(line.substr(0, std::min(line.find(':'), std::size_t{40})));
+      for (char& c : name) {
+        if (static_cast<unsigned char>(c) < 0x20 || static_cast<unsigned char>(c) >= 0x7f) c = '?';
+      }
+      return "the header " + name + " is " + std::to_string(line.size()) + " bytes long; this server reads header lines of at "
+             "most " + std::to_string(line_limit) + " bytes" +
+             (name == "Idempotency-Key" || name == "idempotency-key" ? " (an Idempotency-Key is 1 to 255 characters)" : "");
+    }
+    begin = end;
+  }
+  return "the request could not be read";
+}
+
 }  // namespace
 
 /// Answers for the statuses cpp-httplib produces by itself (unknown route, 413, unreadable
@@ -301,7 +325,10 @@ httplib::Server::HandlerResponse on_error(const RouteState& state, const httplib
       }
       break;
     case 414: kind = ProblemKind::uri_too_long; detail = "the request target is longer than this server reads"; break;
-    case 400: kind = ProblemKind::malformed_body; detail = "the request could not be read"; break;
+    case 400:
+      kind = ProblemKind::malformed_body;
+      detail = unreadable_head(HttpServer::current_head());
+      break;
     default:
       // Below 500 that leaves 416, which 0.11.4 sends for a Range header it cannot parse, before
       // reading the body: a 400 (the problem's own status, so the status line and the body agree;

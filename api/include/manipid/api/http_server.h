@@ -54,6 +54,7 @@
 #include <mutex>
 #include <optional>
 #include <string>
+#include <string_view>
 #include <thread>
 #include <unordered_map>
 #include <vector>
@@ -121,6 +122,9 @@ class HttpServer : public httplib::Server {
   /// Called by the handlers (and the error hook): the body is read, no deadline while answering;
   /// the thread counts toward set_http_threads again.
   static void body_received();
+  /// Called by the error hook: the bytes of the request head this thread is serving (and maybe what
+  /// followed it), to name what httplib could not read in it; empty off an HTTP thread.
+  static std::string_view current_head();
 
   /// Why a body may not be received now: the limit reached, per client address or in all.
   struct UploadRefusal {

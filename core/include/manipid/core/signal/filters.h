@@ -21,14 +21,22 @@
 #include <complex>
 #include <memory>
 #include <mutex>
+#include <string>
 
 namespace manipid {
 
 enum class FilterOrder { lowpass = 0, derivative1 = 1, derivative2 = 2 };
 
+/// The narrowest band edge accepted, rad/sample: below it the coefficients (∝ band³ for q̈) underflow.
+inline constexpr double kMinBand = 1e-9;
+
+/// Throws InputError(field) unless band (rad/sample) lies in [kMinBand, π]: FilterSettings::validate's
+/// rule for the band, for callers that check a request before a filter exists.
+void validate_band(double band, const std::string& field = "band");
+
 struct FilterSettings {
   int half_length = 100;  ///< M: the filter has 2M + 1 taps. Must be ≥ 2.
-  double band = 0.2;      ///< Ωg: band edge, rad/sample, in (0, π].
+  double band = 0.2;      ///< Ωg: band edge, rad/sample, in [kMinBand, π].
   double dt = 0.001;      ///< Δ: sample period, s.
 
   /// Throws InputError (fields "half_length", "band", "dt") unless the settings are usable.
