@@ -130,7 +130,8 @@ class PostgresStore final : public Store {
     params.text(id);
     const std::string owned = owner_condition(scope, params);
     // Datasets never change once stored (ids are never reused): the samples of a recent one are
-    // kept in memory, and only its existence (within the scope) is asked again (it may have been deleted since).
+    // kept in memory, and only its existence (within the scope) is asked again (it may have been
+    // deleted since).
     if (auto cached = recent_datasets_.find(id)) {
       if (connection->exec("SELECT 1 FROM datasets WHERE id = $1" + owned, params).rows() == 0) {
         if (!scope) recent_datasets_.erase(id);  // gone for everyone; another owner's is only out of sight
