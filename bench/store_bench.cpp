@@ -79,7 +79,7 @@ int main(int argc, char** argv) {
   for (int t = 0; t < threads; ++t) {
     readers.emplace_back([&, t] {
       for (std::size_t i = static_cast<std::size_t>(t); Clock::now() < read_until; i += static_cast<std::size_t>(threads)) {
-        if (store->find_job(ids[i % ids.size()])) ++reads;
+        if (store->find_job(manipid::api::all_owners, ids[i % ids.size()])) ++reads;
       }
     });
   }

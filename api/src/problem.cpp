@@ -39,6 +39,7 @@ ProblemEntry entry_of(ProblemKind kind) {
     case ProblemKind::job_failed: return {500, "JOB_FAILED", "The job could not be completed"};
     case ProblemKind::not_computable: return {422, "NOT_COMPUTABLE", "The identification has no finite cost to minimise"};
     case ProblemKind::worker_lost: return {500, "WORKER_LOST", "The job's worker stopped before it finished, too often"};
+    case ProblemKind::forbidden: return {403, "FORBIDDEN", "The token may not do this"};
     case ProblemKind::internal: break;
   }
   // Also the answer for a value outside the enum: never a crash while reporting an error.

@@ -29,6 +29,7 @@ nlohmann::ordered_json dataset_to_json(const DatasetInfo& dataset) {
   return {{"id", dataset.id},
           {"name", dataset.name},
           {"created_at", dataset.created_at},
+          {"owner", text_or_null(dataset.owner)},
           {"joints", dataset.joints},
           {"samples", dataset.samples},
           {"dt", dataset.dt},
@@ -49,6 +50,7 @@ Json job_head(const JobInfo& job) {
           {"kind", to_string(job.kind)},
           {"state", to_string(job.state)},
           {"created_at", job.created_at},
+          {"owner", text_or_null(job.owner)},
           {"started_at", text_or_null(job.started_at)},
           {"finished_at", text_or_null(job.finished_at)},
           {"attempts", job.attempts},
@@ -106,7 +108,8 @@ std::string job_to_text(const JobInfo& job, JobText form) {
 
 nlohmann::ordered_json robot_to_json(const RobotInfo& robot) {
   const std::string self = "/v1/robots/" + robot.id;
-  Json json = {{"id", robot.id}, {"name", robot.name}, {"created_at", robot.created_at}};
+  Json json = {
+      {"id", robot.id}, {"name", robot.name}, {"created_at", robot.created_at}, {"owner", text_or_null(robot.owner)}};
   // The description made at upload (robot_json.h: robot_description), stored as JSON text.
   const Json description = embedded(robot.summary);
   if (description.is_object()) {

@@ -1,10 +1,11 @@
-// serve.cpp — `manipid serve`: the HTTP/JSON identification service. Owns the process: loads
-// the HTTP module (manipid/api/http_endpoint.h), opens the store (recovering jobs a dead process
-// left behind), starts the worker pool and the HTTP server, prints "listening on
-// http://HOST:PORT" as its first line on stdout (so scripts and tests can start it on --port 0),
-// and on SIGINT/SIGTERM stops accepting, lets running jobs reach a safe point (they are queued
-// again) and exits 0.
+// serve.cpp — `manipid serve`: the HTTP/JSON identification service. Owns the process: reads its
+// named tokens (--token-file, cli/token_file.h), loads the HTTP module (manipid/api/http_endpoint.h),
+// opens the store (recovering jobs a dead process left behind), starts the worker pool and the
+// HTTP server, prints "listening on http://HOST:PORT" as its first line on stdout (so scripts and
+// tests can start it on --port 0), and on SIGINT/SIGTERM stops accepting, lets running jobs reach
+// a safe point (they are queued again) and exits 0.
 #include "cli/serve.h"
+#include "cli/token_file.h"
 #include "jobs/job_service.h"
 #include "store/store.h"
 #include "jobs/worker_pool.h"
@@ -24,6 +25,7 @@
 #include <memory>
 #include <mutex>
 #include <thread>
+#include <vector>
 
 namespace manipid::server::cli {
 
@@ -50,8 +52,16 @@ CLI::App* add_serve_command(CLI::App& app, ServeOptions& options) {
                       "Memory the request bodies being handled at once may take, 3 bytes per body byte; "
                       "a body beyond it gets 503 and Retry-After (at least 3 x --max-body)")
       ->capture_default_str();
-  command->add_option("--token", options.token, "Bearer token every /v1 request must carry (or MANIPID_TOKEN)")
+  command->add_option("--token", options.token,
+                      "Bearer token every /v1 request and /metrics must carry (or MANIPID_TOKEN): one token that sees "
+                      "and acts on everything")
       ->envname("MANIPID_TOKEN");
+  command->add_option("--token-file", options.token_file,
+                      "Named tokens (or MANIPID_TOKEN_FILE), one a line: NAME TOKEN, NAME:TOKEN, or admin NAME TOKEN; "
+                      "'#' comments. Each dataset, robot and job is its creator's name's; a token sees its own only "
+                      "(others' answer 404, as missing), an admin token everyone's and /metrics. Tokens at least 16 "
+                      "characters; the file not readable by other users (chmod 600). Not with --token")
+      ->envname("MANIPID_TOKEN_FILE");
   command->add_option("--http-threads", options.http_threads,
                       "Requests served at once (connections waiting for a request, and bodies being received, "
                       "hold no thread of these)")
@@ -79,6 +89,13 @@ CLI::App* add_serve_command(CLI::App& app, ServeOptions& options) {
 }
 
 int run_serve(const ServeOptions& options) {
+  if (!options.token.empty() && !options.token_file.empty()) {
+    throw UsageError("--token (MANIPID_TOKEN) and --token-file (MANIPID_TOKEN_FILE) both given: use one; an admin line "
+                     "in the file (admin NAME TOKEN) is a token that sees everything");
+  }
+  // Read and checked first: a server whose tokens are wrong touches nothing.
+  const std::vector<api::NamedToken> tokens =
+      options.token_file.empty() ? std::vector<api::NamedToken>{} : read_token_file(options.token_file);
   const std::size_t max_body = parse_size(options.max_body, "--max-body");
   const std::size_t memory_budget = parse_size(options.memory_budget, "--memory-budget");
   if (memory_budget / api::memory_per_body_byte < max_body) {
@@ -109,6 +126,7 @@ int run_serve(const ServeOptions& options) {
   http.routes.max_body = max_body;
   http.routes.memory_budget = memory_budget;
   http.routes.token = options.token;
+  http.routes.tokens = tokens;
   http.routes.log = log_line;
   http.routes.max_waiters = std::max(options.http_threads / 2, 1);
   const std::unique_ptr<api::HttpEndpoint> endpoint = api::open_http_endpoint(service, http);
@@ -121,13 +139,16 @@ int run_serve(const ServeOptions& options) {
   }
 
   pool.start();
+  const auto admins = std::count_if(tokens.begin(), tokens.end(), [](const api::NamedToken& named) { return named.admin; });
   std::printf("listening on http://%s:%d\n", options.host.c_str(), port);
   std::fflush(stdout);
   log_line("manipid " MANIPID_VERSION ": listening on http://" + options.host + ":" + std::to_string(port) + ", " +
            (pool_options.workers == 0 ? std::string("no job threads (API only)")
                                       : std::to_string(pool_options.workers) + " worker(s)") +
            ", database " + store::display_name(options.jobs.database) +
-           (options.token.empty() ? "" : ", bearer token required"));
+           (options.token.empty() ? "" : ", bearer token required") +
+           (tokens.empty() ? "" : ", " + std::to_string(tokens.size()) + " named tokens required (" + std::to_string(admins) +
+                                      " admin)"));
 
   std::atomic<bool> listen_returned{false};
   std::thread signal_thread([&] {

@@ -21,6 +21,7 @@ struct ServeOptions {
   std::string max_body = "64MiB";
   std::string memory_budget = "1GiB";  ///< request bodies at once, 3 bytes per body byte (api::RouteOptions)
   std::string token;
+  std::string token_file;     ///< --token-file: named tokens, each owner seeing its own (cli/token_file.h)
   int http_threads = 32;
   int max_connections_per_client = 64;  ///< connections waiting for a request head, per client address
   int max_connections = 4096;           ///< the same in all (at most half the open-file limit)

@@ -131,7 +131,7 @@ api::DatasetInfo store_simulated(store::Store& store, const api::JobInfo& job, a
   const Trajectory data = api::run_simulation(spec);
   const api::IdempotencyKey key{"job-output:" + job.id, job.id};
   const std::string name = spec.name.empty() ? "simulation " + spec.preset.name + " (" + job.id + ")" : spec.name;
-  return store.insert_dataset(name, data, job.id, key).dataset;
+  return store.insert_dataset(job.owner, name, data, job.id, key).dataset;
 }
 
 JobOutcome run_simulation_job(const api::JobInfo& job, store::Store& store, const LiveJob& live, const JobClock& clock) {
@@ -213,9 +213,9 @@ class HistoryWriter {
 /// The simulation that made a stored dataset (a simulation job's, or an identification's that
 /// simulated first), if one did.
 std::optional<api::SimulationSpec> simulation_behind(store::Store& store, const std::string& dataset_id) {
-  const auto dataset = store.find_dataset(dataset_id);
+  const auto dataset = store.find_dataset(api::all_owners, dataset_id);
   if (!dataset || dataset->source_job.empty()) return std::nullopt;
-  const auto source = store.find_job(dataset->source_job);
+  const auto source = store.find_job(api::all_owners, dataset->source_job);
   if (!source) return std::nullopt;
   try {
     if (source->kind == api::JobKind::simulation) return api::simulation_from_json(nlohmann::json::parse(source->request));
@@ -243,7 +243,7 @@ JobOutcome run_identification_job(const api::JobInfo& job, store::Store& store, 
   if (spec.simulation) {
     dataset_id = store_simulated(store, job, *spec.simulation, live, clock).id;
   }
-  data = store.load_dataset(dataset_id);
+  data = store.load_dataset(api::all_owners, dataset_id);
   if (!data) {
     JobOutcome outcome = failed(api::problem_to_json({api::ProblemKind::not_found,
                                                       "dataset " + dataset_id + " was deleted before the job ran",
@@ -296,8 +296,8 @@ JobOutcome run_robot_identification_job(const api::JobInfo& job, store::Store& s
     outcome.dataset_id = spec.dataset_id;
     return outcome;
   };
-  const auto robot = store.find_robot(spec.robot_id);
-  const auto urdf = store.load_robot_urdf(spec.robot_id);
+  const auto robot = store.find_robot(api::all_owners, spec.robot_id);
+  const auto urdf = store.load_robot_urdf(api::all_owners, spec.robot_id);
   if (!robot || !urdf) return fail_missing("robot " + spec.robot_id, "robot_id");
   const std::shared_ptr<const api::ParsedRobot> stored = api::parsed_robot({robot->name, *urdf, robot->base, robot->tip});
   const api::ParsedRobot& parsed = *stored;
@@ -305,7 +305,7 @@ JobOutcome run_robot_identification_job(const api::JobInfo& job, store::Store& s
       -> std::optional<JobOutcome> {
     for (std::size_t i = 0; i < ids.size(); ++i) {
       const std::string where = ids.size() > 1 ? field + "s[" + std::to_string(i) + "]" : field;
-      auto data = store.load_dataset(ids[i]);
+      auto data = store.load_dataset(api::all_owners, ids[i]);
       if (!data) return fail_missing("dataset " + ids[i], where);
       api::check_robot_data(parsed.model.joint_count(), parsed.model.name, data->joint_count(), data->has_torque(), where);
       runs.push_back(std::move(*data));
@@ -357,8 +357,8 @@ constexpr long kExcitationTorquePoints = 1000;
 JobOutcome run_excitation_job(const api::JobInfo& job, store::Store& store, LiveJob& live, const RunnerOptions& options) {
   const auto started = Clock::now();
   api::ExcitationSpec spec = api::excitation_from_json(nlohmann::json::parse(job.request));
-  const auto robot = store.find_robot(spec.robot_id);
-  const auto urdf = store.load_robot_urdf(spec.robot_id);
+  const auto robot = store.find_robot(api::all_owners, spec.robot_id);
+  const auto urdf = store.load_robot_urdf(api::all_owners, spec.robot_id);
   if (!robot || !urdf) {
     return failed(api::problem_to_json({api::ProblemKind::not_found, "robot " + spec.robot_id + " was deleted before the job ran",
                                         "robot_id"})
@@ -403,7 +403,8 @@ JobOutcome run_excitation_job(const api::JobInfo& job, store::Store& store, Live
   }
   const std::string name = spec.name.empty() ? "excitation " + robot->name + " (" + job.id + ")" : spec.name;
   const api::IdempotencyKey key{"job-output:" + job.id, job.id};
-  const api::DatasetInfo dataset = store.insert_dataset(name, robot::to_trajectory(sampled), job.id, key).dataset;
+  const api::DatasetInfo dataset =
+      store.insert_dataset(job.owner, name, robot::to_trajectory(sampled), job.id, key).dataset;
   outcome.state = api::JobState::succeeded;
   outcome.dataset_id = dataset.id;
   outcome.result = nlohmann::ordered_json{
@@ -423,11 +424,12 @@ JobOutcome run_excitation_job(const api::JobInfo& job, store::Store& store, Live
 
 }  // namespace
 
-api::JobShape job_shape(api::JobKind kind, const std::string& request_json, store::Store& store) {
+api::JobShape job_shape(api::JobKind kind, const std::string& request_json, store::Store& store,
+                        const api::OwnerScope& scope) {
   return api::job_shape(
-      kind, nlohmann::json::parse(request_json), [&store](const std::string& id) { return store.find_dataset(id); },
-      [&store](const std::string& id) -> std::optional<int> {
-        if (const auto robot = store.find_robot(id)) return robot->joints;
+      kind, nlohmann::json::parse(request_json), [&](const std::string& id) { return store.find_dataset(scope, id); },
+      [&](const std::string& id) -> std::optional<int> {
+        if (const auto robot = store.find_robot(scope, id)) return robot->joints;
         return std::nullopt;
       });
 }

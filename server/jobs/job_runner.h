@@ -53,8 +53,10 @@ JobOutcome run_job(const api::JobInfo& job, store::Store& store, LiveJob& live, 
 /// (nothing more is written); a cancel asked for through any process stops it as cancelled.
 void heed(store::LeaseStatus status, LiveJob& live);
 
-/// What a job's work is made of (api::job_shape over this store's datasets and robots): the
-/// measure its memory is estimated by. Throws what the request parsers throw.
-api::JobShape job_shape(api::JobKind kind, const std::string& request_json, store::Store& store);
+/// What a job's work is made of (api::job_shape over this store's datasets and robots within
+/// `scope`: a submission's caller's, or all_owners for a worker): the measure its memory is
+/// estimated by. Throws what the request parsers throw.
+api::JobShape job_shape(api::JobKind kind, const std::string& request_json, store::Store& store,
+                        const api::OwnerScope& scope);
 
 }  // namespace manipid::server::jobs

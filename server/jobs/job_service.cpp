@@ -63,51 +63,64 @@ auto page_of(Read&& read) {
 
 }  // namespace
 
-api::DatasetCreated JobService::create_dataset(const api::DatasetUpload& upload,
+api::DatasetCreated JobService::create_dataset(const api::Caller& caller, const api::DatasetUpload& upload,
                                                const std::optional<api::IdempotencyKey>& key) {
   if (!accepting()) throw api::ApiError(api::ProblemKind::shutting_down, "the server is shutting down");
-  const store::DatasetOutcome outcome = stored([&] { return store_.insert_dataset(upload.name, upload.trajectory, "", key); });
+  const store::DatasetOutcome outcome =
+      stored([&] { return store_.insert_dataset(caller.owner, upload.name, upload.trajectory, "", key); });
   if (outcome.status == store::SubmitStatus::key_reused) key_reused();
   return {outcome.dataset, outcome.status == store::SubmitStatus::replayed};
 }
 
-std::optional<api::DatasetInfo> JobService::dataset(const std::string& id) { return reached([&] { return store_.find_dataset(id); }); }
-std::optional<Trajectory> JobService::dataset_data(const std::string& id) { return reached([&] { return store_.load_dataset(id); }); }
-api::Page<api::DatasetInfo> JobService::datasets(const api::PageRequest& page) {
-  return page_of([&] { return store_.list_datasets(page); });
+std::optional<api::DatasetInfo> JobService::dataset(const api::Caller& caller, const std::string& id) {
+  return reached([&] { return store_.find_dataset(caller.scope(), id); });
+}
+std::optional<Trajectory> JobService::dataset_data(const api::Caller& caller, const std::string& id) {
+  return reached([&] { return store_.load_dataset(caller.scope(), id); });
+}
+api::Page<api::DatasetInfo> JobService::datasets(const api::Caller& caller, const api::PageRequest& page) {
+  return page_of([&] { return store_.list_datasets(caller.scope(), page); });
 }
 
-api::DeleteOutcome JobService::delete_dataset(const std::string& id) {
-  return outcome_of(stored([&] { return store_.delete_dataset(id); }));
+api::DeleteOutcome JobService::delete_dataset(const api::Caller& caller, const std::string& id) {
+  return outcome_of(stored([&] { return store_.delete_dataset(caller.scope(), id); }));
 }
 
-api::RobotCreated JobService::create_robot(const api::RobotUpload& upload, int joints, const std::string& description,
-                                           const std::optional<api::IdempotencyKey>& key) {
+api::RobotCreated JobService::create_robot(const api::Caller& caller, const api::RobotUpload& upload, int joints,
+                                           const std::string& description, const std::optional<api::IdempotencyKey>& key) {
   if (!accepting()) throw api::ApiError(api::ProblemKind::shutting_down, "the server is shutting down");
-  const store::RobotOutcome outcome = stored(
-      [&] { return store_.insert_robot({upload.name, upload.urdf, upload.base, upload.tip, joints, description}, key); });
+  const store::RobotOutcome outcome = stored([&] {
+    return store_.insert_robot({upload.name, upload.urdf, upload.base, upload.tip, joints, description, caller.owner}, key);
+  });
   if (outcome.status == store::SubmitStatus::key_reused) key_reused();
   return {outcome.robot, outcome.status == store::SubmitStatus::replayed};
 }
 
-std::optional<api::RobotInfo> JobService::robot(const std::string& id) { return reached([&] { return store_.find_robot(id); }); }
-std::optional<std::string> JobService::robot_urdf(const std::string& id) { return reached([&] { return store_.load_robot_urdf(id); }); }
-api::Page<api::RobotInfo> JobService::robots(const api::PageRequest& page) {
-  return page_of([&] { return store_.list_robots(page); });
+std::optional<api::RobotInfo> JobService::robot(const api::Caller& caller, const std::string& id) {
+  return reached([&] { return store_.find_robot(caller.scope(), id); });
 }
-api::DeleteOutcome JobService::delete_robot(const std::string& id) {
-  return outcome_of(stored([&] { return store_.delete_robot(id); }));
+std::optional<std::string> JobService::robot_urdf(const api::Caller& caller, const std::string& id) {
+  return reached([&] { return store_.load_robot_urdf(caller.scope(), id); });
+}
+api::Page<api::RobotInfo> JobService::robots(const api::Caller& caller, const api::PageRequest& page) {
+  return page_of([&] { return store_.list_robots(caller.scope(), page); });
+}
+api::DeleteOutcome JobService::delete_robot(const api::Caller& caller, const std::string& id) {
+  return outcome_of(stored([&] { return store_.delete_robot(caller.scope(), id); }));
 }
 
-api::SubmitResult JobService::submit(const api::JobSubmission& submission, const std::optional<api::IdempotencyKey>& key) {
+api::SubmitResult JobService::submit(const api::Caller& caller, const api::JobSubmission& submission,
+                                     const std::optional<api::IdempotencyKey>& key) {
   if (!accepting()) throw api::ApiError(api::ProblemKind::shutting_down, "the server is shutting down");
   const api::JobKind kind = submission.kind;
-  // A job that could never fit in --job-memory is refused now, naming what sets its size.
-  api::check_job_memory(job_shape(kind, submission.request_json, store_), pool_.job_memory_budget());
+  // A job that could never fit in --job-memory is refused now, naming what sets its size. The
+  // routes checked that the caller sees the datasets and robot it names; the sizes are read
+  // within the same scope, so nothing of another owner's is measured either.
+  api::check_job_memory(job_shape(kind, submission.request_json, store_, caller.scope()), pool_.job_memory_budget());
   const store::SubmitOutcome outcome = stored([&] {
-    return store_.submit_job(
-        {kind, submission.request_json, submission.dataset_id, submission.robot_id, submission.validation_dataset_id}, key,
-        options_.queue_limit);
+    return store_.submit_job({kind, submission.request_json, submission.dataset_id, submission.robot_id,
+                              submission.validation_dataset_id, caller.owner},
+                             key, options_.queue_limit);
   });
   switch (outcome.status) {
     case store::SubmitStatus::key_reused: key_reused();
@@ -115,7 +128,10 @@ api::SubmitResult JobService::submit(const api::JobSubmission& submission, const
       throw api::ApiError(api::ProblemKind::queue_full, "the job queue is full (" + std::to_string(options_.queue_limit) +
                                                             " queued jobs); retry later");
     case store::SubmitStatus::created:
-      if (options_.log) options_.log("job " + outcome.job.id + " " + api::to_string(kind) + ": queued");
+      if (options_.log) {
+        options_.log("job " + outcome.job.id + " " + api::to_string(kind) + ": queued" +
+                     (caller.owner.empty() ? "" : " for " + caller.owner));
+      }
       pool_.notify_submitted();
       break;
     case store::SubmitStatus::replayed: break;
@@ -132,8 +148,8 @@ api::JobInfo JobService::with_live_progress(api::JobInfo job) const {
   return job;
 }
 
-std::optional<api::JobInfo> JobService::job(const std::string& id) {
-  auto found = reached([&] { return store_.find_job(id); });
+std::optional<api::JobInfo> JobService::job(const api::Caller& caller, const std::string& id) {
+  auto found = reached([&] { return store_.find_job(caller.scope(), id); });
   if (!found) return std::nullopt;
   return with_live_progress(std::move(*found));
 }
@@ -142,12 +158,12 @@ namespace {
 constexpr std::chrono::seconds kWaitPoll{1};
 }  // namespace
 
-std::optional<api::JobInfo> JobService::wait(const std::string& id, double seconds) {
+std::optional<api::JobInfo> JobService::wait(const api::Caller& caller, const std::string& id, double seconds) {
   const auto deadline = std::chrono::steady_clock::now() + std::chrono::duration_cast<std::chrono::steady_clock::duration>(
                                                                 std::chrono::duration<double>(std::max(0.0, seconds)));
   for (;;) {
     const unsigned long generation = pool_.generation();
-    auto found = job(id);
+    auto found = job(caller, id);
     if (!found || api::is_terminal(found->state) || std::chrono::steady_clock::now() >= deadline || !accepting()) {
       return found;
     }
@@ -157,22 +173,25 @@ std::optional<api::JobInfo> JobService::wait(const std::string& id, double secon
   }
 }
 
-api::Page<api::JobInfo> JobService::jobs(const api::JobFilter& filter, const api::PageRequest& page) {
-  api::Page<api::JobInfo> result = page_of([&] { return store_.list_jobs(filter, page); });
+api::Page<api::JobInfo> JobService::jobs(const api::Caller& caller, const api::JobFilter& filter,
+                                         const api::PageRequest& page) {
+  api::Page<api::JobInfo> result = page_of([&] { return store_.list_jobs(caller.scope(), filter, page); });
   for (api::JobInfo& job : result.items) job = with_live_progress(std::move(job));
   return result;
 }
 
-std::optional<api::Page<api::HistoryEntry>> JobService::history(const std::string& id, const api::PageRequest& page) {
-  return page_of([&] { return store_.history(id, page); });
+std::optional<api::Page<api::HistoryEntry>> JobService::history(const api::Caller& caller, const std::string& id,
+                                                                const api::PageRequest& page) {
+  return page_of([&] { return store_.history(caller.scope(), id, page); });
 }
 
-std::optional<api::HistoryOverview> JobService::history_overview(const std::string& id, long max_points) {
-  return reached([&] { return store_.history_overview(id, max_points); });
+std::optional<api::HistoryOverview> JobService::history_overview(const api::Caller& caller, const std::string& id,
+                                                                 long max_points) {
+  return reached([&] { return store_.history_overview(caller.scope(), id, max_points); });
 }
 
-std::optional<api::JobInfo> JobService::cancel(const std::string& id) {
-  switch (stored([&] { return store_.cancel_job(id); })) {
+std::optional<api::JobInfo> JobService::cancel(const api::Caller& caller, const std::string& id) {
+  switch (stored([&] { return store_.cancel_job(caller.scope(), id); })) {
     case store::CancelOutcome::not_found: return std::nullopt;
     case store::CancelOutcome::cancelled_now:
       if (options_.log) options_.log("job " + id + ": cancelled (was queued)");
@@ -184,11 +203,11 @@ std::optional<api::JobInfo> JobService::cancel(const std::string& id) {
       break;
     case store::CancelOutcome::already_finished: break;
   }
-  return job(id);
+  return job(caller, id);
 }
 
-api::DeleteOutcome JobService::delete_job(const std::string& id) {
-  return outcome_of(stored([&] { return store_.delete_job(id); }));
+api::DeleteOutcome JobService::delete_job(const api::Caller& caller, const std::string& id) {
+  return outcome_of(stored([&] { return store_.delete_job(caller.scope(), id); }));
 }
 
 std::optional<std::string> JobService::degraded() const {

@@ -1,6 +1,7 @@
 // job_service.h — the Service the HTTP routes call (api/service.h), made of the store and the
-// worker pool: submissions go to the store and wake a worker; reads merge the store's row
-// with the pool's live progress; long-polls sleep on the pool's change signal.
+// worker pool: submissions go to the store as the caller's and wake a worker; reads (within the
+// caller's scope) merge the store's row with the pool's live progress; long-polls sleep on the
+// pool's change signal.
 #pragma once
 
 #include "manipid/api/service.h"
@@ -23,28 +24,32 @@ class JobService : public api::Service {
  public:
   JobService(store::Store& store, WorkerPool& pool, JobServiceOptions options);
 
-  api::DatasetCreated create_dataset(const api::DatasetUpload& upload,
+  api::DatasetCreated create_dataset(const api::Caller& caller, const api::DatasetUpload& upload,
                                      const std::optional<api::IdempotencyKey>& key) override;
-  std::optional<api::DatasetInfo> dataset(const std::string& id) override;
-  std::optional<Trajectory> dataset_data(const std::string& id) override;
-  api::Page<api::DatasetInfo> datasets(const api::PageRequest& page) override;
-  api::DeleteOutcome delete_dataset(const std::string& id) override;
+  std::optional<api::DatasetInfo> dataset(const api::Caller& caller, const std::string& id) override;
+  std::optional<Trajectory> dataset_data(const api::Caller& caller, const std::string& id) override;
+  api::Page<api::DatasetInfo> datasets(const api::Caller& caller, const api::PageRequest& page) override;
+  api::DeleteOutcome delete_dataset(const api::Caller& caller, const std::string& id) override;
 
-  api::RobotCreated create_robot(const api::RobotUpload& upload, int joints, const std::string& description,
-                                 const std::optional<api::IdempotencyKey>& key) override;
-  std::optional<api::RobotInfo> robot(const std::string& id) override;
-  std::optional<std::string> robot_urdf(const std::string& id) override;
-  api::Page<api::RobotInfo> robots(const api::PageRequest& page) override;
-  api::DeleteOutcome delete_robot(const std::string& id) override;
+  api::RobotCreated create_robot(const api::Caller& caller, const api::RobotUpload& upload, int joints,
+                                 const std::string& description, const std::optional<api::IdempotencyKey>& key) override;
+  std::optional<api::RobotInfo> robot(const api::Caller& caller, const std::string& id) override;
+  std::optional<std::string> robot_urdf(const api::Caller& caller, const std::string& id) override;
+  api::Page<api::RobotInfo> robots(const api::Caller& caller, const api::PageRequest& page) override;
+  api::DeleteOutcome delete_robot(const api::Caller& caller, const std::string& id) override;
 
-  api::SubmitResult submit(const api::JobSubmission& submission, const std::optional<api::IdempotencyKey>& key) override;
-  std::optional<api::JobInfo> job(const std::string& id) override;
-  std::optional<api::JobInfo> wait(const std::string& id, double seconds) override;
-  api::Page<api::JobInfo> jobs(const api::JobFilter& filter, const api::PageRequest& page) override;
-  std::optional<api::Page<api::HistoryEntry>> history(const std::string& id, const api::PageRequest& page) override;
-  std::optional<api::HistoryOverview> history_overview(const std::string& id, long max_points) override;
-  std::optional<api::JobInfo> cancel(const std::string& id) override;
-  api::DeleteOutcome delete_job(const std::string& id) override;
+  api::SubmitResult submit(const api::Caller& caller, const api::JobSubmission& submission,
+                           const std::optional<api::IdempotencyKey>& key) override;
+  std::optional<api::JobInfo> job(const api::Caller& caller, const std::string& id) override;
+  std::optional<api::JobInfo> wait(const api::Caller& caller, const std::string& id, double seconds) override;
+  api::Page<api::JobInfo> jobs(const api::Caller& caller, const api::JobFilter& filter,
+                               const api::PageRequest& page) override;
+  std::optional<api::Page<api::HistoryEntry>> history(const api::Caller& caller, const std::string& id,
+                                                      const api::PageRequest& page) override;
+  std::optional<api::HistoryOverview> history_overview(const api::Caller& caller, const std::string& id,
+                                                       long max_points) override;
+  std::optional<api::JobInfo> cancel(const api::Caller& caller, const std::string& id) override;
+  api::DeleteOutcome delete_job(const api::Caller& caller, const std::string& id) override;
 
   std::string metrics() override;
   bool accepting() const override { return accepting_.load(); }

@@ -283,7 +283,7 @@ void WorkerPool::work() {
 JobOutcome WorkerPool::run_within_memory(const api::JobInfo& job, LiveJob& live) {
   std::size_t need = 0;
   try {
-    need = api::job_memory_bytes(job_shape(job.kind, job.request, store_));
+    need = api::job_memory_bytes(job_shape(job.kind, job.request, store_, api::all_owners));
   } catch (const std::exception&) {
     // A request that no longer parses: run_job fails it with the parser's reason.
   }

@@ -5,9 +5,11 @@
 
 namespace manipid::server::store {
 
-api::DatasetInfo describe_dataset(const std::string& name, const Trajectory& data, const std::string& source_job) {
+api::DatasetInfo describe_dataset(const std::string& owner, const std::string& name, const Trajectory& data,
+                                  const std::string& source_job) {
   check_dataset_shape(data);
   api::DatasetInfo dataset;
+  dataset.owner = owner;
   dataset.name = name;
   dataset.source_job = source_job;
   dataset.joints = data.joint_count();
@@ -28,6 +30,7 @@ api::RobotInfo describe_robot(const NewRobot& robot) {
   described.tip = robot.tip;
   described.joints = robot.joints;
   described.summary = robot.summary;
+  described.owner = robot.owner;
   return described;
 }
 
@@ -39,6 +42,7 @@ api::JobInfo describe_job(const NewJob& job) {
   described.dataset_id = job.dataset_id;
   described.robot_id = job.robot_id;
   described.validation_dataset_id = job.validation_dataset_id;
+  described.owner = job.owner;
   return described;
 }
 

@@ -11,10 +11,11 @@
 
 namespace manipid::server::store {
 
-/// A dataset of `data`: its size, sample period (uniform: t[1] − t[0]; jittery: the median step)
+/// `owner`'s dataset of `data`: its size, sample period (uniform: t[1] − t[0]; jittery: the median step)
 /// and the blocks it has. std::invalid_argument when the blocks' shapes are wrong
 /// (check_dataset_shape, store/encoding.h).
-api::DatasetInfo describe_dataset(const std::string& name, const Trajectory& data, const std::string& source_job);
+api::DatasetInfo describe_dataset(const std::string& owner, const std::string& name, const Trajectory& data,
+                                  const std::string& source_job);
 /// A robot as uploaded: name, base, tip, joints and summary.
 api::RobotInfo describe_robot(const NewRobot& robot);
 /// A queued job of `job`.

@@ -94,8 +94,13 @@ std::int64_t decode_page_token(std::string_view token, std::string_view tag, std
   return static_cast<std::int64_t>(position);
 }
 
-std::string job_list_context(const api::JobFilter& filter) {
-  return std::string("state=") + (filter.state ? state_text(*filter.state) : "") +
+std::string list_context(const api::OwnerScope& scope) {
+  // Every owner's lists keep the context they had before owners existed (their tokens stay good).
+  return scope ? "owner=" + *scope + ";" : "";
+}
+
+std::string job_list_context(const api::OwnerScope& scope, const api::JobFilter& filter) {
+  return list_context(scope) + "state=" + (filter.state ? state_text(*filter.state) : "") +
          ";kind=" + (filter.kind ? kind_text(*filter.kind) : "") + ";robot=" + filter.robot_id;
 }
 

@@ -28,9 +28,12 @@ std::string encode_page_token(std::string_view tag, std::int64_t position, std::
 /// The position; throws PageRequestError (field "page_token") when malformed.
 std::int64_t decode_page_token(std::string_view token, std::string_view tag, std::string_view context);
 
-/// What a job list's page tokens are bound to: its filter (a token from another filter would skip
-/// or repeat jobs).
-std::string job_list_context(const api::JobFilter& filter);
+/// What a dataset or robot list's page tokens are bound to: its owner scope (a token is refused in
+/// another owner's list).
+std::string list_context(const api::OwnerScope& scope);
+/// What a job list's page tokens are bound to: its scope and filter (a token from another filter
+/// would skip or repeat jobs).
+std::string job_list_context(const api::OwnerScope& scope, const api::JobFilter& filter);
 
 /// Page sizes: 0 → 50, above 1000 → 1000; negative → PageRequestError (field "page_size").
 int effective_page_size(int requested);

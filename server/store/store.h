@@ -14,6 +14,11 @@
 //    job recovered by another process) learns so from its next write and stops; its writes never
 //    show. Times of leases are the database's clock, never a worker's.
 //  - Ids are random ("ds_"/"job_" + 16 hex digits), never reused.
+//  - Every dataset, robot and job has an owner (the name of the token that made it; "" without
+//    named tokens). Reads, lists, cancels and deletes take an api::OwnerScope: a resource outside
+//    it is answered exactly as a missing one (not_found, nullopt, absent from lists), filtered in
+//    the SQL. An Idempotency-Key belongs to the owner that sent it: another owner's same key is
+//    another key. (A Lease's `owner` below is the worker process that holds a running job, not this.)
 #pragma once
 
 #include "manipid/api/records.h"
@@ -73,6 +78,7 @@ struct NewJob {
   std::string dataset_id;             ///< input dataset, may be empty
   std::string robot_id;               ///< the URDF robot it works on, may be empty
   std::string validation_dataset_id;  ///< a second dataset it reads, may be empty
+  std::string owner;                  ///< who submitted it (api::Caller::owner); its output datasets are theirs too
 };
 
 enum class SubmitStatus {
@@ -98,6 +104,7 @@ struct NewRobot {
   std::string base, tip;
   int joints = 0;
   std::string summary;  ///< the robot resource's description, JSON text
+  std::string owner;    ///< who uploaded it (api::Caller::owner)
 };
 
 struct RobotOutcome {
@@ -132,7 +139,8 @@ struct JobEnd {
 
 enum class CancelOutcome { not_found, cancelled_now, requested, already_finished };
 
-/// Who runs a claimed job: its owner ("HOST:PID:THREAD") and the attempt the claim counted.
+/// Who runs a claimed job: its owner, the worker ("HOST:PID:THREAD"; not the job's api owner), and
+/// the attempt the claim counted.
 struct Lease {
   std::string job_id;
   std::string owner;
@@ -181,31 +189,38 @@ class Store {
   }
 
   // ---- datasets ----
-  /// Stores the samples (as binary blobs, not text). `key`, when given, makes it idempotent.
-  virtual DatasetOutcome insert_dataset(const std::string& name, const Trajectory& data, const std::string& source_job,
-                                        const std::optional<api::IdempotencyKey>& key) = 0;
-  virtual std::optional<api::DatasetInfo> find_dataset(const std::string& id) = 0;
-  virtual std::optional<Trajectory> load_dataset(const std::string& id) = 0;
-  virtual api::Page<api::DatasetInfo> list_datasets(const api::PageRequest& page) = 0;  ///< newest first
+  /// Stores the samples (as binary blobs, not text) as `owner`'s. `key`, when given, makes it
+  /// idempotent among that owner's datasets.
+  virtual DatasetOutcome insert_dataset(const std::string& owner, const std::string& name, const Trajectory& data,
+                                        const std::string& source_job, const std::optional<api::IdempotencyKey>& key) = 0;
+  virtual std::optional<api::DatasetInfo> find_dataset(const api::OwnerScope& scope, const std::string& id) = 0;
+  virtual std::optional<Trajectory> load_dataset(const api::OwnerScope& scope, const std::string& id) = 0;
+  /// Newest first; a page token holds for the scope it was issued in only.
+  virtual api::Page<api::DatasetInfo> list_datasets(const api::OwnerScope& scope, const api::PageRequest& page) = 0;
   /// Not while a queued or running job will read it (as its data or its validation data).
-  virtual DeleteResult delete_dataset(const std::string& id) = 0;
+  virtual DeleteResult delete_dataset(const api::OwnerScope& scope, const std::string& id) = 0;
 
   // ---- robots ----
-  /// Stores a URDF robot (document and parsed summary). `key`, when given, makes it idempotent.
+  /// Stores a URDF robot (document and parsed summary) as robot.owner's. `key`, when given, makes
+  /// it idempotent among that owner's robots.
   virtual RobotOutcome insert_robot(const NewRobot& robot, const std::optional<api::IdempotencyKey>& key) = 0;
-  virtual std::optional<api::RobotInfo> find_robot(const std::string& id) = 0;
+  virtual std::optional<api::RobotInfo> find_robot(const api::OwnerScope& scope, const std::string& id) = 0;
   /// The URDF document as uploaded.
-  virtual std::optional<std::string> load_robot_urdf(const std::string& id) = 0;
-  virtual api::Page<api::RobotInfo> list_robots(const api::PageRequest& page) = 0;  ///< newest first
+  virtual std::optional<std::string> load_robot_urdf(const api::OwnerScope& scope, const std::string& id) = 0;
+  /// Newest first; a page token holds for the scope it was issued in only.
+  virtual api::Page<api::RobotInfo> list_robots(const api::OwnerScope& scope, const api::PageRequest& page) = 0;
   /// Not while a queued or running job uses it.
-  virtual DeleteResult delete_robot(const std::string& id) = 0;
+  virtual DeleteResult delete_robot(const api::OwnerScope& scope, const std::string& id) = 0;
 
   // ---- jobs ----
-  /// Inserts a queued job unless the key replays or conflicts or the queue is full
-  /// (queue_limit ≤ 0: no limit). The key check, the count and the insert are one transaction.
+  /// Inserts a queued job of job.owner's unless the key (among that owner's) replays or conflicts
+  /// or the queue is full (queue_limit ≤ 0: no limit; every owner's queued jobs count). The key
+  /// check, the count and the insert are one transaction.
   virtual SubmitOutcome submit_job(const NewJob& job, const std::optional<api::IdempotencyKey>& key, int queue_limit) = 0;
-  virtual std::optional<api::JobInfo> find_job(const std::string& id) = 0;
-  virtual api::Page<api::JobInfo> list_jobs(const api::JobFilter& filter, const api::PageRequest& page) = 0;  ///< newest first
+  virtual std::optional<api::JobInfo> find_job(const api::OwnerScope& scope, const std::string& id) = 0;
+  /// Newest first; a page token holds for the filter and the scope it was issued in only.
+  virtual api::Page<api::JobInfo> list_jobs(const api::OwnerScope& scope, const api::JobFilter& filter,
+                                            const api::PageRequest& page) = 0;
   /// The oldest queued job, now running under a lease of `lease` for `owner`: started_at set,
   /// attempts + 1 (the lease's attempt), `worker` the owner. nullopt when none is queued.
   virtual std::optional<api::JobInfo> claim_next_job(const std::string& owner, std::chrono::milliseconds lease) = 0;
@@ -222,14 +237,16 @@ class Store {
   /// the lease still holds; cancelled instead when its cancellation was asked for.
   virtual void requeue_job(const Lease& lease) = 0;
   /// Queued → cancelled at once; running → cancel_requested set; finished → unchanged.
-  virtual CancelOutcome cancel_job(const std::string& id) = 0;
+  virtual CancelOutcome cancel_job(const api::OwnerScope& scope, const std::string& id) = 0;
   /// Finished jobs only (in_use while queued or running); removes its history and estimates too.
-  virtual DeleteResult delete_job(const std::string& id) = 0;
+  virtual DeleteResult delete_job(const api::OwnerScope& scope, const std::string& id) = 0;
   /// History entries in index order; the page token is opaque (keyset on index).
-  virtual std::optional<api::Page<api::HistoryEntry>> history(const std::string& id, const api::PageRequest& page) = 0;
+  virtual std::optional<api::Page<api::HistoryEntry>> history(const api::OwnerScope& scope, const std::string& id,
+                                                              const api::PageRequest& page) = 0;
   /// Every stride-th entry with the first, last and best, stride = ceil(total / max_points),
   /// read in one transaction (a running job's history grows meanwhile).
-  virtual std::optional<api::HistoryOverview> history_overview(const std::string& id, long max_points) = 0;
+  virtual std::optional<api::HistoryOverview> history_overview(const api::OwnerScope& scope, const std::string& id,
+                                                               long max_points) = 0;
 
   // ---- the process's life ----
   /// At start-up: every running job whose worker is `gone` (a process known dead; an empty
@@ -245,6 +262,7 @@ class Store {
   /// paused past it): what every process does every few seconds.
   virtual RecoveryOutcome recover_expired_leases(int max_attempts,
                                                  const std::function<std::string(int losses)>& lost_error) = 0;
+  /// Every owner's jobs (what /metrics shows, to admin tokens only).
   virtual std::map<api::JobState, long> count_jobs_by_state() = 0;
   /// Why writes fail now ("the disk holding the database is full"), or nullopt when the last
   /// write transaction succeeded (or none failed): set by a StorageFull, cleared by the next

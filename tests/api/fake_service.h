@@ -1,6 +1,7 @@
 // fake_service.h — an in-memory api::Service for the route tests (routes_test.cpp): datasets,
-// jobs and histories in maps, every call recorded, and scriptable answers (replays, errors,
-// exceptions, shutting down), so the routes are tested without SQLite or workers.
+// jobs and histories in maps, every call and its caller recorded, scriptable answers (replays,
+// errors, exceptions, shutting down), and the owner rule the real one keeps (another owner's
+// resource is missing), so the routes are tested without SQLite or workers.
 #pragma once
 
 #include "manipid/api/problem.h"
@@ -94,14 +95,21 @@ class FakeService : public Service {
     std::lock_guard lock(mutex_);
     return calls_;
   }
+  /// Whom each call was made for, in order (metrics has none).
+  std::vector<Caller> callers() const {
+    std::lock_guard lock(mutex_);
+    return callers_;
+  }
 
   // ---- Service ----
-  DatasetCreated create_dataset(const DatasetUpload& upload, const std::optional<IdempotencyKey>& key) override {
+  DatasetCreated create_dataset(const Caller& caller, const DatasetUpload& upload,
+                                const std::optional<IdempotencyKey>& key) override {
     std::lock_guard lock(mutex_);
-    enter();
+    enter(caller);
     uploads_.push_back({upload, key});
     DatasetInfo info;
     info.id = "ds_" + std::to_string(uploads_.size());
+    info.owner = caller.owner;
     info.name = upload.name;
     info.created_at = "2026-01-01T00:00:00.000Z";
     info.joints = upload.trajectory.joint_count();
@@ -113,43 +121,49 @@ class FakeService : public Service {
     data_[info.id] = upload.trajectory;
     return {info, script_.replay};
   }
-  std::optional<DatasetInfo> dataset(const std::string& id) override {
+  std::optional<DatasetInfo> dataset(const Caller& caller, const std::string& id) override {
     std::lock_guard lock(mutex_);
-    enter();
+    enter(caller);
     const auto found = datasets_.find(id);
-    return found == datasets_.end() ? std::nullopt : std::optional(found->second);
+    return found == datasets_.end() || !sees(caller, found->second.owner) ? std::nullopt : std::optional(found->second);
   }
-  std::optional<Trajectory> dataset_data(const std::string& id) override {
+  std::optional<Trajectory> dataset_data(const Caller& caller, const std::string& id) override {
     std::lock_guard lock(mutex_);
-    enter();
+    enter(caller);
     const auto found = data_.find(id);
+    const auto info = datasets_.find(id);
+    if (info != datasets_.end() && !sees(caller, info->second.owner)) return std::nullopt;
     return found == data_.end() ? std::nullopt : std::optional(found->second);
   }
-  Page<DatasetInfo> datasets(const PageRequest& page) override {
+  Page<DatasetInfo> datasets(const Caller& caller, const PageRequest& page) override {
     std::lock_guard lock(mutex_);
-    enter();
+    enter(caller);
     page_requests_.push_back(page);
     Page<DatasetInfo> answer;
     for (const auto& [id, info] : datasets_) {
-      if (static_cast<int>(answer.items.size()) < page.page_size) answer.items.push_back(info);
+      if (sees(caller, info.owner) && static_cast<int>(answer.items.size()) < page.page_size) answer.items.push_back(info);
     }
     answer.next_page_token = script_.next_page_token;
     return answer;
   }
-  DeleteOutcome delete_dataset(const std::string& id) override {
+  DeleteOutcome delete_dataset(const Caller& caller, const std::string& id) override {
     std::lock_guard lock(mutex_);
-    enter();
+    enter(caller);
     if (script_.delete_outcome) return *script_.delete_outcome;
+    if (const auto found = datasets_.find(id); found != datasets_.end() && !sees(caller, found->second.owner)) {
+      return DeleteOutcome::not_found;
+    }
     return datasets_.erase(id) + data_.erase(id) > 0 ? DeleteOutcome::deleted : DeleteOutcome::not_found;
   }
 
-  RobotCreated create_robot(const RobotUpload& upload, int joints, const std::string& description,
+  RobotCreated create_robot(const Caller& caller, const RobotUpload& upload, int joints, const std::string& description,
                             const std::optional<IdempotencyKey>& key) override {
     std::lock_guard lock(mutex_);
-    enter();
+    enter(caller);
     if (script_.submit_error) throw ApiError(*script_.submit_error, "scripted refusal");
     RobotInfo robot;
     robot.id = "rb_" + std::to_string(robots_.size() + 1);
+    robot.owner = caller.owner;
     robot.name = upload.name;
     robot.created_at = "2026-01-01T00:00:00.000Z";
     robot.base = upload.base;
@@ -161,44 +175,51 @@ class FakeService : public Service {
     robot_keys_.push_back(key);
     return {robot, script_.replay};
   }
-  std::optional<RobotInfo> robot(const std::string& id) override {
+  std::optional<RobotInfo> robot(const Caller& caller, const std::string& id) override {
     std::lock_guard lock(mutex_);
-    enter();
+    enter(caller);
     const auto found = robots_.find(id);
-    return found == robots_.end() ? std::nullopt : std::optional(found->second);
+    return found == robots_.end() || !sees(caller, found->second.owner) ? std::nullopt : std::optional(found->second);
   }
-  std::optional<std::string> robot_urdf(const std::string& id) override {
+  std::optional<std::string> robot_urdf(const Caller& caller, const std::string& id) override {
     std::lock_guard lock(mutex_);
-    enter();
+    enter(caller);
     const auto found = urdfs_.find(id);
+    const auto info = robots_.find(id);
+    if (info != robots_.end() && !sees(caller, info->second.owner)) return std::nullopt;
     return found == urdfs_.end() ? std::nullopt : std::optional(found->second);
   }
-  Page<RobotInfo> robots(const PageRequest& page) override {
+  Page<RobotInfo> robots(const Caller& caller, const PageRequest& page) override {
     std::lock_guard lock(mutex_);
-    enter();
+    enter(caller);
     page_requests_.push_back(page);
     Page<RobotInfo> answer;
     for (const auto& [id, info] : robots_) {
-      if (static_cast<int>(answer.items.size()) < page.page_size) answer.items.push_back(info);
+      if (sees(caller, info.owner) && static_cast<int>(answer.items.size()) < page.page_size) answer.items.push_back(info);
     }
     answer.next_page_token = script_.next_page_token;
     return answer;
   }
-  DeleteOutcome delete_robot(const std::string& id) override {
+  DeleteOutcome delete_robot(const Caller& caller, const std::string& id) override {
     std::lock_guard lock(mutex_);
-    enter();
+    enter(caller);
     if (script_.delete_outcome) return *script_.delete_outcome;
+    if (const auto found = robots_.find(id); found != robots_.end() && !sees(caller, found->second.owner)) {
+      return DeleteOutcome::not_found;
+    }
     return robots_.erase(id) + urdfs_.erase(id) > 0 ? DeleteOutcome::deleted : DeleteOutcome::not_found;
   }
 
-  SubmitResult submit(const JobSubmission& submission, const std::optional<IdempotencyKey>& key) override {
+  SubmitResult submit(const Caller& caller, const JobSubmission& submission,
+                      const std::optional<IdempotencyKey>& key) override {
     std::lock_guard lock(mutex_);
-    enter();
+    enter(caller);
     if (script_.submit_error) throw ApiError(*script_.submit_error, "scripted refusal");
     submissions_.push_back({submission.kind, submission.request_json, submission.dataset_id, key, submission.robot_id,
                             submission.validation_dataset_id});
     JobInfo job;
     job.id = "job_" + std::to_string(submissions_.size());
+    job.owner = caller.owner;
     job.kind = submission.kind;
     job.state = JobState::queued;
     job.created_at = "2026-01-01T00:00:00.000Z";
@@ -209,27 +230,28 @@ class FakeService : public Service {
     jobs_[job.id] = job;
     return {job, script_.replay};
   }
-  std::optional<JobInfo> job(const std::string& id) override {
+  std::optional<JobInfo> job(const Caller& caller, const std::string& id) override {
     std::lock_guard lock(mutex_);
-    enter();
+    enter(caller);
     const auto found = jobs_.find(id);
-    return found == jobs_.end() ? std::nullopt : std::optional(found->second);
+    return found == jobs_.end() || !sees(caller, found->second.owner) ? std::nullopt : std::optional(found->second);
   }
-  std::optional<JobInfo> wait(const std::string& id, double seconds) override {
+  std::optional<JobInfo> wait(const Caller& caller, const std::string& id, double seconds) override {
     std::lock_guard lock(mutex_);
-    enter();
+    enter(caller);
     waits_.push_back(seconds);  // answers at once: the tests look at what the route asked for
     const auto found = jobs_.find(id);
-    return found == jobs_.end() ? std::nullopt : std::optional(found->second);
+    return found == jobs_.end() || !sees(caller, found->second.owner) ? std::nullopt : std::optional(found->second);
   }
-  Page<JobInfo> jobs(const JobFilter& filter, const PageRequest& page) override {
+  Page<JobInfo> jobs(const Caller& caller, const JobFilter& filter, const PageRequest& page) override {
     std::lock_guard lock(mutex_);
-    enter();
+    enter(caller);
     filters_.push_back(filter);
     page_requests_.push_back(page);
     Page<JobInfo> answer;
     for (const auto& [id, job] : jobs_) {
-      if ((!filter.state || job.state == *filter.state) && (!filter.kind || job.kind == *filter.kind) &&
+      if (sees(caller, job.owner) && (!filter.state || job.state == *filter.state) &&
+          (!filter.kind || job.kind == *filter.kind) &&
           (filter.robot_id.empty() || job.robot_id == filter.robot_id) &&
           static_cast<int>(answer.items.size()) < page.page_size) {
         answer.items.push_back(job);
@@ -239,12 +261,12 @@ class FakeService : public Service {
     return answer;
   }
   /// Pages of the history; the token is the index of the page's first entry.
-  std::optional<Page<HistoryEntry>> history(const std::string& id, const PageRequest& page) override {
+  std::optional<Page<HistoryEntry>> history(const Caller& caller, const std::string& id, const PageRequest& page) override {
     std::lock_guard lock(mutex_);
-    enter();
+    enter(caller);
     page_requests_.push_back(page);
     const auto found = histories_.find(id);
-    if (found == histories_.end()) return std::nullopt;
+    if (found == histories_.end() || !owned_job_seen(caller, id)) return std::nullopt;
     const std::vector<HistoryEntry>& entries = found->second;
     const std::size_t first = page.page_token.empty() ? 0 : std::stoul(page.page_token);
     const std::size_t last = std::min(entries.size(), first + static_cast<std::size_t>(page.page_size));
@@ -253,12 +275,12 @@ class FakeService : public Service {
     if (last < entries.size()) answer.next_page_token = std::to_string(last);
     return answer;
   }
-  std::optional<HistoryOverview> history_overview(const std::string& id, long max_points) override {
+  std::optional<HistoryOverview> history_overview(const Caller& caller, const std::string& id, long max_points) override {
     std::lock_guard lock(mutex_);
-    enter();
+    enter(caller);
     overview_requests_.push_back(max_points);
     const auto found = histories_.find(id);
-    if (found == histories_.end()) return std::nullopt;
+    if (found == histories_.end() || !owned_job_seen(caller, id)) return std::nullopt;
     HistoryOverview overview;
     overview.total = static_cast<long>(found->second.size());
     overview.stride = overview.total > max_points ? (overview.total + max_points - 1) / max_points : 1;
@@ -266,20 +288,20 @@ class FakeService : public Service {
     if (!found->second.empty()) overview.best_index = 0;
     return overview;
   }
-  std::optional<JobInfo> cancel(const std::string& id) override {
+  std::optional<JobInfo> cancel(const Caller& caller, const std::string& id) override {
     std::lock_guard lock(mutex_);
-    enter();
+    enter(caller);
     const auto found = jobs_.find(id);
-    if (found == jobs_.end()) return std::nullopt;
+    if (found == jobs_.end() || !sees(caller, found->second.owner)) return std::nullopt;
     if (!is_terminal(found->second.state)) found->second.state = JobState::cancelled;
     return found->second;
   }
-  DeleteOutcome delete_job(const std::string& id) override {
+  DeleteOutcome delete_job(const Caller& caller, const std::string& id) override {
     std::lock_guard lock(mutex_);
-    enter();
+    enter(caller);
     if (script_.delete_outcome) return *script_.delete_outcome;
     const auto found = jobs_.find(id);
-    if (found == jobs_.end()) return DeleteOutcome::not_found;
+    if (found == jobs_.end() || !sees(caller, found->second.owner)) return DeleteOutcome::not_found;
     if (!is_terminal(found->second.state)) return DeleteOutcome::conflict;
     jobs_.erase(found);
     return DeleteOutcome::deleted;
@@ -287,7 +309,7 @@ class FakeService : public Service {
 
   std::string metrics() override {
     std::lock_guard lock(mutex_);
-    enter();
+    count();
     return "# TYPE manipid_queue_depth gauge\nmanipid_queue_depth 7\n";
   }
   bool accepting() const override {
@@ -304,12 +326,23 @@ class FakeService : public Service {
   }
 
  private:
-  /// Counts the call and throws what the script asks for.
-  void enter() {
+  /// Counts the call, notes its caller and throws what the script asks for.
+  void enter(const Caller& caller) {
+    callers_.push_back(caller);
+    count();
+  }
+  void count() {
     ++calls_;
     if (!script_.throw_what.empty()) throw std::runtime_error(script_.throw_what);
     if (script_.throw_non_standard) throw 42;
     if (script_.throw_bad_alloc) throw std::bad_alloc();
+  }
+
+  /// The real service's rule: an admin sees every owner's, anyone else their own only.
+  static bool sees(const Caller& caller, const std::string& owner) { return caller.admin || owner == caller.owner; }
+  bool owned_job_seen(const Caller& caller, const std::string& id) const {
+    const auto job = jobs_.find(id);
+    return job == jobs_.end() || sees(caller, job->second.owner);
   }
 
   mutable std::mutex mutex_;
@@ -317,6 +350,7 @@ class FakeService : public Service {
   bool accepting_ = true;
   std::optional<std::string> degraded_;
   int calls_ = 0;
+  std::vector<Caller> callers_;
   std::map<std::string, DatasetInfo> datasets_;
   std::map<std::string, RobotInfo> robots_;
   std::map<std::string, std::string> urdfs_;

@@ -41,6 +41,7 @@ const std::vector<ExpectedRow>& table() {
       {ProblemKind::job_failed, 500, "JOB_FAILED"},
       {ProblemKind::not_computable, 422, "NOT_COMPUTABLE"},
       {ProblemKind::worker_lost, 500, "WORKER_LOST"},
+      {ProblemKind::forbidden, 403, "FORBIDDEN"},
   };
   return rows;
 }

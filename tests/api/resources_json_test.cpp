@@ -48,7 +48,7 @@ TEST(JobText, IsValidJsonWhoseDumpIsTheSameBytes) {
   std::string order;
   for (const auto& [key, value] : parsed.items()) order += key + " ";
   EXPECT_EQ(order,
-            "id kind state created_at started_at finished_at attempts worker dataset_id robot_id "
+            "id kind state created_at owner started_at finished_at attempts worker dataset_id robot_id "
             "validation_dataset_id cancel_requested progress request result links ");
   EXPECT_EQ(parsed["links"]["history"], "/v1/jobs/job_0123456789abcdef/history");
   EXPECT_EQ(parsed["links"]["dataset"], "/v1/datasets/ds_1");

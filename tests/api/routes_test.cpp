@@ -295,6 +295,22 @@ class RoutesWithToken : public RouteServer {
   }
 };
 
+/// Named tokens (manipid serve --token-file): alice and bob own their resources; carol is an admin.
+class RoutesWithNamedTokens : public RouteServer {
+ protected:
+  RouteOptions options() const override {
+    RouteOptions routes = RouteServer::options();
+    routes.tokens = {{"alice", "alice-token-0123456789", false},
+                     {"bob", "bob-token-0123456789ab", false},
+                     {"carol", "carol-token-0123456789", true}};
+    return routes;
+  }
+  /// The headers of a request with `name`'s token.
+  static httplib::Headers as(const std::string& name) {
+    return {{"Authorization", "Bearer " + name + "-token-" + (name == "bob" ? "0123456789ab" : "0123456789")}};
+  }
+};
+
 // ---- Datasets ----------------------------------------------------------------------------
 
 TEST_F(Routes, DatasetUploadAsJsonAnswers201WithLocation) {
@@ -1433,6 +1449,71 @@ TEST_F(RoutesWithToken, TheApiNeedsTheBearerToken) {
   const auto posted = post("/v1/simulations", R"({"duration": 0.5})", "application/json", {{"Authorization", "Bearer s3cret"}});
   ASSERT_TRUE(posted);
   EXPECT_EQ(posted->status, 202);
+}
+
+TEST_F(RoutesWithNamedTokens, EachTokenActsForItsNameAndAnotherOwnersJobIsAMissingOne) {
+  JobInfo alices = job_info("job_alice", JobKind::identification, JobState::queued);
+  alices.owner = "alice";
+  JobInfo bobs = job_info("job_bob", JobKind::identification, JobState::queued);
+  bobs.owner = "bob";
+  fake_.add_job(alices);
+  fake_.add_job(bobs);
+  // The token names the caller; the service is asked for that owner's only.
+  Json list = json_of(get("/v1/jobs", as("alice")));
+  ASSERT_EQ(list["items"].size(), 1u) << list;
+  EXPECT_EQ(list["items"][0]["id"], "job_alice");
+  EXPECT_EQ(list["items"][0]["owner"], "alice");
+  ASSERT_FALSE(fake_.callers().empty());
+  EXPECT_EQ(fake_.callers().back().owner, "alice");
+  EXPECT_FALSE(fake_.callers().back().admin);
+  // Bob's job answers alice exactly as a job that does not exist.
+  const Json hidden = expect_problem(get("/v1/jobs/job_bob", as("alice")), 404, "NOT_FOUND", "id");
+  const Json missing = expect_problem(get("/v1/jobs/job_none", as("alice")), 404, "NOT_FOUND", "id");
+  EXPECT_EQ(hidden["detail"], "no job job_bob");
+  EXPECT_EQ(hidden["title"], missing["title"]);
+  expect_problem(client().Delete("/v1/jobs/job_bob", as("alice")), 404, "NOT_FOUND", "id");
+  expect_problem(post("/v1/jobs/job_bob/cancel", "", "application/json", as("alice")), 404, "NOT_FOUND", "id");
+  RawAnswer bodiless = raw("POST /v1/jobs/job_bob/cancel HTTP/1.1\r\nHost: test\r\nAuthorization: Bearer "
+                           "alice-token-0123456789\r\nConnection: close\r\n\r\n");
+  expect_problem(bodiless, 404, "NOT_FOUND", "id");
+  EXPECT_EQ(json_of(get("/v1/jobs/job_bob", as("bob")))["state"], "queued");  // untouched
+  // The admin sees both, and acts as carol.
+  list = json_of(get("/v1/jobs", as("carol")));
+  EXPECT_EQ(list["items"].size(), 2u) << list;
+  EXPECT_TRUE(fake_.callers().back().admin);
+  EXPECT_EQ(fake_.callers().back().owner, "carol");
+  // The log names whom each request acted for, never the token.
+  EXPECT_NE(log().find("GET /v1/jobs 200"), std::string::npos) << log();
+  EXPECT_NE(log().find(" by alice\n"), std::string::npos) << log();
+  EXPECT_EQ(log().find("-token-"), std::string::npos) << log();
+}
+
+TEST_F(RoutesWithNamedTokens, ASubmissionNamingAnotherOwnersDatasetIsRefusedAsIfItWereNotThere) {
+  DatasetInfo bobs = dataset_info("ds_bob", 4, 9701);
+  bobs.owner = "bob";
+  fake_.add_dataset(bobs);
+  const auto refused = post("/v1/identifications", R"({"dataset_id": "ds_bob"})", "application/json", as("alice"));
+  const Json hidden = expect_problem(refused, 422, "INVALID_FIELD", "dataset_id");
+  EXPECT_EQ(hidden["detail"], "no dataset ds_bob");
+  expect_problem(get("/v1/datasets/ds_bob", as("alice")), 404, "NOT_FOUND", "id");
+  EXPECT_TRUE(fake_.submissions().empty());
+  const auto his = post("/v1/identifications", R"({"dataset_id": "ds_bob"})", "application/json", as("bob"));
+  ASSERT_TRUE(his);
+  EXPECT_EQ(his->status, 202) << his->body;
+  EXPECT_EQ(json_of(his)["owner"], "bob");
+}
+
+TEST_F(RoutesWithNamedTokens, MetricsAreTheAdminsAndUnknownTokensAre401) {
+  expect_problem(get("/metrics"), 401, "UNAUTHORIZED", "Authorization");
+  expect_problem(get("/metrics", as("alice")), 403, "FORBIDDEN", "Authorization");
+  const auto metrics = get("/metrics", as("carol"));
+  ASSERT_TRUE(metrics);
+  EXPECT_EQ(metrics->status, 200);
+  for (const httplib::Headers& headers : std::vector<httplib::Headers>{
+           {}, {{"Authorization", "Bearer alice-token-012345678"}}, {{"Authorization", "Bearer alice"}},
+           {{"Authorization", "alice-token-0123456789"}}}) {
+    expect_problem(get("/v1/jobs", headers), 401, "UNAUTHORIZED", "Authorization");
+  }
 }
 
 TEST_F(RoutesWithToken, StaticFilesAreNotBehindTheTokenMetricsAre) {

@@ -113,39 +113,59 @@ class FreshService : public Service {
     current_ = std::move(fresh);
   }
 
-  DatasetCreated create_dataset(const DatasetUpload& upload, const std::optional<IdempotencyKey>& key) override {
-    return fake()->create_dataset(upload, key);
+  DatasetCreated create_dataset(const Caller& caller, const DatasetUpload& upload,
+                                const std::optional<IdempotencyKey>& key) override {
+    return fake()->create_dataset(caller, upload, key);
   }
-  std::optional<DatasetInfo> dataset(const std::string& id) override { return fake()->dataset(id); }
-  std::optional<Trajectory> dataset_data(const std::string& id) override { return fake()->dataset_data(id); }
-  Page<DatasetInfo> datasets(const PageRequest& page) override { return fake()->datasets(page); }
-  DeleteOutcome delete_dataset(const std::string& id) override { return fake()->delete_dataset(id); }
-  RobotCreated create_robot(const RobotUpload& upload, int joints, const std::string& description,
+  std::optional<DatasetInfo> dataset(const Caller& caller, const std::string& id) override {
+    return fake()->dataset(caller, id);
+  }
+  std::optional<Trajectory> dataset_data(const Caller& caller, const std::string& id) override {
+    return fake()->dataset_data(caller, id);
+  }
+  Page<DatasetInfo> datasets(const Caller& caller, const PageRequest& page) override {
+    return fake()->datasets(caller, page);
+  }
+  DeleteOutcome delete_dataset(const Caller& caller, const std::string& id) override {
+    return fake()->delete_dataset(caller, id);
+  }
+  RobotCreated create_robot(const Caller& caller, const RobotUpload& upload, int joints, const std::string& description,
                             const std::optional<IdempotencyKey>& key) override {
-    return fake()->create_robot(upload, joints, description, key);
+    return fake()->create_robot(caller, upload, joints, description, key);
   }
-  std::optional<RobotInfo> robot(const std::string& id) override { return fake()->robot(id); }
-  std::optional<std::string> robot_urdf(const std::string& id) override { return fake()->robot_urdf(id); }
-  Page<RobotInfo> robots(const PageRequest& page) override { return fake()->robots(page); }
-  DeleteOutcome delete_robot(const std::string& id) override { return fake()->delete_robot(id); }
-  SubmitResult submit(const JobSubmission& submission, const std::optional<IdempotencyKey>& key) override {
-    return fake()->submit(submission, key);
+  std::optional<RobotInfo> robot(const Caller& caller, const std::string& id) override { return fake()->robot(caller, id); }
+  std::optional<std::string> robot_urdf(const Caller& caller, const std::string& id) override {
+    return fake()->robot_urdf(caller, id);
   }
-  std::optional<JobInfo> job(const std::string& id) override { return fake()->job(id); }
-  std::optional<JobInfo> wait(const std::string& id, double seconds) override { return fake()->wait(id, seconds); }
-  Page<JobInfo> jobs(const JobFilter& filter, const PageRequest& page) override { return fake()->jobs(filter, page); }
-  std::optional<Page<HistoryEntry>> history(const std::string& id, const PageRequest& page) override {
+  Page<RobotInfo> robots(const Caller& caller, const PageRequest& page) override { return fake()->robots(caller, page); }
+  DeleteOutcome delete_robot(const Caller& caller, const std::string& id) override {
+    return fake()->delete_robot(caller, id);
+  }
+  SubmitResult submit(const Caller& caller, const JobSubmission& submission,
+                      const std::optional<IdempotencyKey>& key) override {
+    return fake()->submit(caller, submission, key);
+  }
+  std::optional<JobInfo> job(const Caller& caller, const std::string& id) override { return fake()->job(caller, id); }
+  std::optional<JobInfo> wait(const Caller& caller, const std::string& id, double seconds) override {
+    return fake()->wait(caller, id, seconds);
+  }
+  Page<JobInfo> jobs(const Caller& caller, const JobFilter& filter, const PageRequest& page) override {
+    return fake()->jobs(caller, filter, page);
+  }
+  std::optional<Page<HistoryEntry>> history(const Caller& caller, const std::string& id, const PageRequest& page) override {
     const std::string& token = page.page_token;
     if (token.size() > 9 || !std::all_of(token.begin(), token.end(), [](unsigned char c) { return std::isdigit(c) != 0; })) {
       throw ApiError(ProblemKind::invalid_field, "page_token is not a token this list returned", "page_token");
     }
-    return fake()->history(id, page);
+    return fake()->history(caller, id, page);
   }
-  std::optional<HistoryOverview> history_overview(const std::string& id, long max_points) override {
-    return fake()->history_overview(id, max_points);
+  std::optional<HistoryOverview> history_overview(const Caller& caller, const std::string& id, long max_points) override {
+    return fake()->history_overview(caller, id, max_points);
   }
-  std::optional<JobInfo> cancel(const std::string& id) override { return fake()->cancel(id); }
-  DeleteOutcome delete_job(const std::string& id) override { return fake()->delete_job(id); }
+  std::optional<JobInfo> cancel(const Caller& caller, const std::string& id) override { return fake()->cancel(caller, id); }
+  DeleteOutcome delete_job(const Caller& caller, const std::string& id) override {
+    return fake()->delete_job(caller, id);
+  }
   std::string metrics() override { return fake()->metrics(); }
   bool accepting() const override { return fake()->accepting(); }
   std::optional<std::string> degraded() const override { return fake()->degraded(); }

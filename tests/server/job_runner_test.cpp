@@ -16,29 +16,36 @@ using namespace manipid::server::store;  // the Store interface this fake implem
 class FailingStore : public Store {
  public:
   [[noreturn]] static void fail() { throw StoreError("string or blob too big"); }
-  DatasetOutcome insert_dataset(const std::string&, const Trajectory&, const std::string&,
+  DatasetOutcome insert_dataset(const std::string&, const std::string&, const Trajectory&, const std::string&,
                                 const std::optional<api::IdempotencyKey>&) override { fail(); }
-  std::optional<api::DatasetInfo> find_dataset(const std::string&) override { fail(); }
-  std::optional<Trajectory> load_dataset(const std::string&) override { fail(); }
-  api::Page<api::DatasetInfo> list_datasets(const api::PageRequest&) override { fail(); }
-  DeleteResult delete_dataset(const std::string&) override { fail(); }
+  std::optional<api::DatasetInfo> find_dataset(const api::OwnerScope&, const std::string&) override { fail(); }
+  std::optional<Trajectory> load_dataset(const api::OwnerScope&, const std::string&) override { fail(); }
+  api::Page<api::DatasetInfo> list_datasets(const api::OwnerScope&, const api::PageRequest&) override { fail(); }
+  DeleteResult delete_dataset(const api::OwnerScope&, const std::string&) override { fail(); }
   RobotOutcome insert_robot(const NewRobot&, const std::optional<api::IdempotencyKey>&) override { fail(); }
-  std::optional<api::RobotInfo> find_robot(const std::string&) override { fail(); }
-  std::optional<std::string> load_robot_urdf(const std::string&) override { fail(); }
-  api::Page<api::RobotInfo> list_robots(const api::PageRequest&) override { fail(); }
-  DeleteResult delete_robot(const std::string&) override { fail(); }
+  std::optional<api::RobotInfo> find_robot(const api::OwnerScope&, const std::string&) override { fail(); }
+  std::optional<std::string> load_robot_urdf(const api::OwnerScope&, const std::string&) override { fail(); }
+  api::Page<api::RobotInfo> list_robots(const api::OwnerScope&, const api::PageRequest&) override { fail(); }
+  DeleteResult delete_robot(const api::OwnerScope&, const std::string&) override { fail(); }
   SubmitOutcome submit_job(const NewJob&, const std::optional<api::IdempotencyKey>&, int) override { fail(); }
-  std::optional<api::JobInfo> find_job(const std::string&) override { fail(); }
-  api::Page<api::JobInfo> list_jobs(const api::JobFilter&, const api::PageRequest&) override { fail(); }
+  std::optional<api::JobInfo> find_job(const api::OwnerScope&, const std::string&) override { fail(); }
+  api::Page<api::JobInfo> list_jobs(const api::OwnerScope&, const api::JobFilter&, const api::PageRequest&) override {
+    fail();
+  }
   std::optional<api::JobInfo> claim_next_job(const std::string&, std::chrono::milliseconds) override { fail(); }
   LeaseStatus renew_lease(const Lease&, std::chrono::milliseconds) override { fail(); }
   LeaseStatus record_progress(const Lease&, long, std::optional<double>, const std::vector<api::HistoryEntry>&) override { fail(); }
   bool finish_job(const Lease&, const JobEnd&) override { fail(); }
   void requeue_job(const Lease&) override { fail(); }
-  CancelOutcome cancel_job(const std::string&) override { fail(); }
-  DeleteResult delete_job(const std::string&) override { fail(); }
-  std::optional<api::Page<api::HistoryEntry>> history(const std::string&, const api::PageRequest&) override { fail(); }
-  std::optional<api::HistoryOverview> history_overview(const std::string&, long) override { fail(); }
+  CancelOutcome cancel_job(const api::OwnerScope&, const std::string&) override { fail(); }
+  DeleteResult delete_job(const api::OwnerScope&, const std::string&) override { fail(); }
+  std::optional<api::Page<api::HistoryEntry>> history(const api::OwnerScope&, const std::string&,
+                                                      const api::PageRequest&) override {
+    fail();
+  }
+  std::optional<api::HistoryOverview> history_overview(const api::OwnerScope&, const std::string&, long) override {
+    fail();
+  }
   RecoveryOutcome recover_interrupted_jobs(int, const std::function<std::string(int)>&,
                                            const std::function<bool(const std::string&)>&) override { fail(); }
   RecoveryOutcome recover_expired_leases(int, const std::function<std::string(int)>&) override { fail(); }

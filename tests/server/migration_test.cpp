@@ -1,5 +1,6 @@
 // migration_test.cpp — a database written by the last release (manipid 0.1.0, schema version 1) opens
-// with today's schema and keeps every job, dataset, history, estimate and idempotency key.
+// with today's schema and keeps every job, dataset, history, estimate and idempotency key; its rows
+// belong to no owner (the admin's to see, no named token's).
 //
 // tests/server/data/manipid-0.1.0.db was made by that release's own binary
 // (tests/server/data/make_release_0.1.0_db.sh); this test reads the file's rows with plain SQL first, opens a
@@ -72,7 +73,7 @@ TEST_F(ReleaseDatabase, OpensMigratedWithEveryRowKept) {
     // The release's rows are days old: keys live long enough here for its key to be checked.
     const auto store = sqlite::open_store(path_, {.idempotency_ttl = std::chrono::hours(24 * 365 * 20)});
     for (const auto& row : jobs_before) {
-      const auto job = store->find_job(row[0]);
+      const auto job = store->find_job(api::all_owners, row[0]);
       ASSERT_TRUE(job) << row[0];
       EXPECT_EQ(api::to_string(job->kind), row[1]);
       EXPECT_EQ(api::to_string(job->state), row[2]);
@@ -84,33 +85,44 @@ TEST_F(ReleaseDatabase, OpensMigratedWithEveryRowKept) {
       EXPECT_EQ(job->robot_id, "");
     }
     for (const auto& row : datasets_before) {
-      const auto dataset = store->find_dataset(row[0]);
+      const auto dataset = store->find_dataset(api::all_owners, row[0]);
       ASSERT_TRUE(dataset) << row[0];
       EXPECT_EQ(dataset->name, row[1]);
       EXPECT_EQ(dataset->samples, std::stoi(row[2]));
       EXPECT_TRUE(dataset->uniform);
       EXPECT_FALSE(dataset->has_rates);
-      const auto data = store->load_dataset(row[0]);
+      const auto data = store->load_dataset(api::all_owners, row[0]);
       ASSERT_TRUE(data);
       EXPECT_EQ(data->joint_count(), std::stoi(row[3]));
       EXPECT_EQ(data->qd.cols(), 0);
     }
     // The succeeded identification's history is whole, in order, as stored.
     const std::string identified = jobs_before[0][0];
-    const auto page = store->history(identified, {1000, ""});
+    const auto page = store->history(api::all_owners, identified, {1000, ""});
     ASSERT_TRUE(page);
-    EXPECT_EQ(static_cast<long>(page->items.size()), store->find_job(identified)->evaluations);
+    EXPECT_EQ(static_cast<long>(page->items.size()), store->find_job(api::all_owners, identified)->evaluations);
     // The release's idempotency key still replays its job (within the key lifetime).
     const auto key_rows = query(path_, "SELECT key, fingerprint, resource_id FROM idempotency_keys WHERE scope = 'job'");
     ASSERT_EQ(key_rows.size(), 1u);
-    const SubmitOutcome replay = store->submit_job({api::JobKind::identification, "{}", "", "", ""},
+    const SubmitOutcome replay = store->submit_job({api::JobKind::identification, "{}", "", "", "", ""},
                                                   api::IdempotencyKey{key_rows[0][0], key_rows[0][1]}, 0);
     EXPECT_EQ(replay.status, SubmitStatus::replayed);
     EXPECT_EQ(replay.job.id, key_rows[0][2]);
+    // The release's rows belong to no one: the admin's (all owners) to see, no named owner's.
+    EXPECT_EQ(store->find_job(api::all_owners, jobs_before[0][0])->owner, "");
+    EXPECT_EQ(store->find_dataset(api::all_owners, datasets_before[0][0])->owner, "");
+    EXPECT_EQ(store->list_jobs(api::all_owners, {}, {}).items.size(), jobs_before.size());
+    EXPECT_EQ(store->list_datasets(api::all_owners, {}).items.size(), datasets_before.size());
+    EXPECT_FALSE(store->find_job(api::OwnerScope("alice"), jobs_before[0][0]));
+    EXPECT_TRUE(store->list_jobs(api::OwnerScope("alice"), {}, {}).items.empty());
+    EXPECT_TRUE(store->list_datasets(api::OwnerScope("alice"), {}).items.empty());
+    NewJob alices{api::JobKind::identification, "{}", "", "", "", "alice"};
+    EXPECT_EQ(store->submit_job(alices, api::IdempotencyKey{key_rows[0][0], key_rows[0][1]}, 0).status,
+              SubmitStatus::created);  // the release's key is no one's: alice's same key is hers
     // And today's rows go in beside them.
-    const RobotOutcome robot = store->insert_robot({"arm", "<robot name=\"arm\"/>", "", "", 2, "{}"}, std::nullopt);
+    const RobotOutcome robot = store->insert_robot({"arm", "<robot name=\"arm\"/>", "", "", 2, "{}", ""}, std::nullopt);
     EXPECT_EQ(robot.status, SubmitStatus::created);
-    NewJob job{api::JobKind::excitation, "{}", "", robot.robot.id, ""};
+    NewJob job{api::JobKind::excitation, "{}", "", robot.robot.id, "", ""};
     EXPECT_EQ(store->submit_job(job, std::nullopt, 0).job.kind, api::JobKind::excitation);
   }
 

@@ -119,7 +119,7 @@ TEST_F(SqliteStoreTest, WriterWaitsForAnotherConnectionsLockInsteadOfFailing) {
   EXPECT_EQ(outcome.status, SubmitStatus::created);
   EXPECT_GE(waited, std::chrono::milliseconds(250));
   // Readers are not blocked by a writer in WAL mode.
-  EXPECT_TRUE(store_->find_job(outcome.job.id));
+  EXPECT_TRUE(store_->find_job(api::all_owners, outcome.job.id));
 }
 
 TEST_F(SqliteStoreTest, ADamagedPageIsFoundAtOpenNotByAFailingReadLater) {
@@ -158,8 +158,8 @@ TEST_F(SqliteStoreTest, CheckFileSaysWhatIsWrongAndChangesNothing) {
 TEST_F(SqliteStoreTest, OpenStoreReadsTheDbValue) {
   // A plain path and sqlite:PATH name the same file: a job stored through one is seen by the other.
   const auto id = store_->submit_job(stored_identification_job(), std::nullopt, 0).job.id;
-  EXPECT_TRUE(open_store(path_)->find_job(id));
-  EXPECT_TRUE(open_store("sqlite:" + path_)->find_job(id));
+  EXPECT_TRUE(open_store(path_)->find_job(api::all_owners, id));
+  EXPECT_TRUE(open_store("sqlite:" + path_)->find_job(api::all_owners, id));
   try {
     open_store("postgresql://lab@db.example/manipid");
     ADD_FAILURE() << "expected StoreError";
@@ -196,12 +196,12 @@ TEST_F(SqliteStoreTest, OutOfMemoryIsBadAllocAndLeavesNothingHalfWritten) {
     ~Unlimited() { sqlite3_hard_heap_limit64(0); }
   } restore;
   sqlite3_hard_heap_limit64(sqlite3_memory_used() + (256 << 10));
-  EXPECT_THROW(store_->insert_dataset("too large for the heap", data, "", std::nullopt), std::bad_alloc);
+  EXPECT_THROW(store_->insert_dataset("", "too large for the heap", data, "", std::nullopt), std::bad_alloc);
   sqlite3_hard_heap_limit64(0);
-  EXPECT_EQ(store_->list_datasets({}).items.size(), 0u);
-  const DatasetOutcome stored = store_->insert_dataset("once memory is back", data, "", std::nullopt);
+  EXPECT_EQ(store_->list_datasets(api::all_owners, {}).items.size(), 0u);
+  const DatasetOutcome stored = store_->insert_dataset("", "once memory is back", data, "", std::nullopt);
   EXPECT_EQ(stored.dataset.samples, 200000);
-  EXPECT_EQ(store_->list_datasets({}).items.size(), 1u);
+  EXPECT_EQ(store_->list_datasets(api::all_owners, {}).items.size(), 1u);
 }
 
 TEST_F(SqliteStoreTest, OnlyAWriteThatChangedRowsClearsAFullDisk) {

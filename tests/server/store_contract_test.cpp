@@ -140,9 +140,10 @@ std::string postgres_database(const fs::path& directory) {
   return name;
 }
 
-/// Runs one statement on the cluster's maintenance database (CREATE and DROP DATABASE).
-void postgres_admin(const std::string& sql) {
-  PGconn* connection = PQconnectdb(postgres_uri("postgres").c_str());
+/// Runs statements on one of the cluster's databases (by default the maintenance database, for
+/// CREATE and DROP DATABASE).
+void postgres_admin(const std::string& sql, const std::string& database = "postgres") {
+  PGconn* connection = PQconnectdb(postgres_uri(database).c_str());
   const bool connected = PQstatus(connection) == CONNECTION_OK;
   std::string error = connected ? "" : PQerrorMessage(connection);
   if (connected) {
@@ -214,7 +215,7 @@ class StoreContract : public ::testing::TestWithParam<Backend> {
 
   /// The lease a job is under now (owner and attempt as stored): what its worker would carry.
   Lease held(const std::string& id) {
-    const auto job = store_->find_job(id);
+    const auto job = store_->find_job(api::all_owners, id);
     return job ? Lease{id, job->worker, job->attempts} : Lease{id, "", 0};
   }
 
@@ -253,12 +254,12 @@ bool is_id(const std::string& text, const std::string& prefix) {
 
 TEST_P(StoreContract, DatasetRoundTripIsBitExact) {
   const auto data = make_trajectory(257, 3, true, true);
-  const auto outcome = store_->insert_dataset("lab run 7", data, "job_00000000000000aa", std::nullopt);
+  const auto outcome = store_->insert_dataset("", "lab run 7", data, "job_00000000000000aa", std::nullopt);
   ASSERT_EQ(outcome.status, SubmitStatus::created);
   EXPECT_TRUE(is_id(outcome.dataset.id, "ds_"));
   EXPECT_TRUE(is_time(outcome.dataset.created_at)) << outcome.dataset.created_at;
 
-  const auto info = store_->find_dataset(outcome.dataset.id);
+  const auto info = store_->find_dataset(api::all_owners, outcome.dataset.id);
   ASSERT_TRUE(info);
   EXPECT_EQ(info->name, "lab run 7");
   EXPECT_EQ(info->source_job, "job_00000000000000aa");
@@ -269,7 +270,7 @@ TEST_P(StoreContract, DatasetRoundTripIsBitExact) {
   EXPECT_TRUE(info->has_reference);
   EXPECT_EQ(info->created_at, outcome.dataset.created_at);
 
-  const auto loaded = store_->load_dataset(outcome.dataset.id);
+  const auto loaded = store_->load_dataset(api::all_owners, outcome.dataset.id);
   ASSERT_TRUE(loaded);
   EXPECT_TRUE(same_bits(loaded->t, data.t));
   EXPECT_TRUE(same_bits(loaded->q, data.q));
@@ -278,25 +279,25 @@ TEST_P(StoreContract, DatasetRoundTripIsBitExact) {
   EXPECT_TRUE(std::signbit(loaded->q(0, 0)));
   // Read again (a backend may keep recent samples in memory): the same bits; deleted — by this
   // store or by another process's — gone.
-  const auto again = store_->load_dataset(outcome.dataset.id);
+  const auto again = store_->load_dataset(api::all_owners, outcome.dataset.id);
   ASSERT_TRUE(again);
   EXPECT_TRUE(same_bits(again->q, data.q));
   auto other = GetParam().open(directory_, {});
-  EXPECT_EQ(other->delete_dataset(outcome.dataset.id), DeleteResult::deleted);
+  EXPECT_EQ(other->delete_dataset(api::all_owners, outcome.dataset.id), DeleteResult::deleted);
   other.reset();
-  EXPECT_FALSE(store_->load_dataset(outcome.dataset.id));
-  EXPECT_FALSE(store_->find_dataset(outcome.dataset.id));
+  EXPECT_FALSE(store_->load_dataset(api::all_owners, outcome.dataset.id));
+  EXPECT_FALSE(store_->find_dataset(api::all_owners, outcome.dataset.id));
 }
 
 TEST_P(StoreContract, DatasetRoundTripWithoutTorqueOrReference) {
   const auto data = make_trajectory(40, 2, false, false);
-  const auto id = store_->insert_dataset("q only", data, "", std::nullopt).dataset.id;
-  const auto info = store_->find_dataset(id);
+  const auto id = store_->insert_dataset("", "q only", data, "", std::nullopt).dataset.id;
+  const auto info = store_->find_dataset(api::all_owners, id);
   ASSERT_TRUE(info);
   EXPECT_FALSE(info->has_torque);
   EXPECT_FALSE(info->has_reference);
   EXPECT_EQ(info->source_job, "");
-  const auto loaded = store_->load_dataset(id);
+  const auto loaded = store_->load_dataset(api::all_owners, id);
   ASSERT_TRUE(loaded);
   EXPECT_TRUE(same_bits(loaded->t, data.t));
   EXPECT_TRUE(same_bits(loaded->q, data.q));
@@ -307,63 +308,66 @@ TEST_P(StoreContract, DatasetRoundTripWithoutTorqueOrReference) {
 
   // Torque without reference, the other mix.
   const auto torque_only = make_trajectory(10, 2, true, false);
-  const auto loaded_torque = store_->load_dataset(store_->insert_dataset("tau", torque_only, "", std::nullopt).dataset.id);
+  const std::string torque_id = store_->insert_dataset("", "tau", torque_only, "", std::nullopt).dataset.id;
+  const auto loaded_torque = store_->load_dataset(api::all_owners, torque_id);
   ASSERT_TRUE(loaded_torque);
   EXPECT_TRUE(same_bits(loaded_torque->tau, torque_only.tau));
   EXPECT_EQ(loaded_torque->ref.cols(), 0);
 }
 
 TEST_P(StoreContract, UnknownDatasetIsAbsent) {
-  EXPECT_FALSE(store_->find_dataset("ds_0000000000000000"));
-  EXPECT_FALSE(store_->load_dataset("ds_0000000000000000"));
-  EXPECT_EQ(store_->delete_dataset("ds_0000000000000000"), DeleteResult::not_found);
+  EXPECT_FALSE(store_->find_dataset(api::all_owners, "ds_0000000000000000"));
+  EXPECT_FALSE(store_->load_dataset(api::all_owners, "ds_0000000000000000"));
+  EXPECT_EQ(store_->delete_dataset(api::all_owners, "ds_0000000000000000"), DeleteResult::not_found);
 }
 
 TEST_P(StoreContract, DatasetOfAQueuedOrRunningJobIsNotDeleted) {
-  const std::string dataset = store_->insert_dataset("in use", make_trajectory(10, 2, true, false), "", std::nullopt).dataset.id;
+  const std::string dataset =
+      store_->insert_dataset("", "in use", make_trajectory(10, 2, true, false), "", std::nullopt).dataset.id;
   NewJob job = identification_job();
   job.dataset_id = dataset;
   const std::string id = submit(job);
-  EXPECT_EQ(store_->delete_dataset(dataset), DeleteResult::in_use);
+  EXPECT_EQ(store_->delete_dataset(api::all_owners, dataset), DeleteResult::in_use);
   ASSERT_TRUE(claim());
-  EXPECT_EQ(store_->delete_dataset(dataset), DeleteResult::in_use);
+  EXPECT_EQ(store_->delete_dataset(api::all_owners, dataset), DeleteResult::in_use);
   store_->finish_job(held(id), end_as(api::JobState::succeeded, "{}", "", {}, dataset));
-  EXPECT_EQ(store_->delete_dataset(dataset), DeleteResult::deleted);
-  EXPECT_FALSE(store_->find_dataset(dataset));
-  EXPECT_EQ(store_->delete_dataset(dataset), DeleteResult::not_found);
+  EXPECT_EQ(store_->delete_dataset(api::all_owners, dataset), DeleteResult::deleted);
+  EXPECT_FALSE(store_->find_dataset(api::all_owners, dataset));
+  EXPECT_EQ(store_->delete_dataset(api::all_owners, dataset), DeleteResult::not_found);
 }
 
 TEST_P(StoreContract, AValidationDatasetIsInUseToo) {
-  const std::string first = store_->insert_dataset("a", make_trajectory(10, 2, true, false), "", std::nullopt).dataset.id;
-  const std::string second = store_->insert_dataset("b", make_trajectory(10, 2, true, false), "", std::nullopt).dataset.id;
+  const auto data = make_trajectory(10, 2, true, false);
+  const std::string first = store_->insert_dataset("", "a", data, "", std::nullopt).dataset.id;
+  const std::string second = store_->insert_dataset("", "b", data, "", std::nullopt).dataset.id;
   NewJob job = identification_job();
   job.dataset_id = first;
   job.validation_dataset_id = second;
   const std::string id = submit(job);
-  EXPECT_EQ(store_->find_job(id)->validation_dataset_id, second);
-  EXPECT_EQ(store_->delete_dataset(second), DeleteResult::in_use);
-  ASSERT_TRUE(store_->cancel_job(id) == CancelOutcome::cancelled_now);
-  EXPECT_EQ(store_->delete_dataset(second), DeleteResult::deleted);
+  EXPECT_EQ(store_->find_job(api::all_owners, id)->validation_dataset_id, second);
+  EXPECT_EQ(store_->delete_dataset(api::all_owners, second), DeleteResult::in_use);
+  ASSERT_TRUE(store_->cancel_job(api::all_owners, id) == CancelOutcome::cancelled_now);
+  EXPECT_EQ(store_->delete_dataset(api::all_owners, second), DeleteResult::deleted);
 }
 
 TEST_P(StoreContract, JitteryDatasetsWithRatesRoundTripAsMeasured) {
   auto data = make_trajectory(50, 3, true, false);
   data.t[10] += 0.3 * (data.t[11] - data.t[10]);  // a logger's jitter
   data.qd = data.q * 2.0;
-  const auto info = store_->insert_dataset("jittery", data, "", std::nullopt).dataset;
+  const auto info = store_->insert_dataset("", "jittery", data, "", std::nullopt).dataset;
   EXPECT_FALSE(info.uniform);
   EXPECT_TRUE(info.has_rates);
   EXPECT_EQ(info.dt, data.median_step());
-  const auto found = store_->find_dataset(info.id);
+  const auto found = store_->find_dataset(api::all_owners, info.id);
   EXPECT_FALSE(found->uniform);
   EXPECT_TRUE(found->has_rates);
-  const auto loaded = store_->load_dataset(info.id);
+  const auto loaded = store_->load_dataset(api::all_owners, info.id);
   ASSERT_TRUE(loaded);
   EXPECT_TRUE(same_bits(loaded->t, data.t));
   EXPECT_TRUE(same_bits(loaded->qd, data.qd));
-  EXPECT_TRUE(store_->find_dataset(store_->insert_dataset("uniform", make_trajectory(5, 1, false, false), "", std::nullopt)
-                                       .dataset.id)
-                  ->uniform);
+  const std::string uniform =
+      store_->insert_dataset("", "uniform", make_trajectory(5, 1, false, false), "", std::nullopt).dataset.id;
+  EXPECT_TRUE(store_->find_dataset(api::all_owners, uniform)->uniform);
 }
 
 // ---- robots ----
@@ -384,18 +388,18 @@ TEST_P(StoreContract, RobotsRoundTripTheirDocumentByteForByte) {
   ASSERT_EQ(created.status, SubmitStatus::created);
   EXPECT_EQ(created.robot.id.rfind("rb_", 0), 0u);
   EXPECT_EQ(created.robot.id.size(), 19u);
-  const auto found = store_->find_robot(created.robot.id);
+  const auto found = store_->find_robot(api::all_owners, created.robot.id);
   ASSERT_TRUE(found);
   EXPECT_EQ(found->name, "arm");
   EXPECT_EQ(found->base, "");
   EXPECT_EQ(found->tip, "tool0");
   EXPECT_EQ(found->joints, 6);
   EXPECT_EQ(found->summary, robot.summary);
-  EXPECT_EQ(store_->load_robot_urdf(created.robot.id), robot.urdf);
+  EXPECT_EQ(store_->load_robot_urdf(api::all_owners, created.robot.id), robot.urdf);
   reopen();
-  EXPECT_EQ(store_->load_robot_urdf(created.robot.id), robot.urdf);
-  EXPECT_FALSE(store_->find_robot("rb_0000000000000000"));
-  EXPECT_FALSE(store_->load_robot_urdf("rb_0000000000000000"));
+  EXPECT_EQ(store_->load_robot_urdf(api::all_owners, created.robot.id), robot.urdf);
+  EXPECT_FALSE(store_->find_robot(api::all_owners, "rb_0000000000000000"));
+  EXPECT_FALSE(store_->load_robot_urdf(api::all_owners, "rb_0000000000000000"));
 }
 
 TEST_P(StoreContract, RobotsAreIdempotentPagedAndNotDeletedWhileInUse) {
@@ -407,11 +411,11 @@ TEST_P(StoreContract, RobotsAreIdempotentPagedAndNotDeletedWhileInUse) {
   for (int i = 0; i < 4; ++i) store_->insert_robot(some_robot("r" + std::to_string(i)), std::nullopt);
   api::PageRequest page;
   page.page_size = 3;
-  const auto one = store_->list_robots(page);
+  const auto one = store_->list_robots(api::all_owners, page);
   ASSERT_EQ(one.items.size(), 3u);
   EXPECT_EQ(one.items[0].name, "r3");  // newest first
   page.page_token = one.next_page_token;
-  const auto two = store_->list_robots(page);
+  const auto two = store_->list_robots(api::all_owners, page);
   ASSERT_EQ(two.items.size(), 2u);
   EXPECT_EQ(two.items[1].name, "a");
   EXPECT_EQ(two.next_page_token, "");
@@ -419,21 +423,21 @@ TEST_P(StoreContract, RobotsAreIdempotentPagedAndNotDeletedWhileInUse) {
   NewJob job = identification_job();
   job.robot_id = first.robot.id;
   const std::string id = submit(job);
-  EXPECT_EQ(store_->find_job(id)->robot_id, first.robot.id);
+  EXPECT_EQ(store_->find_job(api::all_owners, id)->robot_id, first.robot.id);
   submit(identification_job());  // a job on no robot: not in the robot's list
   api::JobFilter on_robot;
   on_robot.robot_id = first.robot.id;
-  const auto robot_jobs = store_->list_jobs(on_robot, {});
+  const auto robot_jobs = store_->list_jobs(api::all_owners, on_robot, {});
   ASSERT_EQ(robot_jobs.items.size(), 1u);
   EXPECT_EQ(robot_jobs.items[0].id, id);
   on_robot.robot_id = "rb_none";
-  EXPECT_TRUE(store_->list_jobs(on_robot, {}).items.empty());
-  EXPECT_EQ(store_->delete_robot(first.robot.id), DeleteResult::in_use);
+  EXPECT_TRUE(store_->list_jobs(api::all_owners, on_robot, {}).items.empty());
+  EXPECT_EQ(store_->delete_robot(api::all_owners, first.robot.id), DeleteResult::in_use);
   ASSERT_TRUE(claim());
-  EXPECT_EQ(store_->delete_robot(first.robot.id), DeleteResult::in_use);
+  EXPECT_EQ(store_->delete_robot(api::all_owners, first.robot.id), DeleteResult::in_use);
   store_->finish_job(held(id), end_as(api::JobState::succeeded, "{}", "", {}, ""));
-  EXPECT_EQ(store_->delete_robot(first.robot.id), DeleteResult::deleted);
-  EXPECT_EQ(store_->delete_robot(first.robot.id), DeleteResult::not_found);
+  EXPECT_EQ(store_->delete_robot(api::all_owners, first.robot.id), DeleteResult::deleted);
+  EXPECT_EQ(store_->delete_robot(api::all_owners, first.robot.id), DeleteResult::not_found);
   // Its key went with it: the same key now makes a new robot.
   EXPECT_EQ(store_->insert_robot(some_robot("a"), key).status, SubmitStatus::created);
 }
@@ -441,30 +445,30 @@ TEST_P(StoreContract, RobotsAreIdempotentPagedAndNotDeletedWhileInUse) {
 TEST_P(StoreContract, MismatchedTrajectoryShapeIsRefused) {
   auto data = make_trajectory(10, 2, true, false);
   data.tau.resize(9, 2);
-  EXPECT_THROW(store_->insert_dataset("bad", data, "", std::nullopt), std::invalid_argument);
-  EXPECT_TRUE(store_->list_datasets({}).items.empty());
+  EXPECT_THROW(store_->insert_dataset("", "bad", data, "", std::nullopt), std::invalid_argument);
+  EXPECT_TRUE(store_->list_datasets(api::all_owners, {}).items.empty());
 }
 
 TEST_P(StoreContract, DatasetIdempotencyKey) {
   const auto data = make_trajectory(20, 2, true, false);
   const api::IdempotencyKey key{"upload-1", "fingerprint-a"};
-  const auto first = store_->insert_dataset("first", data, "", key);
+  const auto first = store_->insert_dataset("", "first", data, "", key);
   ASSERT_EQ(first.status, SubmitStatus::created);
 
-  const auto replay = store_->insert_dataset("first", data, "", key);
+  const auto replay = store_->insert_dataset("", "first", data, "", key);
   EXPECT_EQ(replay.status, SubmitStatus::replayed);
   EXPECT_EQ(replay.dataset.id, first.dataset.id);
   EXPECT_EQ(replay.dataset.name, "first");
 
-  const auto conflict = store_->insert_dataset("other", data, "", api::IdempotencyKey{"upload-1", "fingerprint-b"});
+  const auto conflict = store_->insert_dataset("", "other", data, "", api::IdempotencyKey{"upload-1", "fingerprint-b"});
   EXPECT_EQ(conflict.status, SubmitStatus::key_reused);
   EXPECT_TRUE(conflict.dataset.id.empty());
-  EXPECT_EQ(store_->list_datasets({}).items.size(), 1u);
+  EXPECT_EQ(store_->list_datasets(api::all_owners, {}).items.size(), 1u);
 
   // Deleting the dataset frees its key.
-  EXPECT_EQ(store_->delete_dataset(first.dataset.id), DeleteResult::deleted);
-  EXPECT_FALSE(store_->find_dataset(first.dataset.id));
-  const auto again = store_->insert_dataset("again", data, "", api::IdempotencyKey{"upload-1", "fingerprint-b"});
+  EXPECT_EQ(store_->delete_dataset(api::all_owners, first.dataset.id), DeleteResult::deleted);
+  EXPECT_FALSE(store_->find_dataset(api::all_owners, first.dataset.id));
+  const auto again = store_->insert_dataset("", "again", data, "", api::IdempotencyKey{"upload-1", "fingerprint-b"});
   EXPECT_EQ(again.status, SubmitStatus::created);
   EXPECT_NE(again.dataset.id, first.dataset.id);
 }
@@ -472,7 +476,7 @@ TEST_P(StoreContract, DatasetIdempotencyKey) {
 TEST_P(StoreContract, ListDatasetsNewestFirstInPages) {
   std::vector<std::string> ids;
   for (int i = 0; i < 5; ++i) {
-    ids.push_back(store_->insert_dataset("d" + std::to_string(i), make_trajectory(3, 1, false, false), "",
+    ids.push_back(store_->insert_dataset("", "d" + std::to_string(i), make_trajectory(3, 1, false, false), "",
                                          std::nullopt)
                       .dataset.id);
   }
@@ -480,7 +484,7 @@ TEST_P(StoreContract, ListDatasetsNewestFirstInPages) {
   api::PageRequest request{2, ""};
   std::vector<std::size_t> sizes;
   for (;;) {
-    const auto page = store_->list_datasets(request);
+    const auto page = store_->list_datasets(api::all_owners, request);
     sizes.push_back(page.items.size());
     for (const auto& dataset : page.items) seen.push_back(dataset.id);
     if (page.next_page_token.empty()) break;
@@ -489,7 +493,7 @@ TEST_P(StoreContract, ListDatasetsNewestFirstInPages) {
   EXPECT_EQ(sizes, (std::vector<std::size_t>{2, 2, 1}));
   std::reverse(ids.begin(), ids.end());
   EXPECT_EQ(seen, ids);
-  expect_invalid_field([&] { store_->list_datasets({2, "not-a-token"}); }, "page_token");
+  expect_invalid_field([&] { store_->list_datasets(api::all_owners, {2, "not-a-token"}); }, "page_token");
 }
 
 // ---- submitting and claiming ----
@@ -498,7 +502,7 @@ TEST_P(StoreContract, SubmittedJobIsQueued) {
   const auto outcome = store_->submit_job(identification_job(R"({"a":1})"), std::nullopt, 0);
   ASSERT_EQ(outcome.status, SubmitStatus::created);
   EXPECT_TRUE(is_id(outcome.job.id, "job_"));
-  const auto job = store_->find_job(outcome.job.id);
+  const auto job = store_->find_job(api::all_owners, outcome.job.id);
   ASSERT_TRUE(job);
   EXPECT_EQ(job->state, JobState::queued);
   EXPECT_EQ(job->kind, api::JobKind::identification);
@@ -511,7 +515,7 @@ TEST_P(StoreContract, SubmittedJobIsQueued) {
   EXPECT_EQ(job->evaluations, 0);
   EXPECT_FALSE(job->best_cost);
   EXPECT_FALSE(job->cancel_requested);
-  EXPECT_FALSE(store_->find_job("job_0000000000000000"));
+  EXPECT_FALSE(store_->find_job(api::all_owners, "job_0000000000000000"));
 }
 
 TEST_P(StoreContract, JobIdempotencyKey) {
@@ -603,7 +607,7 @@ TEST_P(StoreContract, ProgressAndHistoryPaging) {
   store_->record_progress(held(id), 120, 0.25, history_batch(60, 60));
   store_->record_progress(held(id), 120, 0.25, history_batch(60, 60));  // a re-sent batch is harmless
 
-  const auto job = store_->find_job(id);
+  const auto job = store_->find_job(api::all_owners, id);
   ASSERT_TRUE(job);
   EXPECT_EQ(job->evaluations, 120);
   ASSERT_TRUE(job->best_cost);
@@ -613,7 +617,7 @@ TEST_P(StoreContract, ProgressAndHistoryPaging) {
   std::vector<std::size_t> sizes;
   api::PageRequest request{50, ""};
   for (;;) {
-    const auto page = store_->history(id, request);
+    const auto page = store_->history(api::all_owners, id, request);
     ASSERT_TRUE(page);
     sizes.push_back(page->items.size());
     all.insert(all.end(), page->items.begin(), page->items.end());
@@ -630,31 +634,31 @@ TEST_P(StoreContract, ProgressAndHistoryPaging) {
     EXPECT_EQ(std::memcmp(all[i].theta.data(), expected[i].theta.data(), 3 * sizeof(double)), 0);
   }
 
-  EXPECT_EQ(store_->history(id, {0, ""})->items.size(), 50u);            // 0 → default 50
-  const auto everything = store_->history(id, {5000, ""});                // coerced to 1000
+  EXPECT_EQ(store_->history(api::all_owners, id, {0, ""})->items.size(), 50u);            // 0 → default 50
+  const auto everything = store_->history(api::all_owners, id, {5000, ""});                // coerced to 1000
   EXPECT_EQ(everything->items.size(), 120u);
   EXPECT_TRUE(everything->next_page_token.empty());
-  const auto exact = store_->history(id, {120, ""});                      // exactly one full page
+  const auto exact = store_->history(api::all_owners, id, {120, ""});                      // exactly one full page
   EXPECT_EQ(exact->items.size(), 120u);
   EXPECT_TRUE(exact->next_page_token.empty());
 
-  const auto first = store_->history(id, {10, ""});
+  const auto first = store_->history(api::all_owners, id, {10, ""});
   ASSERT_FALSE(first->next_page_token.empty());
-  const auto second = store_->history(id, {10, first->next_page_token});
+  const auto second = store_->history(api::all_owners, id, {10, first->next_page_token});
   EXPECT_EQ(second->items.front().index, 10);
 
   std::string edited = first->next_page_token;
   edited[3] = edited[3] == '1' ? '2' : '1';
-  expect_invalid_field([&] { store_->history(id, {10, "garbage"}); }, "page_token");
-  expect_invalid_field([&] { store_->history(id, {10, edited}); }, "page_token");
-  expect_invalid_field([&] { store_->history(id, {10, first->next_page_token + "0"}); }, "page_token");
-  expect_invalid_field([&] { store_->history(id, {-1, ""}); }, "page_size");
+  expect_invalid_field([&] { store_->history(api::all_owners, id, {10, "garbage"}); }, "page_token");
+  expect_invalid_field([&] { store_->history(api::all_owners, id, {10, edited}); }, "page_token");
+  expect_invalid_field([&] { store_->history(api::all_owners, id, {10, first->next_page_token + "0"}); }, "page_token");
+  expect_invalid_field([&] { store_->history(api::all_owners, id, {-1, ""}); }, "page_size");
   // A token is bound to its job.
   const auto other = submit();
-  expect_invalid_field([&] { store_->history(other, {10, first->next_page_token}); }, "page_token");
+  expect_invalid_field([&] { store_->history(api::all_owners, other, {10, first->next_page_token}); }, "page_token");
 
-  EXPECT_FALSE(store_->history("job_0000000000000000", {}));
-  const auto empty = store_->history(other, {});
+  EXPECT_FALSE(store_->history(api::all_owners, "job_0000000000000000", {}));
+  const auto empty = store_->history(api::all_owners, other, {});
   ASSERT_TRUE(empty);
   EXPECT_TRUE(empty->items.empty());
   EXPECT_TRUE(empty->next_page_token.empty());
@@ -663,8 +667,8 @@ TEST_P(StoreContract, ProgressAndHistoryPaging) {
 TEST_P(StoreContract, ProgressOnlyForRunningJobs) {
   const auto id = submit();
   EXPECT_EQ(store_->record_progress(held(id), 5, 1.0, history_batch(0, 5)), LeaseStatus::lost);  // still queued
-  EXPECT_EQ(store_->find_job(id)->evaluations, 0);
-  EXPECT_TRUE(store_->history(id, {})->items.empty());
+  EXPECT_EQ(store_->find_job(api::all_owners, id)->evaluations, 0);
+  EXPECT_TRUE(store_->history(api::all_owners, id, {})->items.empty());
 }
 
 // ---- finishing, cancelling, deleting ----
@@ -675,25 +679,25 @@ TEST_P(StoreContract, FinishJobKeepsOutcome) {
   store_->record_progress(held(id), 10, 0.1, history_batch(0, 10));
   store_->finish_job(held(id), end_as(JobState::succeeded, R"({"theta":[1,2]})", "",
                      {{"m1", 1.5, 0.01}, {"l1", 0.3, std::nullopt}}, "ds_aaaaaaaaaaaaaaaa"));
-  auto job = store_->find_job(id);
+  auto job = store_->find_job(api::all_owners, id);
   ASSERT_TRUE(job);
   EXPECT_EQ(job->state, JobState::succeeded);
   EXPECT_EQ(job->result, R"({"theta":[1,2]})");
   EXPECT_EQ(job->error, "");
   EXPECT_EQ(job->dataset_id, "ds_aaaaaaaaaaaaaaaa");
   EXPECT_TRUE(is_time(job->finished_at));
-  EXPECT_EQ(store_->history(id, {})->items.size(), 10u);  // the history stays with the result
+  EXPECT_EQ(store_->history(api::all_owners, id, {})->items.size(), 10u);  // the history stays with the result
 
   // A second end does not overwrite the first; an empty dataset id keeps the input's.
   store_->finish_job(held(id), end_as(JobState::failed, "", R"({"code":"INTERNAL"})", {}, ""));
-  job = store_->find_job(id);
+  job = store_->find_job(api::all_owners, id);
   EXPECT_EQ(job->state, JobState::succeeded);
   EXPECT_EQ(job->error, "");
 
   const auto failed = submit();
   ASSERT_TRUE(claim());
   store_->finish_job(held(failed), end_as(JobState::failed, "", R"({"code":"INTERNAL"})", {}, ""));
-  job = store_->find_job(failed);
+  job = store_->find_job(api::all_owners, failed);
   EXPECT_EQ(job->state, JobState::failed);
   EXPECT_EQ(job->error, R"({"code":"INTERNAL"})");
   EXPECT_EQ(job->dataset_id, "ds_0123456789abcdef");
@@ -710,11 +714,11 @@ TEST_P(StoreContract, TheEndBringsTheLastHistoryBatchAndItsProgressInOneWrite) {
   end.evaluations = 15;
   end.best_cost = 0.125;
   ASSERT_TRUE(store_->finish_job(held(id), end));
-  auto job = store_->find_job(id);
+  auto job = store_->find_job(api::all_owners, id);
   EXPECT_EQ(job->state, JobState::succeeded);
   EXPECT_EQ(job->evaluations, 15);
   EXPECT_EQ(job->best_cost, 0.125);
-  const auto items = store_->history(id, {})->items;
+  const auto items = store_->history(api::all_owners, id, {})->items;
   ASSERT_EQ(items.size(), 15u);
   const auto expected = history_batch(0, 15);
   for (std::size_t i = 0; i < items.size(); ++i) {
@@ -728,7 +732,7 @@ TEST_P(StoreContract, TheEndBringsTheLastHistoryBatchAndItsProgressInOneWrite) {
   ASSERT_TRUE(claim());
   store_->record_progress(held(quiet), 7, 0.25, history_batch(0, 7));
   ASSERT_TRUE(store_->finish_job(held(quiet), end_as(JobState::cancelled, "", "", {}, "")));
-  job = store_->find_job(quiet);
+  job = store_->find_job(api::all_owners, quiet);
   EXPECT_EQ(job->evaluations, 7);
   EXPECT_EQ(job->best_cost, 0.25);
 
@@ -739,47 +743,47 @@ TEST_P(StoreContract, TheEndBringsTheLastHistoryBatchAndItsProgressInOneWrite) {
   stale.history = history_batch(0, 3);
   stale.evaluations = 3;
   EXPECT_FALSE(store_->finish_job(Lease{lost, "someone-else:1", 1}, stale));
-  job = store_->find_job(lost);
+  job = store_->find_job(api::all_owners, lost);
   EXPECT_EQ(job->state, JobState::running);
   EXPECT_EQ(job->evaluations, 0);
-  EXPECT_TRUE(store_->history(lost, {})->items.empty());
+  EXPECT_TRUE(store_->history(api::all_owners, lost, {})->items.empty());
 }
 
 TEST_P(StoreContract, CancelRules) {
   const auto queued = submit();
   const auto running = submit();
-  EXPECT_EQ(store_->cancel_job(queued), CancelOutcome::cancelled_now);
-  auto job = store_->find_job(queued);
+  EXPECT_EQ(store_->cancel_job(api::all_owners, queued), CancelOutcome::cancelled_now);
+  auto job = store_->find_job(api::all_owners, queued);
   EXPECT_EQ(job->state, JobState::cancelled);
   EXPECT_TRUE(is_time(job->finished_at));
-  EXPECT_EQ(store_->cancel_job(queued), CancelOutcome::already_finished);
+  EXPECT_EQ(store_->cancel_job(api::all_owners, queued), CancelOutcome::already_finished);
 
   ASSERT_EQ(claim()->id, running);  // the cancelled one is skipped
-  EXPECT_EQ(store_->cancel_job(running), CancelOutcome::requested);
-  EXPECT_EQ(store_->cancel_job(running), CancelOutcome::requested);
-  job = store_->find_job(running);
+  EXPECT_EQ(store_->cancel_job(api::all_owners, running), CancelOutcome::requested);
+  EXPECT_EQ(store_->cancel_job(api::all_owners, running), CancelOutcome::requested);
+  job = store_->find_job(api::all_owners, running);
   EXPECT_EQ(job->state, JobState::running);
   EXPECT_TRUE(job->cancel_requested);
   store_->finish_job(held(running), end_as(JobState::cancelled, "", "", {}, ""));
-  EXPECT_EQ(store_->cancel_job(running), CancelOutcome::already_finished);
-  EXPECT_EQ(store_->cancel_job("job_0000000000000000"), CancelOutcome::not_found);
+  EXPECT_EQ(store_->cancel_job(api::all_owners, running), CancelOutcome::already_finished);
+  EXPECT_EQ(store_->cancel_job(api::all_owners, "job_0000000000000000"), CancelOutcome::not_found);
 }
 
 TEST_P(StoreContract, DeleteRules) {
   const api::IdempotencyKey key{"delete-me", "f"};
   const auto queued = store_->submit_job(identification_job(), key, 0).job.id;
-  EXPECT_EQ(store_->delete_job(queued), DeleteResult::in_use);
+  EXPECT_EQ(store_->delete_job(api::all_owners, queued), DeleteResult::in_use);
 
   ASSERT_TRUE(claim());
-  EXPECT_EQ(store_->delete_job(queued), DeleteResult::in_use);
+  EXPECT_EQ(store_->delete_job(api::all_owners, queued), DeleteResult::in_use);
 
   store_->record_progress(held(queued), 3, 1.0, history_batch(0, 3));
   store_->finish_job(held(queued), end_as(JobState::succeeded, "{}", "", {{"m1", 1.0, std::nullopt}}, ""));
-  EXPECT_EQ(store_->delete_job(queued), DeleteResult::deleted);
-  EXPECT_FALSE(store_->find_job(queued));
-  EXPECT_FALSE(store_->history(queued, {}));
+  EXPECT_EQ(store_->delete_job(api::all_owners, queued), DeleteResult::deleted);
+  EXPECT_FALSE(store_->find_job(api::all_owners, queued));
+  EXPECT_FALSE(store_->history(api::all_owners, queued, {}));
 
-  EXPECT_EQ(store_->delete_job(queued), DeleteResult::not_found);
+  EXPECT_EQ(store_->delete_job(api::all_owners, queued), DeleteResult::not_found);
 
   // The deleted job's key no longer replays.
   const auto again = store_->submit_job(identification_job(), key, 0);
@@ -792,22 +796,22 @@ TEST_P(StoreContract, RequeueClearsProgressAndKeepsAttempts) {
   ASSERT_TRUE(claim());
   store_->record_progress(held(id), 7, 0.7, history_batch(0, 7));
   store_->requeue_job(held(id));
-  auto job = store_->find_job(id);
+  auto job = store_->find_job(api::all_owners, id);
   EXPECT_EQ(job->state, JobState::queued);
   EXPECT_EQ(job->started_at, "");
   EXPECT_EQ(job->evaluations, 0);
   EXPECT_FALSE(job->best_cost);
   EXPECT_EQ(job->attempts, 1);
-  EXPECT_TRUE(store_->history(id, {})->items.empty());
+  EXPECT_TRUE(store_->history(api::all_owners, id, {})->items.empty());
   const auto again = claim();
   ASSERT_TRUE(again);
   EXPECT_EQ(again->id, id);
   EXPECT_EQ(again->attempts, 2);
 
   // A job whose cancellation was asked for is not run again.
-  EXPECT_EQ(store_->cancel_job(id), CancelOutcome::requested);
+  EXPECT_EQ(store_->cancel_job(api::all_owners, id), CancelOutcome::requested);
   store_->requeue_job(held(id));
-  EXPECT_EQ(store_->find_job(id)->state, JobState::cancelled);
+  EXPECT_EQ(store_->find_job(api::all_owners, id)->state, JobState::cancelled);
   EXPECT_FALSE(claim());
 }
 
@@ -820,21 +824,21 @@ TEST_P(StoreContract, RecoverInterruptedJobsAfterReopen) {
   ASSERT_EQ(claim()->id, interrupted);
   ASSERT_EQ(claim()->id, cancelling);
   store_->record_progress(held(interrupted), 30, 0.3, history_batch(0, 30));
-  ASSERT_EQ(store_->cancel_job(cancelling), CancelOutcome::requested);
+  ASSERT_EQ(store_->cancel_job(api::all_owners, cancelling), CancelOutcome::requested);
 
   reopen();  // as if the process had died with the jobs running
   const RecoveryOutcome recovered = recover();
   EXPECT_EQ(recovered.requeued, 1);
   EXPECT_EQ(recovered.cancelled, 1);
   EXPECT_TRUE(recovered.failed.empty());
-  auto job = store_->find_job(interrupted);
+  auto job = store_->find_job(api::all_owners, interrupted);
   EXPECT_EQ(job->state, JobState::queued);
   EXPECT_EQ(job->attempts, 1);
   EXPECT_EQ(job->started_at, "");
   EXPECT_EQ(job->evaluations, 0);
-  EXPECT_TRUE(store_->history(interrupted, {})->items.empty());
-  EXPECT_EQ(store_->find_job(cancelling)->state, JobState::cancelled);
-  EXPECT_EQ(store_->find_job(waiting)->state, JobState::queued);
+  EXPECT_TRUE(store_->history(api::all_owners, interrupted, {})->items.empty());
+  EXPECT_EQ(store_->find_job(api::all_owners, cancelling)->state, JobState::cancelled);
+  EXPECT_EQ(store_->find_job(api::all_owners, waiting)->state, JobState::queued);
   EXPECT_EQ(recover().requeued, 0);
 
   // Back in submission order; the interrupted job starts its second attempt.
@@ -853,8 +857,8 @@ TEST_P(StoreContract, StartUpRecoveryLeavesTheJobsOfLiveWorkers) {
   reopen();
   const RecoveryOutcome recovered = recover(3, "host-a:200");
   EXPECT_EQ(recovered.requeued, 1);
-  EXPECT_EQ(store_->find_job(dead)->state, JobState::queued);
-  const auto job = store_->find_job(alive);
+  EXPECT_EQ(store_->find_job(api::all_owners, dead)->state, JobState::queued);
+  const auto job = store_->find_job(api::all_owners, alive);
   EXPECT_EQ(job->state, JobState::running);
   EXPECT_EQ(job->worker, "host-a:200");
   EXPECT_EQ(store_->renew_lease(held(alive), std::chrono::seconds(30)), LeaseStatus::held);
@@ -873,11 +877,11 @@ TEST_P(StoreContract, AJobThatKillsItsWorkerThreeTimesIsFailedNotRunAgain) {
     if (death < 3) {
       EXPECT_EQ(recovered.requeued, 1);
       EXPECT_TRUE(recovered.failed.empty());
-      EXPECT_EQ(store_->find_job(poison)->state, JobState::queued);
+      EXPECT_EQ(store_->find_job(api::all_owners, poison)->state, JobState::queued);
     } else {
       EXPECT_EQ(recovered.requeued, 0);
       EXPECT_EQ(recovered.failed, std::vector<std::string>{poison});
-      const auto job = store_->find_job(poison);
+      const auto job = store_->find_job(api::all_owners, poison);
       EXPECT_EQ(job->state, JobState::failed);
       EXPECT_EQ(job->error, "{\"lost\": 3}");
       EXPECT_NE(job->finished_at, "");
@@ -906,7 +910,7 @@ TEST_P(StoreContract, AGracefulRequeueIsNotAWorkerDeath) {
 TEST_P(StoreContract, IdempotencyKeysExpire) {
   const api::IdempotencyKey key{"k-expiring", "f1"};
   const auto first = store_->submit_job(identification_job(), key, 0);
-  const auto robot = store_->insert_robot({"arm", "<robot/>", "", "", 1, "{}"}, key);
+  const auto robot = store_->insert_robot({"arm", "<robot/>", "", "", 1, "{}", ""}, key);
   EXPECT_EQ(store_->submit_job(identification_job(), key, 0).status, SubmitStatus::replayed);
   reopen({.idempotency_ttl = std::chrono::seconds(0)});
   std::this_thread::sleep_for(std::chrono::milliseconds(20));  // past the stamps' millisecond
@@ -918,7 +922,7 @@ TEST_P(StoreContract, IdempotencyKeysExpire) {
   EXPECT_EQ(store_->submit_job(identification_job(), {{"k-expiring", "f2"}}, 0).job.id, again.job.id);
   EXPECT_EQ(store_->submit_job(identification_job(), key, 0).status, SubmitStatus::key_reused);
   // The robot's key was stored before the expired job key was replaced: forgotten with it.
-  const auto second_robot = store_->insert_robot({"arm", "<robot/>", "", "", 1, "{}"}, key);
+  const auto second_robot = store_->insert_robot({"arm", "<robot/>", "", "", 1, "{}", ""}, key);
   EXPECT_EQ(second_robot.status, SubmitStatus::created);
   EXPECT_NE(second_robot.robot.id, robot.robot.id);
 }
@@ -931,7 +935,7 @@ TEST_P(StoreContract, AClaimNamesItsOwnerAndOnlyThatAttemptWrites) {
   ASSERT_TRUE(claimed);
   EXPECT_EQ(claimed->worker, "host-a:100");
   EXPECT_EQ(claimed->attempts, 1);
-  EXPECT_EQ(store_->find_job(id)->worker, "host-a:100");
+  EXPECT_EQ(store_->find_job(api::all_owners, id)->worker, "host-a:100");
   const Lease lease{id, "host-a:100", 1};
   EXPECT_EQ(store_->renew_lease(lease, std::chrono::seconds(30)), LeaseStatus::held);
   EXPECT_EQ(store_->record_progress(lease, 4, 0.4, history_batch(0, 4)), LeaseStatus::held);
@@ -943,17 +947,17 @@ TEST_P(StoreContract, AClaimNamesItsOwnerAndOnlyThatAttemptWrites) {
     EXPECT_FALSE(store_->finish_job(stranger, end_as(JobState::succeeded, "{}", "", {{"m1", 1.0, std::nullopt}}, "")));
     store_->requeue_job(stranger);
   }
-  auto job = store_->find_job(id);
+  auto job = store_->find_job(api::all_owners, id);
   EXPECT_EQ(job->state, JobState::running);
   EXPECT_EQ(job->evaluations, 4);
-  EXPECT_EQ(store_->history(id, {})->items.size(), 4u);
+  EXPECT_EQ(store_->history(api::all_owners, id, {})->items.size(), 4u);
 
   // A cancel asked for through any process reaches the holder on its next write.
-  EXPECT_EQ(store_->cancel_job(id), CancelOutcome::requested);
+  EXPECT_EQ(store_->cancel_job(api::all_owners, id), CancelOutcome::requested);
   EXPECT_EQ(store_->renew_lease(lease, std::chrono::seconds(30)), LeaseStatus::cancel_requested);
   EXPECT_EQ(store_->record_progress(lease, 5, 0.3, history_batch(4, 1)), LeaseStatus::cancel_requested);
   EXPECT_TRUE(store_->finish_job(lease, end_as(JobState::cancelled, "", "", {}, "")));
-  job = store_->find_job(id);
+  job = store_->find_job(api::all_owners, id);
   EXPECT_EQ(job->state, JobState::cancelled);
   EXPECT_EQ(job->worker, "");  // only a running job has a worker
   EXPECT_EQ(store_->renew_lease(lease, std::chrono::seconds(30)), LeaseStatus::lost);
@@ -978,13 +982,13 @@ TEST_P(StoreContract, ExpiredLeasesAreRecoveredAndTheOldAttemptIsShutOut) {
   EXPECT_EQ(recovered.requeued, 1);
   EXPECT_EQ(recovered.cancelled, 0);
   EXPECT_TRUE(recovered.failed.empty());
-  auto job = store_->find_job(expiring);
+  auto job = store_->find_job(api::all_owners, expiring);
   EXPECT_EQ(job->state, JobState::queued);
   EXPECT_EQ(job->worker, "");
   EXPECT_EQ(job->evaluations, 0);
-  EXPECT_TRUE(store_->history(expiring, {})->items.empty());
-  EXPECT_EQ(store_->find_job(renewed)->state, JobState::running);
-  EXPECT_EQ(store_->find_job(held_long)->state, JobState::running);
+  EXPECT_TRUE(store_->history(api::all_owners, expiring, {})->items.empty());
+  EXPECT_EQ(store_->find_job(api::all_owners, renewed)->state, JobState::running);
+  EXPECT_EQ(store_->find_job(api::all_owners, held_long)->state, JobState::running);
 
   // The paused worker wakes up: none of its writes show, before or after the next claim.
   EXPECT_EQ(store_->record_progress(old_attempt, 6, 0.2, history_batch(3, 3)), LeaseStatus::lost);
@@ -995,9 +999,9 @@ TEST_P(StoreContract, ExpiredLeasesAreRecoveredAndTheOldAttemptIsShutOut) {
   EXPECT_EQ(store_->record_progress(old_attempt, 6, 0.2, history_batch(3, 3)), LeaseStatus::lost);
   EXPECT_FALSE(store_->finish_job(old_attempt, end_as(JobState::succeeded, "{\"old\": true}", "", {}, "")));
   EXPECT_TRUE(store_->finish_job(held(expiring), end_as(JobState::succeeded, "{\"new\": true}", "", {}, "")));
-  job = store_->find_job(expiring);
+  job = store_->find_job(api::all_owners, expiring);
   EXPECT_EQ(job->result, "{\"new\": true}");
-  EXPECT_TRUE(store_->history(expiring, {})->items.empty());
+  EXPECT_TRUE(store_->history(api::all_owners, expiring, {})->items.empty());
 }
 
 TEST_P(StoreContract, AJobWhoseLeaseExpiresMaxAttemptsTimesIsFailed) {
@@ -1008,7 +1012,7 @@ TEST_P(StoreContract, AJobWhoseLeaseExpiresMaxAttemptsTimesIsFailed) {
     std::this_thread::sleep_for(std::chrono::milliseconds(20));
     EXPECT_EQ(store_->recover_expired_leases(2, lost_error).requeued, loss == 1 ? 1 : 0);
   }
-  const auto job = store_->find_job(poison);
+  const auto job = store_->find_job(api::all_owners, poison);
   EXPECT_EQ(job->state, JobState::failed);
   EXPECT_EQ(job->error, "{\"lost\": 2}");
   EXPECT_EQ(job->attempts, 2);
@@ -1017,34 +1021,34 @@ TEST_P(StoreContract, AJobWhoseLeaseExpiresMaxAttemptsTimesIsFailed) {
   // A running job whose cancellation was asked for ends cancelled, not queued again.
   const auto cancelling = submit();
   ASSERT_EQ(claim("host-a:100", std::chrono::milliseconds(1))->id, cancelling);
-  ASSERT_EQ(store_->cancel_job(cancelling), CancelOutcome::requested);
+  ASSERT_EQ(store_->cancel_job(api::all_owners, cancelling), CancelOutcome::requested);
   std::this_thread::sleep_for(std::chrono::milliseconds(20));
   EXPECT_EQ(store_->recover_expired_leases(2, lost_error).cancelled, 1);
-  EXPECT_EQ(store_->find_job(cancelling)->state, JobState::cancelled);
+  EXPECT_EQ(store_->find_job(api::all_owners, cancelling)->state, JobState::cancelled);
 }
 
 TEST_P(StoreContract, EverythingSurvivesReopen) {
   const auto data = make_trajectory(50, 2, true, true);
-  const auto dataset = store_->insert_dataset("kept", data, "", api::IdempotencyKey{"d", "f"}).dataset.id;
+  const auto dataset = store_->insert_dataset("", "kept", data, "", api::IdempotencyKey{"d", "f"}).dataset.id;
   const auto job = store_->submit_job(identification_job(), api::IdempotencyKey{"j", "f"}, 0).job.id;
   ASSERT_TRUE(claim());
   store_->record_progress(held(job), 12, 0.12, history_batch(0, 12));
 
   reopen();
-  const auto loaded = store_->load_dataset(dataset);
+  const auto loaded = store_->load_dataset(api::all_owners, dataset);
   ASSERT_TRUE(loaded);
   EXPECT_TRUE(same_bits(loaded->q, data.q));
   EXPECT_TRUE(same_bits(loaded->ref, data.ref));
-  const auto info = store_->find_job(job);
+  const auto info = store_->find_job(api::all_owners, job);
   ASSERT_TRUE(info);
   EXPECT_EQ(info->state, JobState::running);
   EXPECT_EQ(info->evaluations, 12);
-  EXPECT_EQ(store_->history(job, {})->items.size(), 12u);
+  EXPECT_EQ(store_->history(api::all_owners, job, {})->items.size(), 12u);
   EXPECT_EQ(store_->submit_job(identification_job(), api::IdempotencyKey{"j", "f"}, 0).job.id, job);
-  EXPECT_EQ(store_->insert_dataset("kept", data, "", api::IdempotencyKey{"d", "f"}).status, SubmitStatus::replayed);
+  EXPECT_EQ(store_->insert_dataset("", "kept", data, "", api::IdempotencyKey{"d", "f"}).status, SubmitStatus::replayed);
   // New rows after the reopen list above the old ones.
   const auto newer = submit();
-  const auto page = store_->list_jobs({}, {});
+  const auto page = store_->list_jobs(api::all_owners, {}, {});
   ASSERT_EQ(page.items.size(), 2u);
   EXPECT_EQ(page.items[0].id, newer);
 }
@@ -1061,7 +1065,7 @@ TEST_P(StoreContract, ListJobsNewestFirstWithFilters) {
   std::vector<std::string> seen;
   api::PageRequest request{3, ""};
   for (;;) {
-    const auto page = store_->list_jobs({}, request);
+    const auto page = store_->list_jobs(api::all_owners, {}, request);
     for (const auto& job : page.items) seen.push_back(job.id);
     if (page.next_page_token.empty()) break;
     EXPECT_EQ(page.items.size(), 3u);
@@ -1069,22 +1073,27 @@ TEST_P(StoreContract, ListJobsNewestFirstWithFilters) {
   }
   EXPECT_EQ(seen, std::vector<std::string>(ids.rbegin(), ids.rend()));
 
-  const auto simulations = store_->list_jobs({.state = {}, .kind = api::JobKind::simulation, .robot_id = {}}, {});
+  const auto simulations =
+      store_->list_jobs(api::all_owners, {.state = {}, .kind = api::JobKind::simulation, .robot_id = {}}, {});
   ASSERT_EQ(simulations.items.size(), 4u);
   EXPECT_EQ(simulations.items[0].id, ids[6]);
-  const auto queued_simulations = store_->list_jobs({.state = JobState::queued, .kind = api::JobKind::simulation, .robot_id = {}}, {});
+  const auto queued_simulations = store_->list_jobs(
+      api::all_owners, {.state = JobState::queued, .kind = api::JobKind::simulation, .robot_id = {}}, {});
   EXPECT_EQ(queued_simulations.items.size(), 3u);
-  const auto running = store_->list_jobs({.state = JobState::running, .kind = {}, .robot_id = {}}, {});
+  const auto running = store_->list_jobs(api::all_owners, {.state = JobState::running, .kind = {}, .robot_id = {}}, {});
   ASSERT_EQ(running.items.size(), 1u);
   EXPECT_EQ(running.items[0].id, ids[0]);
 
-  const auto first = store_->list_jobs({.state = JobState::queued, .kind = {}, .robot_id = {}}, {2, ""});
+  const auto first = store_->list_jobs(api::all_owners, {.state = JobState::queued, .kind = {}, .robot_id = {}}, {2, ""});
   ASSERT_FALSE(first.next_page_token.empty());
-  EXPECT_EQ(store_->list_jobs({.state = JobState::queued, .kind = {}, .robot_id = {}}, {2, first.next_page_token}).items.size(), 2u);
+  EXPECT_EQ(store_->list_jobs(api::all_owners, {.state = JobState::queued, .kind = {}, .robot_id = {}},
+                              {2, first.next_page_token})
+                .items.size(),
+            2u);
   // The token belongs to its filter.
-  expect_invalid_field([&] { store_->list_jobs({}, {2, first.next_page_token}); }, "page_token");
-  expect_invalid_field([&] { store_->list_jobs({}, {2, "j1.zz.00000000"}); }, "page_token");
-  expect_invalid_field([&] { store_->list_jobs({}, {2, "%%%"}); }, "page_token");
+  expect_invalid_field([&] { store_->list_jobs(api::all_owners, {}, {2, first.next_page_token}); }, "page_token");
+  expect_invalid_field([&] { store_->list_jobs(api::all_owners, {}, {2, "j1.zz.00000000"}); }, "page_token");
+  expect_invalid_field([&] { store_->list_jobs(api::all_owners, {}, {2, "%%%"}); }, "page_token");
 }
 
 TEST_P(StoreContract, CountJobsByStateHasAllStates) {
@@ -1094,7 +1103,7 @@ TEST_P(StoreContract, CountJobsByStateHasAllStates) {
   const auto cancelled = submit();
   submit();
   submit();
-  store_->cancel_job(cancelled);
+  store_->cancel_job(api::all_owners, cancelled);
   claim();
   counts = store_->count_jobs_by_state();
   EXPECT_EQ(counts.at(JobState::queued), 1);
@@ -1128,7 +1137,7 @@ TEST_P(StoreContract, ConcurrentSubmissionsWithSharedKeys) {
           if (outcome.status == SubmitStatus::replayed) ++replayed;
           if (i % 5 == 0) shared_ids[t].emplace_back(i, outcome.job.id);
           // Readers interleaved with the writers.
-          if (!store_->find_job(outcome.job.id)) ++failures;
+          if (!store_->find_job(api::all_owners, outcome.job.id)) ++failures;
         }
       } catch (const std::exception& error) {
         ADD_FAILURE() << error.what();
@@ -1165,7 +1174,7 @@ TEST_P(StoreContract, AWatcherHearsWhatAnotherProcessDid) {
   const std::string id = other->submit_job(identification_job(), std::nullopt, 0).job.id;
   const auto job = other->claim_next_job("host-b:200", std::chrono::seconds(30));
   ASSERT_TRUE(job);
-  EXPECT_EQ(other->cancel_job(id), CancelOutcome::requested);
+  EXPECT_EQ(other->cancel_job(api::all_owners, id), CancelOutcome::requested);
   ASSERT_TRUE(other->finish_job({id, job->worker, job->attempts}, end_as(JobState::cancelled, "", "", {}, "")));
   const std::vector<std::pair<JobEvent::Kind, std::string>> expected = {
       {JobEvent::Kind::queued, id}, {JobEvent::Kind::cancel_requested, id}, {JobEvent::Kind::changed, id}};
@@ -1180,6 +1189,250 @@ TEST_P(StoreContract, AWatcherHearsWhatAnotherProcessDid) {
 
 // The rule both backends apply to a key's live record (store/idempotency.h), without a database:
 // the paths the suite above cannot reach directly (a record whose resource is gone).
+// ---- owners (manipid serve --token-file) ----
+
+/// What owner `owner` stores: a dataset, a robot, and a job on both.
+struct Owned {
+  std::string dataset, robot, job;
+};
+
+Owned store_as(Store& store, const std::string& owner) {
+  Owned owned;
+  const DatasetOutcome dataset =
+      store.insert_dataset(owner, owner + "'s run", make_trajectory(5, 2, true, false), "", std::nullopt);
+  EXPECT_EQ(dataset.dataset.owner, owner);
+  owned.dataset = dataset.dataset.id;
+  NewRobot robot = some_robot(owner + "-arm");
+  robot.owner = owner;
+  const RobotOutcome created = store.insert_robot(robot, std::nullopt);
+  EXPECT_EQ(created.robot.owner, owner);
+  owned.robot = created.robot.id;
+  NewJob job = identification_job();
+  job.dataset_id = owned.dataset;
+  job.robot_id = owned.robot;
+  job.owner = owner;
+  const SubmitOutcome submitted = store.submit_job(job, std::nullopt, 0);
+  EXPECT_EQ(submitted.job.owner, owner);
+  owned.job = submitted.job.id;
+  return owned;
+}
+
+template <class Item>
+std::set<std::string> ids_of(const api::Page<Item>& page) {
+  std::set<std::string> ids;
+  for (const Item& item : page.items) ids.insert(item.id);
+  return ids;
+}
+
+TEST_P(StoreContract, AnOwnersResourcesAreAnotherOwnersMissingOnesAndAnAdminSeesAll) {
+  const Owned alice = store_as(*store_, "alice");
+  const Owned bob = store_as(*store_, "bob");
+  const api::OwnerScope as_alice = "alice", as_bob = "bob";
+
+  // Her own: found, whole.
+  ASSERT_TRUE(store_->find_dataset(as_alice, alice.dataset));
+  EXPECT_EQ(store_->find_dataset(as_alice, alice.dataset)->owner, "alice");
+  EXPECT_TRUE(store_->load_dataset(as_alice, alice.dataset));
+  EXPECT_TRUE(store_->find_robot(as_alice, alice.robot));
+  EXPECT_TRUE(store_->load_robot_urdf(as_alice, alice.robot));
+  EXPECT_TRUE(store_->find_job(as_alice, alice.job));
+  EXPECT_TRUE(store_->history(as_alice, alice.job, {}));
+  EXPECT_TRUE(store_->history_overview(as_alice, alice.job, 10));
+
+  // Hers to bob: exactly as missing.
+  EXPECT_FALSE(store_->find_dataset(as_bob, alice.dataset));
+  EXPECT_FALSE(store_->load_dataset(as_bob, alice.dataset));
+  EXPECT_FALSE(store_->find_robot(as_bob, alice.robot));
+  EXPECT_FALSE(store_->load_robot_urdf(as_bob, alice.robot));
+  EXPECT_FALSE(store_->find_job(as_bob, alice.job));
+  EXPECT_FALSE(store_->history(as_bob, alice.job, {}));
+  EXPECT_FALSE(store_->history_overview(as_bob, alice.job, 10));
+  EXPECT_EQ(store_->cancel_job(as_bob, alice.job), CancelOutcome::not_found);
+  EXPECT_EQ(store_->delete_job(as_bob, alice.job), DeleteResult::not_found);  // not in_use: not there at all
+  EXPECT_EQ(store_->delete_dataset(as_bob, alice.dataset), DeleteResult::not_found);
+  EXPECT_EQ(store_->delete_robot(as_bob, alice.robot), DeleteResult::not_found);
+  EXPECT_EQ(store_->find_job(api::all_owners, alice.job)->state, JobState::queued);  // untouched
+
+  // Lists: each owner's alone, every one's to the admin.
+  EXPECT_EQ(ids_of(store_->list_datasets(as_bob, {})), std::set<std::string>{bob.dataset});
+  EXPECT_EQ(ids_of(store_->list_robots(as_bob, {})), std::set<std::string>{bob.robot});
+  EXPECT_EQ(ids_of(store_->list_jobs(as_bob, {}, {})), std::set<std::string>{bob.job});
+  api::JobFilter on_alices_robot;
+  on_alices_robot.robot_id = alice.robot;
+  EXPECT_TRUE(store_->list_jobs(as_bob, on_alices_robot, {}).items.empty());
+  EXPECT_EQ(ids_of(store_->list_jobs(as_alice, on_alices_robot, {})), std::set<std::string>{alice.job});
+  EXPECT_EQ(ids_of(store_->list_datasets(api::all_owners, {})), (std::set<std::string>{alice.dataset, bob.dataset}));
+  EXPECT_EQ(ids_of(store_->list_robots(api::all_owners, {})), (std::set<std::string>{alice.robot, bob.robot}));
+  EXPECT_EQ(ids_of(store_->list_jobs(api::all_owners, {}, {})), (std::set<std::string>{alice.job, bob.job}));
+  EXPECT_EQ(store_->find_job(api::all_owners, bob.job)->owner, "bob");
+  EXPECT_EQ(store_->find_robot(api::all_owners, alice.robot)->owner, "alice");
+
+  // Her own cancel and delete work; the admin's work on anyone's.
+  EXPECT_EQ(store_->cancel_job(as_alice, alice.job), CancelOutcome::cancelled_now);
+  EXPECT_EQ(store_->delete_job(as_bob, alice.job), DeleteResult::not_found);
+  EXPECT_EQ(store_->delete_job(as_alice, alice.job), DeleteResult::deleted);
+  EXPECT_EQ(store_->delete_dataset(as_alice, alice.dataset), DeleteResult::deleted);
+  EXPECT_EQ(store_->cancel_job(api::all_owners, bob.job), CancelOutcome::cancelled_now);
+  EXPECT_EQ(store_->delete_job(api::all_owners, bob.job), DeleteResult::deleted);
+  EXPECT_EQ(store_->delete_robot(api::all_owners, bob.robot), DeleteResult::deleted);
+
+  // A worker's output is its job's owner's.
+  NewJob simulation;
+  simulation.kind = api::JobKind::simulation;
+  simulation.request = "{}";
+  simulation.owner = "bob";
+  const std::string id = submit(simulation);
+  const auto claimed = claim();
+  ASSERT_TRUE(claimed);
+  const DatasetOutcome made = store_->insert_dataset(claimed->owner, "simulated", make_trajectory(4, 1, false, false), id,
+                                                     api::IdempotencyKey{"job-output:" + id, id});
+  EXPECT_TRUE(store_->find_dataset(as_bob, made.dataset.id));
+  EXPECT_FALSE(store_->find_dataset(as_alice, made.dataset.id));
+  // Everything is as it was after a reopen.
+  reopen();
+  EXPECT_EQ(store_->find_dataset(api::all_owners, made.dataset.id)->owner, "bob");
+  EXPECT_FALSE(store_->find_robot(as_bob, alice.robot));
+  EXPECT_EQ(ids_of(store_->list_robots(as_alice, {})), std::set<std::string>{alice.robot});
+}
+
+TEST_P(StoreContract, AnOwnersPagesHoldTheirsAloneAndTheirTokensServeNoOtherList) {
+  std::vector<std::string> alices_datasets, alices_jobs;
+  for (int i = 0; i < 5; ++i) {
+    for (const std::string owner : {"alice", "bob"}) {
+      const auto dataset = store_->insert_dataset(owner, owner + std::to_string(i), make_trajectory(3, 1, false, false),
+                                                  "", std::nullopt);
+      NewJob job = identification_job();
+      job.owner = owner;
+      const std::string id = submit(job);
+      if (owner == "alice") {
+        alices_datasets.insert(alices_datasets.begin(), dataset.dataset.id);  // newest first
+        alices_jobs.insert(alices_jobs.begin(), id);
+      }
+    }
+  }
+  const api::OwnerScope as_alice = "alice";
+  std::vector<std::string> seen;
+  api::PageRequest request{2, ""};
+  std::string alices_token;
+  for (;;) {
+    const auto page = store_->list_datasets(as_alice, request);
+    for (const auto& dataset : page.items) seen.push_back(dataset.id);
+    if (page.next_page_token.empty()) break;
+    request.page_token = alices_token = page.next_page_token;
+  }
+  EXPECT_EQ(seen, alices_datasets);
+  seen.clear();
+  api::JobFilter queued;
+  queued.state = JobState::queued;
+  request = {2, ""};
+  std::string alices_job_token;
+  for (;;) {
+    const auto page = store_->list_jobs(as_alice, queued, request);
+    for (const auto& job : page.items) seen.push_back(job.id);
+    if (page.next_page_token.empty()) break;
+    request.page_token = alices_job_token = page.next_page_token;
+  }
+  EXPECT_EQ(seen, alices_jobs);
+  // A token is its list's: not bob's, not the admin's (and theirs not hers).
+  expect_invalid_field([&] { store_->list_datasets(api::OwnerScope("bob"), {2, alices_token}); }, "page_token");
+  expect_invalid_field([&] { store_->list_datasets(api::all_owners, {2, alices_token}); }, "page_token");
+  expect_invalid_field([&] { store_->list_jobs(api::OwnerScope("bob"), queued, {2, alices_job_token}); }, "page_token");
+  const std::string admins_token = store_->list_datasets(api::all_owners, {2, ""}).next_page_token;
+  ASSERT_FALSE(admins_token.empty());
+  expect_invalid_field([&] { store_->list_datasets(as_alice, {2, admins_token}); }, "page_token");
+  for (int i = 0; i < 3; ++i) {
+    NewRobot robot = some_robot("r" + std::to_string(i));
+    robot.owner = i == 1 ? "bob" : "alice";
+    store_->insert_robot(robot, std::nullopt);
+  }
+  const auto first = store_->list_robots(as_alice, {1, ""});
+  ASSERT_EQ(first.items.size(), 1u);
+  EXPECT_EQ(first.items[0].name, "r2");
+  const auto second = store_->list_robots(as_alice, {1, first.next_page_token});
+  ASSERT_EQ(second.items.size(), 1u);
+  EXPECT_EQ(second.items[0].name, "r0");  // bob's r1 between them is skipped, not shown
+  EXPECT_EQ(second.next_page_token, "");
+  expect_invalid_field([&] { store_->list_robots(api::OwnerScope("bob"), {1, first.next_page_token}); }, "page_token");
+}
+
+TEST_P(StoreContract, AnIdempotencyKeyIsItsOwners) {
+  const api::IdempotencyKey key{"run-42", "fingerprint-a"};
+  NewJob alices = identification_job(), bobs = identification_job();
+  alices.owner = "alice";
+  bobs.owner = "bob";
+  const SubmitOutcome first = store_->submit_job(alices, key, 0);
+  ASSERT_EQ(first.status, SubmitStatus::created);
+  // Bob's same key, same body: his own new job, never alice's.
+  const SubmitOutcome his = store_->submit_job(bobs, key, 0);
+  ASSERT_EQ(his.status, SubmitStatus::created);
+  EXPECT_NE(his.job.id, first.job.id);
+  EXPECT_EQ(his.job.owner, "bob");
+  // And each replays their own.
+  EXPECT_EQ(store_->submit_job(alices, key, 0).job.id, first.job.id);
+  EXPECT_EQ(store_->submit_job(bobs, key, 0).job.id, his.job.id);
+  // Another body under the key is refused for its owner alone; a third owner's is a new key.
+  NewJob carols = identification_job(R"({"other":1})");
+  carols.owner = "carol";
+  alices.request = R"({"other":1})";
+  EXPECT_EQ(store_->submit_job(alices, api::IdempotencyKey{"run-42", "fingerprint-b"}, 0).status, SubmitStatus::key_reused);
+  EXPECT_EQ(store_->submit_job(carols, api::IdempotencyKey{"run-42", "fingerprint-b"}, 0).status, SubmitStatus::created);
+  // Deleting bob's job frees his key only.
+  ASSERT_EQ(store_->cancel_job(api::OwnerScope("bob"), his.job.id), CancelOutcome::cancelled_now);
+  ASSERT_EQ(store_->delete_job(api::OwnerScope("bob"), his.job.id), DeleteResult::deleted);
+  EXPECT_EQ(store_->submit_job(bobs, key, 0).status, SubmitStatus::created);
+  EXPECT_EQ(store_->submit_job(identification_job(), key, 0).status, SubmitStatus::created);  // owner "": a fourth
+
+  // Datasets and robots alike.
+  const auto data = make_trajectory(6, 1, false, false);
+  const api::IdempotencyKey upload{"upload-1", "fingerprint-d"};
+  const DatasetOutcome her_data = store_->insert_dataset("alice", "run", data, "", upload);
+  const DatasetOutcome his_data = store_->insert_dataset("bob", "run", data, "", upload);
+  EXPECT_EQ(his_data.status, SubmitStatus::created);
+  EXPECT_NE(his_data.dataset.id, her_data.dataset.id);
+  EXPECT_EQ(store_->insert_dataset("alice", "run", data, "", upload).dataset.id, her_data.dataset.id);
+  EXPECT_EQ(store_->insert_dataset("bob", "run", data, "", upload).dataset.id, his_data.dataset.id);
+  NewRobot her_robot = some_robot("arm"), his_robot = some_robot("arm");
+  her_robot.owner = "alice";
+  his_robot.owner = "bob";
+  const RobotOutcome hers = store_->insert_robot(her_robot, upload);
+  const RobotOutcome theirs = store_->insert_robot(his_robot, upload);
+  EXPECT_EQ(theirs.status, SubmitStatus::created);
+  EXPECT_NE(theirs.robot.id, hers.robot.id);
+  EXPECT_EQ(store_->insert_robot(his_robot, upload).robot.id, theirs.robot.id);
+  EXPECT_EQ(store_->insert_robot(her_robot, upload).robot.id, hers.robot.id);
+}
+
+// A PostgreSQL database from before owners (schema version 1: made here by taking today's owner
+// columns away again) opens migrated: its rows are no one's, the admin's to see, and its keys still
+// replay. (SQLite's migration from a release's file: migration_test.cpp.)
+TEST_P(StoreContract, APostgresDatabaseFromBeforeOwnersOpensWithItsRowsTheAdmins) {
+  if (GetParam().name != "postgres") GTEST_SKIP() << "SQLite's migrations: migration_test.cpp";
+  const std::string dataset =
+      store_->insert_dataset("", "old run", make_trajectory(5, 1, false, false), "", std::nullopt).dataset.id;
+  const std::string robot = store_->insert_robot(some_robot(), std::nullopt).robot.id;
+  const api::IdempotencyKey key{"old-key", "old-fingerprint"};
+  const std::string job = store_->submit_job(identification_job(), key, 0).job.id;
+  store_.reset();
+  postgres_admin(
+      "ALTER TABLE idempotency_keys DROP CONSTRAINT idempotency_keys_pkey; "
+      "ALTER TABLE idempotency_keys DROP COLUMN owner; ALTER TABLE idempotency_keys ADD PRIMARY KEY (scope, key); "
+      "ALTER TABLE datasets DROP COLUMN owner; ALTER TABLE robots DROP COLUMN owner; ALTER TABLE jobs DROP COLUMN owner; "
+      "DELETE FROM manipid_schema WHERE version > 1",
+      postgres_database(directory_));
+  reopen();
+  ASSERT_TRUE(store_->find_dataset(api::all_owners, dataset));
+  EXPECT_EQ(store_->find_dataset(api::all_owners, dataset)->owner, "");
+  EXPECT_EQ(store_->find_robot(api::all_owners, robot)->owner, "");
+  EXPECT_EQ(store_->find_job(api::all_owners, job)->owner, "");
+  EXPECT_EQ(ids_of(store_->list_jobs(api::all_owners, {}, {})), std::set<std::string>{job});
+  EXPECT_FALSE(store_->find_job(api::OwnerScope("alice"), job));
+  EXPECT_TRUE(store_->list_datasets(api::OwnerScope("alice"), {}).items.empty());
+  EXPECT_EQ(store_->submit_job(identification_job(), key, 0).job.id, job);  // the old key replays
+  NewJob alices = identification_job();
+  alices.owner = "alice";
+  EXPECT_EQ(store_->submit_job(alices, key, 0).status, SubmitStatus::created);  // hers is another key
+}
+
 TEST(IdempotencyRule, ReplaysRefusesOrGoesOn) {
   const api::IdempotencyKey key{"k", "f1"};
   int asked = 0;

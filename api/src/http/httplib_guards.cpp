@@ -3,6 +3,7 @@
 #include "manipid/api/problem.h"
 
 #include "http/httplib_guards.h"  // includes httplib.h, after the manipid headers
+#include "http/request_helpers.h"
 #include "http/responses.h"
 #include "routes/handlers.h"
 
@@ -17,14 +18,6 @@
 #include <sstream>
 
 namespace manipid::api::http {
-
-bool token_matches(const std::string& given, const std::string& expected) {
-  // Constant time in the token's content, so the comparison leaks nothing but the length.
-  if (given.size() != expected.size()) return false;
-  unsigned char difference = 0;
-  for (std::size_t i = 0; i < given.size(); ++i) difference |= static_cast<unsigned char>(given[i] ^ expected[i]);
-  return difference == 0;
-}
 
 /// Debian's cpp-httplib 0.11.4 answers "Accept-Encoding: br" (every browser sends it) with
 /// Brotli at quality 11: 25 s of one server thread for a 17.7 MB history CSV, 0.6 s for the
@@ -176,15 +169,12 @@ httplib::Server::HandlerResponse before_routing(RouteState& state, const httplib
   // The bearer token guards the API and /metrics (job counts, memory, request rates are the lab's
   // business; Prometheus sends a bearer token with `authorization`): the dashboard's static files and
   // /healthz stay outside its reach (the page asks for the token and sends it with its own API calls).
+  // Which token it is — whose resources the request sees — the handlers ask again (caller_of).
   const bool needs_token = request.path.rfind("/v1/", 0) == 0 || request.path == "/v1" || request.path == "/metrics";
-  if (needs_token && !state.options.token.empty()) {
-    const std::string header = request.get_header_value("Authorization");
-    const std::string prefix = "Bearer ";
-    if (header.rfind(prefix, 0) != 0 || !token_matches(header.substr(prefix.size()), state.options.token)) {
-      return refuse(response,
-                    {ProblemKind::unauthorized, "this server needs 'Authorization: Bearer <token>'", "Authorization"},
-                    request.path);
-    }
+  if (needs_token && !identify(state, request)) {
+    return refuse(response,
+                  {ProblemKind::unauthorized, "this server needs 'Authorization: Bearer <token>'", "Authorization"},
+                  request.path);
   }
   // cpp-httplib 0.11.4 reads a POST without Content-Length until the peer closes (curl -X POST
   // sends none): answer a bodiless cancel here, before any read, and refuse other such POSTs.
@@ -194,8 +184,8 @@ httplib::Server::HandlerResponse before_routing(RouteState& state, const httplib
                              request.method == "PRI";
   if (body_expected && !request.has_header("Content-Length") && !request.has_header("Transfer-Encoding")) {
     if (const std::string id = request.method == "POST" ? cancel_route_id(request.path) : ""; !id.empty()) {
-      guarded(state.self.lock(), [&state, id](const httplib::Request&, httplib::Response& answer) {
-        cancel_job_with_id(state, id, answer);
+      guarded(state.self.lock(), [&state, id](const httplib::Request& cancel, httplib::Response& answer) {
+        cancel_job_with_id(state, caller_of(state, cancel), id, answer);
       })(request, response);
       return httplib::Server::HandlerResponse::Handled;
     }

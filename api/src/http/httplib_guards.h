@@ -13,15 +13,13 @@
 
 namespace manipid::api::http {
 
-/// Constant time in the token's content, so the comparison leaks nothing but the length.
-bool token_matches(const std::string& given, const std::string& expected);
-
 /// Strikes "br" from the request's Accept-Encoding (gzip stays): 0.11.4's Brotli is quality 11.
 void refuse_brotli(const httplib::Request& request);
 
 /// The pre-routing hook: runs before any byte of the body is read. Body framing (two
 /// Content-Lengths, Content-Length beside Transfer-Encoding, a body on a GET: 400) and a
-/// declared length over --max-body (413), Brotli strike, bearer token on /v1, bodiless POST,
+/// declared length over --max-body (413), Brotli strike, bearer token on /v1 and /metrics (401
+/// unless it is one the server takes: request_helpers.h's identify), bodiless POST,
 /// PUT or PATCH (411, but a bodiless cancel is answered), chunked (411) and compressed (415)
 /// bodies refused; then one of the places for bodies being received at once taken
 /// (HttpServer::admit_body: 503 UPLOADS_BUSY beyond them) and the body's memory reserved

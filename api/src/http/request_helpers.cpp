@@ -1,5 +1,5 @@
-// request_helpers.cpp — reading media types, JSON bodies, Idempotency-Keys and query
-// parameters (request_helpers.h).
+// request_helpers.cpp — reading bearer tokens, media types, JSON bodies, Idempotency-Keys and
+// query parameters (request_helpers.h).
 #include "manipid/api/problem.h"
 
 #include "json_fields.h"  // includes Eigen: before httplib.h
@@ -17,10 +17,7 @@
 #include <string_view>
 
 namespace manipid::api::http {
-namespace {
 
-/// SHA-256 of the parts one after the other, in hex: the digest of their concatenation, without
-/// making it (an idempotent upload's body is not copied to be hashed).
 std::string sha256_hex(std::initializer_list<std::string_view> parts) {
   const std::unique_ptr<EVP_MD_CTX, decltype(&EVP_MD_CTX_free)> context(EVP_MD_CTX_new(), EVP_MD_CTX_free);
   bool ok = context && EVP_DigestInit_ex(context.get(), EVP_sha256(), nullptr) == 1;
@@ -37,7 +34,34 @@ std::string sha256_hex(std::initializer_list<std::string_view> parts) {
   return out;
 }
 
-}  // namespace
+bool token_matches(const std::string& given, const std::string& expected) {
+  if (given.size() != expected.size()) return false;
+  unsigned char difference = 0;
+  for (std::size_t i = 0; i < given.size(); ++i) difference |= static_cast<unsigned char>(given[i] ^ expected[i]);
+  return difference == 0;
+}
+
+std::optional<Caller> identify(const RouteState& state, const httplib::Request& request) {
+  if (state.credentials.empty()) return Caller{};
+  const std::string header = request.get_header_value("Authorization");
+  const std::string prefix = "Bearer ";
+  if (header.rfind(prefix, 0) != 0) return std::nullopt;
+  // The digests all have one length, and every one is compared: how long this takes tells
+  // nothing of the token given, of the tokens taken, or of which one matched.
+  const std::string digest = sha256_hex({std::string_view(header).substr(prefix.size())});
+  const Credential* found = nullptr;
+  for (const Credential& credential : state.credentials) {
+    if (token_matches(digest, credential.digest)) found = &credential;
+  }
+  if (found == nullptr) return std::nullopt;
+  return found->caller;
+}
+
+Caller caller_of(const RouteState& state, const httplib::Request& request) {
+  if (auto caller = identify(state, request)) return *caller;
+  throw ApiError(ProblemKind::unauthorized, "this server needs 'Authorization: Bearer <token>'", "Authorization");
+}
+
 
 std::string media_type(const httplib::Request& request) {
   std::string type = request.get_header_value("Content-Type");

@@ -1,7 +1,7 @@
 // request_helpers.h — internal to the routes: reading what a request says beyond its path —
-// media type, JSON body, Idempotency-Key and its fingerprint, integer and paging query
-// parameters, ?format= / Accept: text/csv — and the ETag of an answer. Each throws ApiError
-// naming the header or parameter at fault.
+// whom its bearer token stands for, media type, JSON body, Idempotency-Key and its fingerprint,
+// integer and paging query parameters, ?format= / Accept: text/csv — and the ETag of an answer.
+// Each throws ApiError naming the header or parameter at fault.
 #pragma once
 
 #include "manipid/api/records.h"
@@ -10,10 +10,28 @@
 
 #include <nlohmann/json.hpp>
 
+#include <initializer_list>
 #include <optional>
 #include <string>
+#include <string_view>
 
 namespace manipid::api::http {
+
+/// SHA-256 of the parts one after the other, in hex: the digest of their concatenation, without
+/// making it (an idempotent upload's body is not copied to be hashed).
+std::string sha256_hex(std::initializer_list<std::string_view> parts);
+
+/// Constant time in the strings' content: the comparison leaks nothing but their lengths (callers
+/// compare SHA-256 digests, all of one length).
+bool token_matches(const std::string& given, const std::string& expected);
+
+/// Whom the request acts for, by its "Authorization: Bearer <token>": the admin with owner "" on a
+/// server without tokens; nullopt when the server has tokens and the request carries none of them.
+/// The token's digest is compared with every credential's, all of them every time.
+std::optional<Caller> identify(const RouteState& state, const httplib::Request& request);
+/// identify() in a handler (the pre-routing hook let the request through): 401 ApiError when it
+/// finds no one (a route outside the token's reach, such as /metrics without any token).
+Caller caller_of(const RouteState& state, const httplib::Request& request);
 
 /// The Content-Type without parameters, spaces removed, lower case ("" when absent).
 std::string media_type(const httplib::Request& request);

@@ -1,5 +1,5 @@
 // route_state.h — internal to the routes: what every handler shares (the Service, the
-// options, the request counters for /metrics) and the handler signature the route table maps
+// options, the tokens it takes, the request counters for /metrics) and the handler signature the route table maps
 // paths to.
 //
 // Everything behind register_routes lives in manipid::api::http: the public namespace
@@ -30,6 +30,13 @@
 
 namespace manipid::api::http {
 
+/// A token the server takes, as it is compared: the SHA-256 of the token (hex), never the token
+/// itself, so each comparison takes the same time whatever the tokens' lengths and contents.
+struct Credential {
+  Caller caller;
+  std::string digest;
+};
+
 /// Shared by every handler; lives as long as the server's handlers (captured by shared_ptr).
 struct RouteState {
   RouteState(Service& service_, RouteOptions options_)
@@ -38,6 +45,9 @@ struct RouteState {
   RouteOptions options;
   MemoryBudget memory;  ///< the bodies being read and handled now (RouteOptions::memory_budget)
   std::weak_ptr<RouteState> self;  ///< for handlers called from the pre-routing hook
+  /// RouteOptions::token and RouteOptions::tokens as compared (register_routes fills it); empty:
+  /// no token is asked for and every request acts as the admin, owner "".
+  std::vector<Credential> credentials;
   std::mutex mutex;
   std::map<std::string, long> requests;  ///< "METHOD,status" → count
   std::atomic<int> waiters{0};           ///< ?wait= long-polls waiting now (RouteOptions::max_waiters)

@@ -4,6 +4,7 @@
 #include "manipid/api/routes.h"
 
 #include "http/httplib_guards.h"  // includes httplib.h, after the manipid headers
+#include "http/request_helpers.h"
 #include "http/responses.h"
 #include "routes/handlers.h"
 
@@ -54,6 +55,13 @@ void register_routes(httplib::Server& server, Service& service, RouteOptions opt
   using namespace http;
   auto state = std::make_shared<RouteState>(service, std::move(options));
   state->self = state;
+  // The tokens as compared: their digests, never the tokens (request_helpers.h: identify).
+  if (!state->options.token.empty()) {
+    state->credentials.push_back({Caller{"", true}, sha256_hex({state->options.token})});
+  }
+  for (const NamedToken& named : state->options.tokens) {
+    state->credentials.push_back({Caller{named.name, named.admin}, sha256_hex({named.token})});
+  }
   const std::string id = id_pattern;
 
   // ---- Hooks (http/httplib_guards.h says what each guards against) ----
@@ -81,7 +89,10 @@ void register_routes(httplib::Server& server, Service& service, RouteOptions opt
     char line[96];
     std::snprintf(line, sizeof line, " %d %zu bytes %.1f ms", response.status, response.body.size(),
                   std::chrono::duration<double, std::milli>(Clock::now() - request_started).count());
-    state->options.log(request.remote_addr + " " + request.method + " " + request.target + line);
+    // Whom a named token stood for (never the token itself): its name ends the line.
+    const auto caller = identify(*state, request);
+    const std::string owner = caller && !caller->owner.empty() ? " by " + caller->owner : "";
+    state->options.log(request.remote_addr + " " + request.method + " " + request.target + line + owner);
   });
 
   Table routes(server, state);

@@ -164,6 +164,7 @@ void reserve_for_numbers(RouteState& state, const std::string& body) {
 }  // namespace
 
 void create_dataset(RouteState& state, const httplib::Request& request, httplib::Response& response) {
+  const Caller caller = caller_of(state, request);
   const auto key = idempotency_key(request);
   const std::string type = media_type(request);
   // `curl --data-binary @run.csv` labels the body form-urlencoded unless told otherwise: an
@@ -173,7 +174,8 @@ void create_dataset(RouteState& state, const httplib::Request& request, httplib:
   const auto robot_joint_names = [&] {
     std::vector<std::string> names;
     if (request.has_param("robot_id")) {
-      for (const robot::Joint& joint : stored_robot(state, request.get_param_value("robot_id"), "robot_id")->model.joints) {
+      const auto named = stored_robot(state, caller, request.get_param_value("robot_id"), "robot_id");
+      for (const robot::Joint& joint : named->model.joints) {
         names.push_back(joint.name);
       }
     }
@@ -214,29 +216,31 @@ void create_dataset(RouteState& state, const httplib::Request& request, httplib:
     reserve_for_numbers(state, request.body);
     upload = dataset_from_json_text(text);  // no document of the body: numbers straight into arrays
   }
-  const DatasetCreated created = state.service.create_dataset(upload, key);
+  const DatasetCreated created = state.service.create_dataset(caller, upload, key);
   response.set_header("Location", "/v1/datasets/" + created.dataset.id);
   if (created.replayed) response.set_header("Idempotent-Replayed", "true");
   send_json(response, 201, dataset_to_json(created.dataset));
 }
 
 void get_dataset(RouteState& state, const httplib::Request& request, httplib::Response& response) {
+  const Caller caller = caller_of(state, request);
   const std::string id = request.matches[1];
   if (wants_csv(request)) {
-    auto data = state.service.dataset_data(id);
+    auto data = state.service.dataset_data(caller, id);
     if (!data) throw ApiError(ProblemKind::not_found, "no dataset " + id, "id");
     send_csv(response, std::make_shared<const Trajectory>(std::move(*data)));
     return;
   }
-  const auto dataset = state.service.dataset(id);
+  const auto dataset = state.service.dataset(caller, id);
   if (!dataset) throw ApiError(ProblemKind::not_found, "no dataset " + id, "id");
   send_json(response, 200, dataset_to_json(*dataset));
 }
 
 void get_dataset_data(RouteState& state, const httplib::Request& request, httplib::Response& response) {
+  const Caller caller = caller_of(state, request);
   const std::string id = request.matches[1];
   const long max_points = max_points_parameter(request, 0);  // 0: every sample
-  auto data = state.service.dataset_data(id);
+  auto data = state.service.dataset_data(caller, id);
   if (!data) throw ApiError(ProblemKind::not_found, "no dataset " + id, "id");
   // Every sample: the stored data itself, not a copy.
   auto shown = std::make_shared<const Trajectory>(thinning_stride(data->samples(), max_points) == 1
@@ -251,7 +255,8 @@ void get_dataset_data(RouteState& state, const httplib::Request& request, httpli
 }
 
 void list_datasets(RouteState& state, const httplib::Request& request, httplib::Response& response) {
-  const Page<DatasetInfo> page = state.service.datasets(page_request(request, 50));
+  const Caller caller = caller_of(state, request);
+  const Page<DatasetInfo> page = state.service.datasets(caller, page_request(request, 50));
   nlohmann::ordered_json items = nlohmann::ordered_json::array();
   for (const DatasetInfo& dataset : page.items) items.push_back(dataset_to_json(dataset));
   nlohmann::ordered_json body = {{"items", items}};
@@ -260,8 +265,9 @@ void list_datasets(RouteState& state, const httplib::Request& request, httplib::
 }
 
 void delete_dataset(RouteState& state, const httplib::Request& request, httplib::Response& response) {
+  const Caller caller = caller_of(state, request);
   const std::string id = request.matches[1];
-  switch (state.service.delete_dataset(id)) {
+  switch (state.service.delete_dataset(caller, id)) {
     case DeleteOutcome::deleted: response.status = 204; return;
     case DeleteOutcome::not_found: throw ApiError(ProblemKind::not_found, "no dataset " + id, "id");
     case DeleteOutcome::conflict:

@@ -1,7 +1,8 @@
 // handlers.h — internal to the routes: every handler the route table (http/route_table.cpp)
-// maps a path to, one section per resource file. A handler maps the request to Service calls
-// and the answer back; it throws ApiError or InputError for anything a client can fix, and
-// `guarded` (http/responses.h) turns what it throws into problem+json.
+// maps a path to, one section per resource file. A handler maps the request to Service calls,
+// made for the request's caller (request_helpers.h: caller_of), and the answer back; it throws
+// ApiError or InputError for anything a client can fix, and `guarded` (http/responses.h) turns
+// what it throws into problem+json.
 //
 // A new resource (robots, say) is a routes/robots.cpp with its handlers, a section here, and
 // its lines in the route table.
@@ -43,13 +44,14 @@ void list_robots(RouteState& state, const httplib::Request& request, httplib::Re
 void get_robot(RouteState& state, const httplib::Request& request, httplib::Response& response);
 void delete_robot(RouteState& state, const httplib::Request& request, httplib::Response& response);
 void submit_excitation(RouteState& state, const httplib::Request& request, httplib::Response& response);
-/// A stored robot parsed again (as a job does), for requests checked against it; InputError-like
-/// ApiError (422, `field`) when there is no such robot.
-std::shared_ptr<const ParsedRobot> stored_robot(RouteState& state, const std::string& id, const std::string& field);
+/// A stored robot the caller sees, parsed again (as a job does), for requests checked against it;
+/// InputError-like ApiError (422, `field`) when there is no such robot (or it is another owner's).
+std::shared_ptr<const ParsedRobot> stored_robot(RouteState& state, const Caller& caller, const std::string& id,
+                                                const std::string& field);
 /// /v1/identifications with a robot_id (submissions.cpp hands those over): checked against the stored
 /// robot and datasets, then queued.
-void submit_robot_identification(RouteState& state, const nlohmann::json& body, const std::optional<IdempotencyKey>& key,
-                                 httplib::Response& response);
+void submit_robot_identification(RouteState& state, const Caller& caller, const nlohmann::json& body,
+                                 const std::optional<IdempotencyKey>& key, httplib::Response& response);
 
 // ---- jobs.cpp: /v1/jobs ------------------------------------------------------------------
 
@@ -65,8 +67,8 @@ void delete_job(RouteState& state, const httplib::Request& request, httplib::Res
 /// The job as JSON with `status`, and Retry-After: 1 while it is not terminal (submissions
 /// answer with it too).
 void send_job(httplib::Response& response, int status, const JobInfo& job);
-/// The cancel of job `id`; also called from the pre-routing guard for a bodiless cancel.
-void cancel_job_with_id(RouteState& state, const std::string& id, httplib::Response& response);
+/// The cancel of job `id` for `caller`; also called from the pre-routing guard for a bodiless cancel.
+void cancel_job_with_id(RouteState& state, const Caller& caller, const std::string& id, httplib::Response& response);
 /// The job id of "/v1/jobs/{id}/cancel" or "/v1/jobs/{id}:cancel", else empty.
 std::string cancel_route_id(const std::string& path);
 

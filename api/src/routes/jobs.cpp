@@ -26,6 +26,7 @@ void send_job(httplib::Response& response, int status, const JobInfo& job) {
 }
 
 void get_job(RouteState& state, const httplib::Request& request, httplib::Response& response) {
+  const Caller caller = caller_of(state, request);
   const std::string id = request.matches[1];
   std::optional<JobInfo> job;
   if (request.has_param("wait")) {
@@ -39,20 +40,20 @@ void get_job(RouteState& state, const httplib::Request& request, httplib::Respon
     // A waiter holds this HTTP thread: at most max_waiters at once, so /healthz, uploads and
     // reads always find a thread; the others get the job as it stands and come back later.
     if (seconds <= 0) {
-      job = state.service.wait(id, 0.0);
+      job = state.service.wait(caller, id, 0.0);
     } else if (state.waiters.fetch_add(1) >= state.options.max_waiters) {
       state.waiters.fetch_sub(1);
       response.set_header("Manipid-Wait", "declined");
-      job = state.service.job(id);
+      job = state.service.job(caller, id);
     } else {
       struct Release {
         std::atomic<int>& count;
         ~Release() { count.fetch_sub(1); }
       } release{state.waiters};
-      job = state.service.wait(id, seconds);
+      job = state.service.wait(caller, id, seconds);
     }
   } else {
-    job = state.service.job(id);
+    job = state.service.job(caller, id);
   }
   if (!job) throw ApiError(ProblemKind::not_found, "no job " + id, "id");
   const std::string body = job_to_text(*job);
@@ -68,6 +69,7 @@ void get_job(RouteState& state, const httplib::Request& request, httplib::Respon
 }
 
 void list_jobs(RouteState& state, const httplib::Request& request, httplib::Response& response) {
+  const Caller caller = caller_of(state, request);
   JobFilter filter;
   if (request.has_param("state")) {
     filter.state = parse_job_state(request.get_param_value("state"));
@@ -92,7 +94,7 @@ void list_jobs(RouteState& state, const httplib::Request& request, httplib::Resp
       throw ApiError(ProblemKind::invalid_field, "robot_id must be a robot's id (1 to 64 characters)", "robot_id");
     }
   }
-  const Page<JobInfo> page = state.service.jobs(filter, page_request(request, 50));
+  const Page<JobInfo> page = state.service.jobs(caller, filter, page_request(request, 50));
   std::string body = "{\"items\":[";
   for (const JobInfo& job : page.items) {
     if (&job != &page.items.front()) body += ',';
@@ -106,13 +108,14 @@ void list_jobs(RouteState& state, const httplib::Request& request, httplib::Resp
 }
 
 void job_history(RouteState& state, const httplib::Request& request, httplib::Response& response) {
+  const Caller caller = caller_of(state, request);
   const std::string id = request.matches[1];
   if (request.has_param("max_points")) {
     // Thinned for drawing; paging does not apply.
     if (request.has_param("page_size") || request.has_param("page_token")) {
       throw ApiError(ProblemKind::invalid_field, "max_points cannot be combined with page_size or page_token", "max_points");
     }
-    const auto overview = state.service.history_overview(id, max_points_parameter(request, 0));
+    const auto overview = state.service.history_overview(caller, id, max_points_parameter(request, 0));
     if (!overview) throw ApiError(ProblemKind::not_found, "no job " + id, "id");
     if (wants_csv(request)) {
       response.status = 200;
@@ -127,7 +130,7 @@ void job_history(RouteState& state, const httplib::Request& request, httplib::Re
     std::vector<HistoryEntry> entries;
     PageRequest page{1000, ""};
     for (;;) {
-      const auto chunk = state.service.history(id, page);
+      const auto chunk = state.service.history(caller, id, page);
       if (!chunk) throw ApiError(ProblemKind::not_found, "no job " + id, "id");
       entries.insert(entries.end(), chunk->items.begin(), chunk->items.end());
       if (chunk->next_page_token.empty()) break;
@@ -137,7 +140,7 @@ void job_history(RouteState& state, const httplib::Request& request, httplib::Re
     response.set_content(history_to_csv(entries), "text/csv");
     return;
   }
-  const auto page = state.service.history(id, page_request(request, 1000));
+  const auto page = state.service.history(caller, id, page_request(request, 1000));
   if (!page) throw ApiError(ProblemKind::not_found, "no job " + id, "id");
   if (wants_csv(request)) {
     if (!page->next_page_token.empty()) response.set_header("X-Next-Page-Token", page->next_page_token);
@@ -151,9 +154,9 @@ void job_history(RouteState& state, const httplib::Request& request, httplib::Re
 namespace {
 
 /// The robot a robot identification ran on, parsed as the job parsed it.
-std::shared_ptr<const ParsedRobot> job_robot(RouteState& state, const JobInfo& job) {
-  const auto robot = state.service.robot(job.robot_id);
-  const auto urdf = state.service.robot_urdf(job.robot_id);
+std::shared_ptr<const ParsedRobot> job_robot(RouteState& state, const Caller& caller, const JobInfo& job) {
+  const auto robot = state.service.robot(caller, job.robot_id);
+  const auto urdf = state.service.robot_urdf(caller, job.robot_id);
   if (!robot || !urdf) throw ApiError(ProblemKind::conflict, "the robot of job " + job.id + " was deleted", "robot_id");
   return parsed_robot({robot->name, *urdf, robot->base, robot->tip});
 }
@@ -161,9 +164,10 @@ std::shared_ptr<const ParsedRobot> job_robot(RouteState& state, const JobInfo& j
 }  // namespace
 
 void job_fit(RouteState& state, const httplib::Request& request, httplib::Response& response) {
+  const Caller caller = caller_of(state, request);
   const std::string id = request.matches[1];
   const long max_points = max_points_parameter(request, 2000);
-  const auto job = state.service.job(id);
+  const auto job = state.service.job(caller, id);
   if (!job) throw ApiError(ProblemKind::not_found, "no job " + id, "id");
   if (job->kind != JobKind::identification) {
     const std::string kind = to_string(job->kind);
@@ -174,11 +178,12 @@ void job_fit(RouteState& state, const httplib::Request& request, httplib::Respon
     throw ApiError(ProblemKind::conflict,
                    "job " + id + " is " + to_string(job->state) + " and has no estimate to fit yet", "id");
   }
-  const auto data = state.service.dataset_data(job->dataset_id);
+  const auto data = state.service.dataset_data(caller, job->dataset_id);
   if (!data) throw ApiError(ProblemKind::conflict, "the dataset of job " + id + " was deleted", "dataset_id");
   try {
     if (!job->robot_id.empty()) {
-      send_json(response, 200, robot_fit_to_json(job_robot(state, *job)->model, job->request, job->result, *data, max_points, false));
+      send_json(response, 200,
+                robot_fit_to_json(job_robot(state, caller, *job)->model, job->request, job->result, *data, max_points, false));
       return;
     }
     send_json(response, 200, torque_fit_to_json(job->request, job->result, *data, max_points));
@@ -190,9 +195,10 @@ void job_fit(RouteState& state, const httplib::Request& request, httplib::Respon
 }
 
 void job_validation(RouteState& state, const httplib::Request& request, httplib::Response& response) {
+  const Caller caller = caller_of(state, request);
   const std::string id = request.matches[1];
   const long max_points = max_points_parameter(request, 2000);
-  const auto job = state.service.job(id);
+  const auto job = state.service.job(caller, id);
   if (!job) throw ApiError(ProblemKind::not_found, "no job " + id, "id");
   if (job->robot_id.empty() || job->validation_dataset_id.empty()) {
     throw ApiError(ProblemKind::conflict,
@@ -202,12 +208,13 @@ void job_validation(RouteState& state, const httplib::Request& request, httplib:
   if (job->state != JobState::succeeded) {
     throw ApiError(ProblemKind::conflict, "job " + id + " is " + to_string(job->state) + " and has no estimate yet", "id");
   }
-  const auto data = state.service.dataset_data(job->validation_dataset_id);
+  const auto data = state.service.dataset_data(caller, job->validation_dataset_id);
   if (!data) {
     throw ApiError(ProblemKind::conflict, "the validation dataset of job " + id + " was deleted", "validation_dataset_id");
   }
   try {
-    send_json(response, 200, robot_fit_to_json(job_robot(state, *job)->model, job->request, job->result, *data, max_points, true));
+    send_json(response, 200,
+              robot_fit_to_json(job_robot(state, caller, *job)->model, job->request, job->result, *data, max_points, true));
   } catch (const nlohmann::json::exception&) {
     throw ApiError(ProblemKind::conflict, "job " + id + " has no usable stored result", "id");
   } catch (const InputError&) {
@@ -216,14 +223,15 @@ void job_validation(RouteState& state, const httplib::Request& request, httplib:
 }
 
 void job_urdf(RouteState& state, const httplib::Request& request, httplib::Response& response) {
+  const Caller caller = caller_of(state, request);
   const std::string id = request.matches[1];
-  const auto job = state.service.job(id);
+  const auto job = state.service.job(caller, id);
   if (!job) throw ApiError(ProblemKind::not_found, "no job " + id, "id");
   if (job->kind != JobKind::identification || job->robot_id.empty() || job->state != JobState::succeeded) {
     throw ApiError(ProblemKind::conflict, "job " + id + " is not a succeeded robot identification: no estimate to write", "id");
   }
-  const auto robot = state.service.robot(job->robot_id);
-  const auto urdf = state.service.robot_urdf(job->robot_id);
+  const auto robot = state.service.robot(caller, job->robot_id);
+  const auto urdf = state.service.robot_urdf(caller, job->robot_id);
   if (!robot || !urdf) throw ApiError(ProblemKind::conflict, "the robot of job " + id + " was deleted", "robot_id");
   const std::shared_ptr<const ParsedRobot> stored = parsed_robot({robot->name, *urdf, robot->base, robot->tip});
   const ParsedRobot& parsed = *stored;
@@ -250,14 +258,15 @@ void job_urdf(RouteState& state, const httplib::Request& request, httplib::Respo
   }
 }
 
-void cancel_job_with_id(RouteState& state, const std::string& id, httplib::Response& response) {
-  const auto job = state.service.cancel(id);
+void cancel_job_with_id(RouteState& state, const Caller& caller, const std::string& id, httplib::Response& response) {
+  const auto job = state.service.cancel(caller, id);
   if (!job) throw ApiError(ProblemKind::not_found, "no job " + id, "id");
   send_job(response, 200, *job);
 }
 
 void cancel_job(RouteState& state, const httplib::Request& request, httplib::Response& response) {
-  cancel_job_with_id(state, request.matches[1], response);
+  const Caller caller = caller_of(state, request);
+  cancel_job_with_id(state, caller, request.matches[1], response);
 }
 
 std::string cancel_route_id(const std::string& path) {
@@ -272,8 +281,9 @@ std::string cancel_route_id(const std::string& path) {
 }
 
 void delete_job(RouteState& state, const httplib::Request& request, httplib::Response& response) {
+  const Caller caller = caller_of(state, request);
   const std::string id = request.matches[1];
-  switch (state.service.delete_job(id)) {
+  switch (state.service.delete_job(caller, id)) {
     case DeleteOutcome::deleted: response.status = 204; return;
     case DeleteOutcome::not_found: throw ApiError(ProblemKind::not_found, "no job " + id, "id");
     case DeleteOutcome::conflict:

@@ -11,14 +11,16 @@
 
 namespace manipid::api::http {
 
-std::shared_ptr<const ParsedRobot> stored_robot(RouteState& state, const std::string& id, const std::string& field) {
-  const auto robot = state.service.robot(id);
-  const auto urdf = state.service.robot_urdf(id);
+std::shared_ptr<const ParsedRobot> stored_robot(RouteState& state, const Caller& caller, const std::string& id,
+                                                const std::string& field) {
+  const auto robot = state.service.robot(caller, id);
+  const auto urdf = state.service.robot_urdf(caller, id);
   if (!robot || !urdf) throw ApiError(ProblemKind::invalid_field, "no robot " + id, field);
   return parsed_robot({robot->name, *urdf, robot->base, robot->tip});
 }
 
 void create_robot(RouteState& state, const httplib::Request& request, httplib::Response& response) {
+  const Caller caller = caller_of(state, request);
   const auto key = idempotency_key(request);
   const std::string type = media_type(request);
   RobotUpload upload;
@@ -43,14 +45,16 @@ void create_robot(RouteState& state, const httplib::Request& request, httplib::R
   const ParsedRobot& parsed = *parsed_upload;
   if (upload.name.empty()) upload.name = parsed.model.name;
   const std::string description = robot_description(parsed.model, parsed.warnings).dump();
-  const RobotCreated created = state.service.create_robot(upload, parsed.model.joint_count(), description, key);
+  const RobotCreated created =
+      state.service.create_robot(caller, upload, parsed.model.joint_count(), description, key);
   response.set_header("Location", "/v1/robots/" + created.robot.id);
   if (created.replayed) response.set_header("Idempotent-Replayed", "true");
   send_json(response, 201, robot_to_json(created.robot));
 }
 
 void list_robots(RouteState& state, const httplib::Request& request, httplib::Response& response) {
-  const Page<RobotInfo> page = state.service.robots(page_request(request, 50));
+  const Caller caller = caller_of(state, request);
+  const Page<RobotInfo> page = state.service.robots(caller, page_request(request, 50));
   nlohmann::ordered_json items = nlohmann::ordered_json::array();
   for (const RobotInfo& robot : page.items) items.push_back(robot_to_json(robot));
   nlohmann::ordered_json body = {{"items", items}};
@@ -59,26 +63,28 @@ void list_robots(RouteState& state, const httplib::Request& request, httplib::Re
 }
 
 void get_robot(RouteState& state, const httplib::Request& request, httplib::Response& response) {
+  const Caller caller = caller_of(state, request);
   const std::string id = request.matches[1];
   const std::string format = request.has_param("format") ? request.get_param_value("format") : "json";
   if (format != "json" && format != "urdf") {
     throw ApiError(ProblemKind::invalid_field, "format must be json or urdf, got '" + format + "'", "format");
   }
   if (format == "urdf") {
-    const auto urdf = state.service.robot_urdf(id);
+    const auto urdf = state.service.robot_urdf(caller, id);
     if (!urdf) throw ApiError(ProblemKind::not_found, "no robot " + id, "id");
     response.status = 200;
     response.set_content(*urdf, "application/xml");  // as uploaded, byte for byte
     return;
   }
-  const auto robot = state.service.robot(id);
+  const auto robot = state.service.robot(caller, id);
   if (!robot) throw ApiError(ProblemKind::not_found, "no robot " + id, "id");
   send_json(response, 200, robot_to_json(*robot));
 }
 
 void delete_robot(RouteState& state, const httplib::Request& request, httplib::Response& response) {
+  const Caller caller = caller_of(state, request);
   const std::string id = request.matches[1];
-  switch (state.service.delete_robot(id)) {
+  switch (state.service.delete_robot(caller, id)) {
     case DeleteOutcome::deleted: response.status = 204; return;
     case DeleteOutcome::not_found: throw ApiError(ProblemKind::not_found, "no robot " + id, "id");
     case DeleteOutcome::conflict:
@@ -87,27 +93,29 @@ void delete_robot(RouteState& state, const httplib::Request& request, httplib::R
 }
 
 void submit_excitation(RouteState& state, const httplib::Request& request, httplib::Response& response) {
+  const Caller caller = caller_of(state, request);
   const auto key = idempotency_key(request);
   const nlohmann::json body = json_body(request);
   const ExcitationSpec spec = excitation_from_json(body);
-  check_excitation(spec, stored_robot(state, spec.robot_id, "robot_id")->model);
-  const SubmitResult submitted = state.service.submit({JobKind::excitation, body.dump(), "", spec.robot_id, ""}, key);
+  check_excitation(spec, stored_robot(state, caller, spec.robot_id, "robot_id")->model);
+  const SubmitResult submitted =
+      state.service.submit(caller, {JobKind::excitation, body.dump(), "", spec.robot_id, ""}, key);
   response.set_header("Location", "/v1/jobs/" + submitted.job.id);
   if (submitted.replayed) response.set_header("Idempotent-Replayed", "true");
   send_job(response, 202, submitted.job);
 }
 
-void submit_robot_identification(RouteState& state, const nlohmann::json& body, const std::optional<IdempotencyKey>& key,
-                                 httplib::Response& response) {
+void submit_robot_identification(RouteState& state, const Caller& caller, const nlohmann::json& body,
+                                 const std::optional<IdempotencyKey>& key, httplib::Response& response) {
   const RobotIdentificationSpec spec = robot_identification_from_json(body);
-  const std::shared_ptr<const ParsedRobot> stored = stored_robot(state, spec.robot_id, "robot_id");
+  const std::shared_ptr<const ParsedRobot> stored = stored_robot(state, caller, spec.robot_id, "robot_id");
   const ParsedRobot& robot = *stored;
   const int joints = robot.model.joint_count();
   for (const auto& [ids, field] : {std::pair{spec.dataset_ids, std::string("dataset_id")},
                                    std::pair{spec.validation_dataset_ids, std::string("validation_dataset_id")}}) {
     for (std::size_t i = 0; i < ids.size(); ++i) {
       const std::string where = ids.size() > 1 ? field + "s[" + std::to_string(i) + "]" : field;
-      const auto dataset = state.service.dataset(ids[i]);
+      const auto dataset = state.service.dataset(caller, ids[i]);
       if (!dataset) throw ApiError(ProblemKind::invalid_field, "no dataset " + ids[i], where);
       check_robot_data(joints, robot.model.name, dataset->joints, dataset->has_torque, where);
     }
@@ -121,7 +129,7 @@ void submit_robot_identification(RouteState& state, const nlohmann::json& body, 
     }
   }
   const SubmitResult submitted = state.service.submit(
-      {JobKind::identification, body.dump(), spec.dataset_id, spec.robot_id, spec.validation_dataset_id}, key);
+      caller, {JobKind::identification, body.dump(), spec.dataset_id, spec.robot_id, spec.validation_dataset_id}, key);
   response.set_header("Location", "/v1/jobs/" + submitted.job.id);
   if (submitted.replayed) response.set_header("Idempotent-Replayed", "true");
   send_job(response, 202, submitted.job);

@@ -4,7 +4,8 @@
 #include "manipid/api/problem.h"
 #include "manipid/api/routes.h"
 
-#include "http/responses.h"  // includes httplib.h, after the manipid headers
+#include "http/request_helpers.h"  // includes httplib.h, after the manipid headers
+#include "http/responses.h"
 #include "routes/handlers.h"
 
 #include <algorithm>
@@ -74,7 +75,12 @@ void health(RouteState& state, const httplib::Request&, httplib::Response& respo
   send_json(response, 200, {{"status", "ok"}});
 }
 
-void metrics(RouteState& state, const httplib::Request&, httplib::Response& response) {
+void metrics(RouteState& state, const httplib::Request& request, httplib::Response& response) {
+  // Every owner's job counts and every route's request rates: a named token's owner would learn
+  // of the others' work, so only an admin token reads them (--token and no token at all are admins).
+  if (!caller_of(state, request).admin) {
+    throw ApiError(ProblemKind::forbidden, "/metrics counts every owner's jobs: it needs an admin token", "Authorization");
+  }
   response.status = 200;
   response.set_content(state.service.metrics() + request_metrics(state), "text/plain; version=0.0.4");
 }

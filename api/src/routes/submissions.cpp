@@ -16,6 +16,7 @@ namespace manipid::api::http {
 namespace {
 
 void submit(RouteState& state, const httplib::Request& request, httplib::Response& response, JobKind kind) {
+  const Caller caller = caller_of(state, request);
   const auto key = idempotency_key(request);
   const nlohmann::json body = json_body(request);
   std::string dataset_id;
@@ -29,12 +30,12 @@ void submit(RouteState& state, const httplib::Request& request, httplib::Respons
       check_against_data(spec, spec.simulation->preset.model.joint_count(), samples, true, true);
     } else {
       dataset_id = spec.dataset_id;
-      const auto dataset = state.service.dataset(dataset_id);
+      const auto dataset = state.service.dataset(caller, dataset_id);
       if (!dataset) throw ApiError(ProblemKind::invalid_field, "no dataset " + dataset_id, "dataset_id");
       check_against_data(spec, dataset->joints, dataset->samples, dataset->has_torque, dataset->has_reference);
     }
   }
-  const SubmitResult submitted = state.service.submit({kind, body.dump(), dataset_id, "", ""}, key);
+  const SubmitResult submitted = state.service.submit(caller, {kind, body.dump(), dataset_id, "", ""}, key);
   response.set_header("Location", "/v1/jobs/" + submitted.job.id);
   if (submitted.replayed) response.set_header("Idempotent-Replayed", "true");
   send_job(response, 202, submitted.job);
@@ -47,10 +48,11 @@ void submit_simulation(RouteState& state, const httplib::Request& request, httpl
 }
 
 void submit_identification(RouteState& state, const httplib::Request& request, httplib::Response& response) {
+  const Caller caller = caller_of(state, request);
   const auto key = idempotency_key(request);
   const nlohmann::json body = json_body(request);
   if (names_a_robot(body)) {
-    submit_robot_identification(state, body, key, response);
+    submit_robot_identification(state, caller, body, key, response);
     return;
   }
   submit(state, request, response, JobKind::identification);

@@ -314,7 +314,8 @@ class Client:
     """A connection to a manipid server.
 
     url: e.g. "http://127.0.0.1:8080" (a path prefix behind a proxy is kept);
-    token: sent as `Authorization: Bearer <token>` (the server's --token);
+    token: sent as `Authorization: Bearer <token>` (the server's --token, or your group's token
+        of its --token-file: then you see your group's datasets, robots and jobs only);
     timeout: seconds for one request (a long-poll adds its wait to it).
     """
 

@@ -42,6 +42,7 @@ api::JobInfo read_job(const Result& rows, int row) {
   job.robot_id = rows.text(row, 14);
   job.validation_dataset_id = rows.text(row, 15);
   job.worker = rows.text(row, 16);
+  job.owner = rows.text(row, kJobOwnerColumn);
   return job;
 }
 
@@ -59,6 +60,7 @@ api::DatasetInfo read_dataset(const Result& rows, int row) {
   dataset.uniform = rows.boolean(row, 9);
   dataset.has_rates = rows.boolean(row, 10);
   dataset.has_accelerations = rows.boolean(row, 11);
+  dataset.owner = rows.text(row, kDatasetOwnerColumn);
   return dataset;
 }
 
@@ -71,6 +73,7 @@ api::RobotInfo read_robot(const Result& rows, int row) {
   robot.tip = rows.text(row, 4);
   robot.joints = static_cast<int>(rows.integer(row, 5));
   robot.summary = rows.text(row, 6);
+  robot.owner = rows.text(row, kRobotOwnerColumn);
   return robot;
 }
 
@@ -78,27 +81,46 @@ api::HistoryEntry history_entry(const Result& rows, int row, const std::string& 
   return decode_history_entry(rows.integer(row, 0), rows.real_or_null(row, 1), rows.bytes(row, 2), id);
 }
 
-std::optional<api::JobInfo> select_job(Connection& connection, const std::string& id) {
-  auto rows = connection.exec("SELECT " + kJobColumns + " FROM jobs WHERE id = $1", Params().text(id));
+std::string owner_condition(const api::OwnerScope& owners, Params& params) {
+  if (!owners) return "";
+  params.text(*owners);
+  return " AND owner = $" + std::to_string(params.size());
+}
+
+std::optional<api::JobInfo> select_job(Connection& connection, const api::OwnerScope& owners, const std::string& id) {
+  Params params;
+  params.text(id);
+  const std::string sql = "SELECT " + kJobColumns + " FROM jobs WHERE id = $1" + owner_condition(owners, params);
+  auto rows = connection.exec(sql, params);
   if (rows.rows() == 0) return std::nullopt;
   return read_job(rows, 0);
 }
 
-std::optional<api::DatasetInfo> select_dataset(Connection& connection, const std::string& id) {
-  auto rows = connection.exec("SELECT " + kDatasetColumns + " FROM datasets WHERE id = $1", Params().text(id));
+std::optional<api::DatasetInfo> select_dataset(Connection& connection, const api::OwnerScope& owners,
+                                               const std::string& id) {
+  Params params;
+  params.text(id);
+  const std::string sql = "SELECT " + kDatasetColumns + " FROM datasets WHERE id = $1" + owner_condition(owners, params);
+  auto rows = connection.exec(sql, params);
   if (rows.rows() == 0) return std::nullopt;
   return read_dataset(rows, 0);
 }
 
-std::optional<api::RobotInfo> select_robot(Connection& connection, const std::string& id) {
-  auto rows = connection.exec("SELECT " + kRobotColumns + " FROM robots WHERE id = $1", Params().text(id));
+std::optional<api::RobotInfo> select_robot(Connection& connection, const api::OwnerScope& owners, const std::string& id) {
+  Params params;
+  params.text(id);
+  const std::string sql = "SELECT " + kRobotColumns + " FROM robots WHERE id = $1" + owner_condition(owners, params);
+  auto rows = connection.exec(sql, params);
   if (rows.rows() == 0) return std::nullopt;
   return read_robot(rows, 0);
 }
 
-std::optional<api::JobState> select_state(Connection& connection, const std::string& id, bool lock) {
-  auto rows = connection.exec(std::string("SELECT state FROM jobs WHERE id = $1") + (lock ? " FOR UPDATE" : ""),
-                              Params().text(id));
+std::optional<api::JobState> select_state(Connection& connection, const api::OwnerScope& owners, const std::string& id,
+                                          bool lock) {
+  Params params;
+  params.text(id);
+  const std::string sql = "SELECT state FROM jobs WHERE id = $1" + owner_condition(owners, params) + (lock ? " FOR UPDATE" : "");
+  auto rows = connection.exec(sql, params);
   if (rows.rows() == 0) return std::nullopt;
   const auto state = state_from_text(rows.text(0, 0));
   if (!state) throw StoreError("job " + id + " has an unknown state in the database");
@@ -114,24 +136,27 @@ std::string unused_id(Connection& connection, const char* prefix, const std::str
 
 // ---- idempotency keys ----
 
-std::optional<KeyRecord> claim_key(Connection& connection, const char* scope, const api::IdempotencyKey& key,
-                                   const std::string& id, const std::string& now, const std::string& not_before) {
+std::optional<KeyRecord> claim_key(Connection& connection, const char* scope, const std::string& owner,
+                                   const api::IdempotencyKey& key, const std::string& id, const std::string& now,
+                                   const std::string& not_before) {
   connection.exec("DELETE FROM idempotency_keys WHERE created_at < $1", Params().text(not_before));
   auto inserted = connection.exec(
-      "INSERT INTO idempotency_keys (scope, key, fingerprint, resource_id, created_at) VALUES ($1, $2, $3, $4, $5) "
-      "ON CONFLICT (scope, key) DO NOTHING",
-      Params().text(scope).text(key.key).text(key.fingerprint).text(id).text(now));
+      "INSERT INTO idempotency_keys (scope, owner, key, fingerprint, resource_id, created_at) "
+      "VALUES ($1, $2, $3, $4, $5, $6) ON CONFLICT (scope, owner, key) DO NOTHING",
+      Params().text(scope).text(owner).text(key.key).text(key.fingerprint).text(id).text(now));
   if (inserted.changed() == 1) return std::nullopt;
-  auto held = connection.exec("SELECT fingerprint, resource_id FROM idempotency_keys WHERE scope = $1 AND key = $2",
-                              Params().text(scope).text(key.key));
+  auto held = connection.exec(
+      "SELECT fingerprint, resource_id FROM idempotency_keys WHERE scope = $1 AND owner = $2 AND key = $3",
+      Params().text(scope).text(owner).text(key.key));
   if (held.rows() == 0) throw ConflictRetry("an Idempotency-Key was removed while it was being claimed");
   return KeyRecord{held.text(0, 0), held.text(0, 1)};
 }
 
-void retake_key(Connection& connection, const char* scope, const api::IdempotencyKey& key, const std::string& id,
-                const std::string& now) {
-  connection.exec("UPDATE idempotency_keys SET resource_id = $3, created_at = $4 WHERE scope = $1 AND key = $2",
-                  Params().text(scope).text(key.key).text(id).text(now));
+void retake_key(Connection& connection, const char* scope, const std::string& owner, const api::IdempotencyKey& key,
+                const std::string& id, const std::string& now) {
+  connection.exec(
+      "UPDATE idempotency_keys SET resource_id = $4, created_at = $5 WHERE scope = $1 AND owner = $2 AND key = $3",
+      Params().text(scope).text(owner).text(key.key).text(id).text(now));
 }
 
 void forget_keys_of(Connection& connection, const char* scope, const std::string& id) {

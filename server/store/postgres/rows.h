@@ -43,40 +43,48 @@ api::Page<Item> page_of(const Result& rows, int size, const char* tag, const std
   return result;
 }
 
-std::optional<api::JobInfo> select_job(Connection& connection, const std::string& id);
-std::optional<api::DatasetInfo> select_dataset(Connection& connection, const std::string& id);
-std::optional<api::RobotInfo> select_robot(Connection& connection, const std::string& id);
+/// " AND owner = $N" when `owners` names one owner (added to `params` as $N), else "": the
+/// fragment a statement's WHERE gets.
+std::string owner_condition(const api::OwnerScope& owners, Params& params);
+
+/// The record of `id` if it is within `owners` (a row of another owner is not found, as a missing one).
+std::optional<api::JobInfo> select_job(Connection& connection, const api::OwnerScope& owners, const std::string& id);
+std::optional<api::DatasetInfo> select_dataset(Connection& connection, const api::OwnerScope& owners,
+                                               const std::string& id);
+std::optional<api::RobotInfo> select_robot(Connection& connection, const api::OwnerScope& owners, const std::string& id);
 /// The job's state, its row locked until the transaction ends (`lock`), or nullopt.
-std::optional<api::JobState> select_state(Connection& connection, const std::string& id, bool lock);
+std::optional<api::JobState> select_state(Connection& connection, const api::OwnerScope& owners, const std::string& id,
+                                          bool lock);
 
 /// A fresh random id ("ds_"/"job_"/"rb_" + 16 hex) not held by a row of `table` (a 64-bit
 /// collision is unlikely, but a UNIQUE failure would be a 500).
 std::string unused_id(Connection& connection, const char* prefix, const std::string& table);
 
-// ---- idempotency keys (scope: "job", "dataset" or "robot") ----
+// ---- idempotency keys (scope: "job", "dataset" or "robot"; owner: whose key it is) ----
 
-/// Claims Idempotency-Key `key` in `scope` for the new resource `id`: nullopt when the key is
-/// now ours (create the resource), else the live record that holds it. Expired keys are
+/// Claims `owner`'s Idempotency-Key `key` in `scope` for the new resource `id`: nullopt when the
+/// key is now ours (create the resource), else the live record that holds it. Expired keys are
 /// forgotten first (by the index on their age). Never a read-then-write: of two processes
 /// sending the same key, the second waits for the first's commit and then finds its row.
-std::optional<KeyRecord> claim_key(Connection& connection, const char* scope, const api::IdempotencyKey& key,
-                                   const std::string& id, const std::string& now, const std::string& not_before);
+std::optional<KeyRecord> claim_key(Connection& connection, const char* scope, const std::string& owner,
+                                   const api::IdempotencyKey& key, const std::string& id, const std::string& now,
+                                   const std::string& not_before);
 /// The key now names `id` (its earlier resource is gone).
-void retake_key(Connection& connection, const char* scope, const api::IdempotencyKey& key, const std::string& id,
-                const std::string& now);
+void retake_key(Connection& connection, const char* scope, const std::string& owner, const api::IdempotencyKey& key,
+                const std::string& id, const std::string& now);
 void forget_keys_of(Connection& connection, const char* scope, const std::string& id);
 
-/// A keyed insert's first step: claims `key` (when given) for the new resource `id` and answers
-/// as the shared rule says (answer_from_key, store/idempotency.h) — the earlier resource
+/// A keyed insert's first step: claims `owner`'s `key` (when given) for the new resource `id` and
+/// answers as the shared rule says (answer_from_key, store/idempotency.h) — the earlier resource
 /// (`find`) or a refusal; nullopt: create `id`, the key (if any) now names it.
 template <class Outcome, class Find>
-std::optional<Outcome> claim_key_for(Connection& connection, const char* scope,
+std::optional<Outcome> claim_key_for(Connection& connection, const char* scope, const std::string& owner,
                                      const std::optional<api::IdempotencyKey>& key, const std::string& id,
                                      const std::string& now, const std::string& not_before, Find&& find) {
   if (!key) return std::nullopt;
-  const auto held = claim_key(connection, scope, *key, id, now, not_before);
+  const auto held = claim_key(connection, scope, owner, *key, id, now, not_before);
   auto answer = answer_from_key<Outcome>(held, *key, find);
-  if (!answer && held) retake_key(connection, scope, *key, id, now);
+  if (!answer && held) retake_key(connection, scope, owner, *key, id, now);
   return answer;
 }
 

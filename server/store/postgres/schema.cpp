@@ -14,7 +14,9 @@ namespace {
 /// Any fixed number: the key of the advisory lock migrations hold ("mani" in ASCII).
 constexpr const char* kMigrationLock = "1835101801";
 
-constexpr std::array<const char*, 1> kMigrations = {
+// kMigrations[i] takes version i to i + 1. A migration is appended, never edited: databases in the
+// field have run the old ones.
+constexpr std::array<const char*, 2> kMigrations = {
     R"sql(
     -- seq orders rows newest first for keyset paging; a sequence never hands a value out twice.
     -- The samples come last: reading a description (find, list) never fetches them (TOAST).
@@ -115,6 +117,22 @@ constexpr std::array<const char*, 1> kMigrations = {
     );
     CREATE INDEX idempotency_keys_by_resource ON idempotency_keys (resource_id);
     CREATE INDEX idempotency_keys_by_age ON idempotency_keys (created_at);
+    )sql",
+
+    // 1 → 2: owners (`manipid serve --token-file`), as in the SQLite store's 4 → 5. Every dataset,
+    // robot and job belongs to the name of the token that made it; the rows from before belong to
+    // no one (''), which admin tokens and servers without named tokens see. A column with a
+    // constant default is added without rewriting the table (PostgreSQL 11 and later). An
+    // Idempotency-Key is its owner's: the primary key takes the owner in.
+    R"sql(
+    ALTER TABLE datasets ADD COLUMN owner text NOT NULL DEFAULT '';
+    ALTER TABLE robots ADD COLUMN owner text NOT NULL DEFAULT '';
+    ALTER TABLE jobs ADD COLUMN owner text NOT NULL DEFAULT '';
+    CREATE INDEX datasets_by_owner ON datasets (owner, seq);
+    CREATE INDEX robots_by_owner ON robots (owner, seq);
+    CREATE INDEX jobs_by_owner ON jobs (owner, seq);
+    ALTER TABLE idempotency_keys ADD COLUMN owner text NOT NULL DEFAULT '';
+    ALTER TABLE idempotency_keys DROP CONSTRAINT idempotency_keys_pkey, ADD PRIMARY KEY (scope, owner, key);
     )sql",
 };
 

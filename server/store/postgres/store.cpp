@@ -76,9 +76,9 @@ class PostgresStore final : public Store {
 
   // ---- datasets ----
 
-  DatasetOutcome insert_dataset(const std::string& name, const Trajectory& data, const std::string& source_job,
-                                const std::optional<api::IdempotencyKey>& key) override {
-    api::DatasetInfo dataset = describe_dataset(name, data, source_job);
+  DatasetOutcome insert_dataset(const std::string& owner, const std::string& name, const Trajectory& data,
+                                const std::string& source_job, const std::optional<api::IdempotencyKey>& key) override {
+    api::DatasetInfo dataset = describe_dataset(owner, name, data, source_job);
     const std::string keys_not_before = rfc3339_ago(options_.idempotency_ttl);
 
     auto connection = pool_.checkout();
@@ -86,8 +86,8 @@ class PostgresStore final : public Store {
       dataset.id = unused_id(*connection, "ds_", "datasets");
       dataset.created_at = now_rfc3339();
       if (auto answer = claim_key_for<DatasetOutcome>(
-              *connection, "dataset", key, dataset.id, dataset.created_at, keys_not_before,
-              [&](const std::string& earlier) { return select_dataset(*connection, earlier); })) {
+              *connection, "dataset", owner, key, dataset.id, dataset.created_at, keys_not_before,
+              [&](const std::string& earlier) { return select_dataset(*connection, owner, earlier); })) {
         return *answer;
       }
       Params params;
@@ -108,28 +108,33 @@ class PostgresStore final : public Store {
           .bytes_or_null(encode(data.tau.data(), data.tau.size()))
           .bytes_or_null(encode(data.ref.data(), data.ref.size()))
           .bytes_or_null(encode(data.qd.data(), data.qd.size()))
-          .bytes_or_null(encode(data.qdd.data(), data.qdd.size()));
+          .bytes_or_null(encode(data.qdd.data(), data.qdd.size()))
+          .text(owner);
       connection->exec(
           "INSERT INTO datasets (id, name, created_at, source_job, joints, samples, dt, uniform, has_torque, "
-          "has_reference, has_rates, has_accelerations, t, q, tau, ref, qd, qdd) "
-          "VALUES ($1, $2, $3, $4, $5, $6, $7, $8, $9, $10, $11, $12, $13, $14, $15, $16, $17, $18)",
+          "has_reference, has_rates, has_accelerations, t, q, tau, ref, qd, qdd, owner) "
+          "VALUES ($1, $2, $3, $4, $5, $6, $7, $8, $9, $10, $11, $12, $13, $14, $15, $16, $17, $18, $19)",
           params);
       return {SubmitStatus::created, dataset};
     });
   }
 
-  std::optional<api::DatasetInfo> find_dataset(const std::string& id) override {
+  std::optional<api::DatasetInfo> find_dataset(const api::OwnerScope& scope, const std::string& id) override {
     auto connection = pool_.checkout();
-    return select_dataset(*connection, id);
+    return select_dataset(*connection, scope, id);
   }
 
-  std::optional<Trajectory> load_dataset(const std::string& id) override {
+  std::optional<Trajectory> load_dataset(const api::OwnerScope& scope, const std::string& id) override {
     auto connection = pool_.checkout();
+    Params params;
+    params.text(id);
+    const std::string owned = owner_condition(scope, params);
     // Datasets never change once stored (ids are never reused): the samples of a recent one are
-    // kept in memory, and only its existence is asked again (it may have been deleted since).
+    // kept in memory, and only its existence (within the scope) is asked again (it may have been
+    // deleted since).
     if (auto cached = recent_datasets_.find(id)) {
-      if (connection->exec("SELECT 1 FROM datasets WHERE id = $1", Params().text(id)).rows() == 0) {
-        recent_datasets_.erase(id);
+      if (connection->exec("SELECT 1 FROM datasets WHERE id = $1" + owned, params).rows() == 0) {
+        if (!scope) recent_datasets_.erase(id);  // gone for everyone; another owner's is only out of sight
         return std::nullopt;
       }
       return *cached;
@@ -137,8 +142,8 @@ class PostgresStore final : public Store {
     // Binary results: the samples arrive as the bytes stored, not as hex text.
     auto row = connection->exec(
         "SELECT samples, joints, has_torque, has_reference, has_rates, has_accelerations, t, q, tau, ref, qd, qdd "
-        "FROM datasets WHERE id = $1",
-        Params().text(id), true);
+        "FROM datasets WHERE id = $1" + owned,
+        params, true);
     if (row.rows() == 0) return std::nullopt;
     StoredSamples stored;
     stored.samples = row.binary_integer(0, 0);
@@ -158,18 +163,24 @@ class PostgresStore final : public Store {
     return data;
   }
 
-  api::Page<api::DatasetInfo> list_datasets(const api::PageRequest& page) override {
+  api::Page<api::DatasetInfo> list_datasets(const api::OwnerScope& scope, const api::PageRequest& page) override {
     const int size = effective_page_size(page.page_size);
-    const std::int64_t before = page.page_token.empty() ? INT64_MAX : decode_page_token(page.page_token, "d1", "");
+    const std::string context = list_context(scope);
+    const std::int64_t before = page.page_token.empty() ? INT64_MAX : decode_page_token(page.page_token, "d1", context);
+    Params params;
+    params.integer(before).integer(size + 1);
+    const std::string sql = "SELECT " + kDatasetColumns + " FROM datasets WHERE seq < $1" +
+                            owner_condition(scope, params) + " ORDER BY seq DESC LIMIT $2";
     auto connection = pool_.checkout();
-    auto rows = connection->exec("SELECT " + kDatasetColumns + " FROM datasets WHERE seq < $1 ORDER BY seq DESC LIMIT $2",
-                                 Params().integer(before).integer(size + 1));
-    return page_of<api::DatasetInfo>(rows, size, "d1", "", kDatasetSeqColumn, read_dataset);
+    auto rows = connection->exec(sql, params);
+    return page_of<api::DatasetInfo>(rows, size, "d1", context, kDatasetSeqColumn, read_dataset);
   }
 
-  DeleteResult delete_dataset(const std::string& id) override {
+  DeleteResult delete_dataset(const api::OwnerScope& scope, const std::string& id) override {
     auto connection = pool_.checkout();
     return run_transaction(*connection, TransactionKind::write, [&] {
+      // Another owner's dataset is not found, whoever's jobs read it.
+      if (!select_dataset(*connection, scope, id)) return DeleteResult::not_found;
       auto readers = connection->exec(
           "SELECT 1 FROM jobs WHERE (dataset_id = $1 OR validation_dataset_id = $1) AND state IN ('queued', 'running') "
           "LIMIT 1",
@@ -194,13 +205,13 @@ class PostgresStore final : public Store {
       created.id = unused_id(*connection, "rb_", "robots");
       created.created_at = now_rfc3339();
       if (auto answer = claim_key_for<RobotOutcome>(
-              *connection, "robot", key, created.id, created.created_at, keys_not_before,
-              [&](const std::string& earlier) { return select_robot(*connection, earlier); })) {
+              *connection, "robot", robot.owner, key, created.id, created.created_at, keys_not_before,
+              [&](const std::string& earlier) { return select_robot(*connection, robot.owner, earlier); })) {
         return *answer;
       }
       connection->exec(
-          "INSERT INTO robots (id, name, created_at, base, tip, joints, summary, urdf) "
-          "VALUES ($1, $2, $3, $4, $5, $6, $7, $8)",
+          "INSERT INTO robots (id, name, created_at, base, tip, joints, summary, urdf, owner) "
+          "VALUES ($1, $2, $3, $4, $5, $6, $7, $8, $9)",
           Params()
               .text(created.id)
               .text(created.name)
@@ -209,35 +220,45 @@ class PostgresStore final : public Store {
               .text_or_null(created.tip)
               .integer(created.joints)
               .text(created.summary)
-              .text(robot.urdf));
+              .text(robot.urdf)
+              .text(robot.owner));
       return {SubmitStatus::created, created};
     });
   }
 
-  std::optional<api::RobotInfo> find_robot(const std::string& id) override {
+  std::optional<api::RobotInfo> find_robot(const api::OwnerScope& scope, const std::string& id) override {
     auto connection = pool_.checkout();
-    return select_robot(*connection, id);
+    return select_robot(*connection, scope, id);
   }
 
-  std::optional<std::string> load_robot_urdf(const std::string& id) override {
+  std::optional<std::string> load_robot_urdf(const api::OwnerScope& scope, const std::string& id) override {
+    Params params;
+    params.text(id);
+    const std::string sql = "SELECT urdf FROM robots WHERE id = $1" + owner_condition(scope, params);
     auto connection = pool_.checkout();
-    auto row = connection->exec("SELECT urdf FROM robots WHERE id = $1", Params().text(id));
+    auto row = connection->exec(sql, params);
     if (row.rows() == 0) return std::nullopt;
     return row.text(0, 0);
   }
 
-  api::Page<api::RobotInfo> list_robots(const api::PageRequest& page) override {
+  api::Page<api::RobotInfo> list_robots(const api::OwnerScope& scope, const api::PageRequest& page) override {
     const int size = effective_page_size(page.page_size);
-    const std::int64_t before = page.page_token.empty() ? INT64_MAX : decode_page_token(page.page_token, "r1", "");
+    const std::string context = list_context(scope);
+    const std::int64_t before = page.page_token.empty() ? INT64_MAX : decode_page_token(page.page_token, "r1", context);
+    Params params;
+    params.integer(before).integer(size + 1);
+    const std::string sql = "SELECT " + kRobotColumns + " FROM robots WHERE seq < $1" + owner_condition(scope, params) +
+                            " ORDER BY seq DESC LIMIT $2";
     auto connection = pool_.checkout();
-    auto rows = connection->exec("SELECT " + kRobotColumns + " FROM robots WHERE seq < $1 ORDER BY seq DESC LIMIT $2",
-                                 Params().integer(before).integer(size + 1));
-    return page_of<api::RobotInfo>(rows, size, "r1", "", kRobotSeqColumn, read_robot);
+    auto rows = connection->exec(sql, params);
+    return page_of<api::RobotInfo>(rows, size, "r1", context, kRobotSeqColumn, read_robot);
   }
 
-  DeleteResult delete_robot(const std::string& id) override {
+  DeleteResult delete_robot(const api::OwnerScope& scope, const std::string& id) override {
     auto connection = pool_.checkout();
     return run_transaction(*connection, TransactionKind::write, [&] {
+      // Another owner's robot is not found, whoever's jobs use it.
+      if (!select_robot(*connection, scope, id)) return DeleteResult::not_found;
       auto users = connection->exec("SELECT 1 FROM jobs WHERE robot_id = $1 AND state IN ('queued', 'running') LIMIT 1",
                                     Params().text(id));
       if (users.rows() > 0) return DeleteResult::in_use;
@@ -261,15 +282,16 @@ class PostgresStore final : public Store {
     }
   }
 
-  std::optional<api::JobInfo> find_job(const std::string& id) override {
+  std::optional<api::JobInfo> find_job(const api::OwnerScope& scope, const std::string& id) override {
     auto connection = pool_.checkout();
-    return select_job(*connection, id);
+    return select_job(*connection, scope, id);
   }
 
-  api::Page<api::JobInfo> list_jobs(const api::JobFilter& filter, const api::PageRequest& page) override {
+  api::Page<api::JobInfo> list_jobs(const api::OwnerScope& scope, const api::JobFilter& filter,
+                                    const api::PageRequest& page) override {
     const int size = effective_page_size(page.page_size);
-    // The token is bound to the filter: a token from another filter would skip or repeat jobs.
-    const std::string context = job_list_context(filter);
+    // The token is bound to the scope and filter: a token from another filter would skip or repeat jobs.
+    const std::string context = job_list_context(scope, filter);
     const std::int64_t before = page.page_token.empty() ? INT64_MAX : decode_page_token(page.page_token, "j1", context);
     // Fixed SQL fragments per filter combination (values bound, never in the text).
     Params params;
@@ -287,6 +309,7 @@ class PostgresStore final : public Store {
       params.text(filter.robot_id);
       sql += " AND robot_id = $" + std::to_string(params.size());
     }
+    sql += owner_condition(scope, params);
     sql += " ORDER BY seq DESC LIMIT $2";
     auto connection = pool_.checkout();
     auto rows = connection->exec(sql, params);
@@ -398,10 +421,10 @@ class PostgresStore final : public Store {
     });
   }
 
-  CancelOutcome cancel_job(const std::string& id) override {
+  CancelOutcome cancel_job(const api::OwnerScope& scope, const std::string& id) override {
     auto connection = pool_.checkout();
     return run_transaction(*connection, TransactionKind::write, [&] {
-      const auto state = select_state(*connection, id, true);
+      const auto state = select_state(*connection, scope, id, true);
       if (!state) return CancelOutcome::not_found;
       if (*state == api::JobState::queued) {
         connection->exec("UPDATE jobs SET state = 'cancelled', finished_at = $2 WHERE id = $1",
@@ -418,10 +441,10 @@ class PostgresStore final : public Store {
     });
   }
 
-  DeleteResult delete_job(const std::string& id) override {
+  DeleteResult delete_job(const api::OwnerScope& scope, const std::string& id) override {
     auto connection = pool_.checkout();
     return run_transaction(*connection, TransactionKind::write, [&] {
-      const auto state = select_state(*connection, id, true);
+      const auto state = select_state(*connection, scope, id, true);
       if (!state) return DeleteResult::not_found;
       if (!api::is_terminal(*state)) return DeleteResult::in_use;
       clear_progress(*connection, {id});
@@ -431,13 +454,14 @@ class PostgresStore final : public Store {
     });
   }
 
-  std::optional<api::Page<api::HistoryEntry>> history(const std::string& id, const api::PageRequest& page) override {
+  std::optional<api::Page<api::HistoryEntry>> history(const api::OwnerScope& scope, const std::string& id,
+                                                      const api::PageRequest& page) override {
     const int size = effective_page_size(page.page_size);
     const bool first_page = page.page_token.empty();
     const std::int64_t after = first_page ? -1 : decode_page_token(page.page_token, "h1", id);
     auto connection = pool_.checkout();
     return run_transaction(*connection, TransactionKind::read, [&]() -> std::optional<api::Page<api::HistoryEntry>> {
-      if (!select_state(*connection, id, false)) return std::nullopt;
+      if (!select_state(*connection, scope, id, false)) return std::nullopt;
       auto rows = connection->exec(
           "SELECT idx, cost, theta FROM job_history WHERE job_id = $1 AND idx > $2 ORDER BY idx LIMIT $3",
           Params().text(id).integer(after).integer(size + 1));
@@ -453,10 +477,11 @@ class PostgresStore final : public Store {
     });
   }
 
-  std::optional<api::HistoryOverview> history_overview(const std::string& id, long max_points) override {
+  std::optional<api::HistoryOverview> history_overview(const api::OwnerScope& scope, const std::string& id,
+                                                       long max_points) override {
     auto connection = pool_.checkout();
     return run_transaction(*connection, TransactionKind::read, [&]() -> std::optional<api::HistoryOverview> {
-      if (!select_state(*connection, id, false)) return std::nullopt;
+      if (!select_state(*connection, scope, id, false)) return std::nullopt;
       api::HistoryOverview overview;
       auto extent = connection->exec("SELECT count(*), min(idx), max(idx) FROM job_history WHERE job_id = $1",
                                      Params().text(id));
@@ -542,8 +567,8 @@ class PostgresStore final : public Store {
       created.created_at = now_rfc3339();
       // The key first: a replay or a reused key is answered whatever the queue's length.
       if (auto answer = claim_key_for<SubmitOutcome>(
-              connection, "job", key, created.id, created.created_at, keys_not_before,
-              [&](const std::string& earlier) { return select_job(connection, earlier); })) {
+              connection, "job", job.owner, key, created.id, created.created_at, keys_not_before,
+              [&](const std::string& earlier) { return select_job(connection, job.owner, earlier); })) {
         return *answer;
       }
       if (queue_limit > 0) {
@@ -558,7 +583,7 @@ class PostgresStore final : public Store {
       // the transaction runs again with a new one.
       auto added = connection.exec(
           "WITH added AS (INSERT INTO jobs (id, kind, state, request, dataset_id, created_at, robot_id, "
-          "validation_dataset_id) VALUES ($1, $2, 'queued', $3, $4, $5, $6, $7) ON CONFLICT (id) DO NOTHING "
+          "validation_dataset_id, owner) VALUES ($1, $2, 'queued', $3, $4, $5, $6, $7, $8) ON CONFLICT (id) DO NOTHING "
           "RETURNING id) " + announcement("queued", "added"),
           Params()
               .text(created.id)
@@ -567,7 +592,8 @@ class PostgresStore final : public Store {
               .text_or_null(job.dataset_id)
               .text(created.created_at)
               .text_or_null(job.robot_id)
-              .text_or_null(job.validation_dataset_id));
+              .text_or_null(job.validation_dataset_id)
+              .text(job.owner));
       if (added.rows() == 0) throw ConflictRetry("job id " + created.id + " drawn twice");
       return {SubmitStatus::created, created};
     });

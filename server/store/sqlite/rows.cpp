@@ -28,6 +28,7 @@ api::JobInfo read_job(const Statement& row) {
   job.robot_id = row.text(14);
   job.validation_dataset_id = row.text(15);
   job.worker = row.text(16);
+  job.owner = row.text(kJobOwnerColumn);
   return job;
 }
 
@@ -45,6 +46,7 @@ api::DatasetInfo read_dataset(const Statement& row) {
   dataset.uniform = row.integer(9) != 0;
   dataset.has_rates = row.integer(10) != 0;
   dataset.has_accelerations = row.integer(11) != 0;
+  dataset.owner = row.text(kDatasetOwnerColumn);
   return dataset;
 }
 
@@ -57,33 +59,48 @@ api::RobotInfo read_robot(const Statement& row) {
   robot.tip = row.text(4);
   robot.joints = static_cast<int>(row.integer(5));
   robot.summary = row.text(6);
+  robot.owner = row.text(kRobotOwnerColumn);
   return robot;
 }
 
-std::optional<api::RobotInfo> select_robot(Connection& connection, const std::string& id) {
-  auto statement = connection.prepare("SELECT " + kRobotColumns + " FROM robots WHERE id = ?1");
+std::string owner_condition(const api::OwnerScope& owners, int parameter) {
+  return owners ? " AND owner = ?" + std::to_string(parameter) : "";
+}
+
+void bind_owner(Statement& statement, const api::OwnerScope& owners, int parameter) {
+  if (owners) statement.bind_text(parameter, *owners);
+}
+
+std::optional<api::RobotInfo> select_robot(Connection& connection, const api::OwnerScope& owners, const std::string& id) {
+  auto statement = connection.prepare("SELECT " + kRobotColumns + " FROM robots WHERE id = ?1" + owner_condition(owners, 2));
   statement.bind_text(1, id);
+  bind_owner(statement, owners, 2);
   if (!statement.step()) return std::nullopt;
   return read_robot(statement);
 }
 
-std::optional<api::JobInfo> select_job(Connection& connection, const std::string& id) {
-  auto statement = connection.prepare("SELECT " + kJobColumns + " FROM jobs WHERE id = ?1");
+std::optional<api::JobInfo> select_job(Connection& connection, const api::OwnerScope& owners, const std::string& id) {
+  auto statement = connection.prepare("SELECT " + kJobColumns + " FROM jobs WHERE id = ?1" + owner_condition(owners, 2));
   statement.bind_text(1, id);
+  bind_owner(statement, owners, 2);
   if (!statement.step()) return std::nullopt;
   return read_job(statement);
 }
 
-std::optional<api::DatasetInfo> select_dataset(Connection& connection, const std::string& id) {
-  auto statement = connection.prepare("SELECT " + kDatasetColumns + " FROM datasets WHERE id = ?1");
+std::optional<api::DatasetInfo> select_dataset(Connection& connection, const api::OwnerScope& owners,
+                                               const std::string& id) {
+  auto statement =
+      connection.prepare("SELECT " + kDatasetColumns + " FROM datasets WHERE id = ?1" + owner_condition(owners, 2));
   statement.bind_text(1, id);
+  bind_owner(statement, owners, 2);
   if (!statement.step()) return std::nullopt;
   return read_dataset(statement);
 }
 
-std::optional<api::JobState> select_state(Connection& connection, const std::string& id) {
-  auto statement = connection.prepare("SELECT state FROM jobs WHERE id = ?1");
+std::optional<api::JobState> select_state(Connection& connection, const api::OwnerScope& owners, const std::string& id) {
+  auto statement = connection.prepare("SELECT state FROM jobs WHERE id = ?1" + owner_condition(owners, 2));
   statement.bind_text(1, id);
+  bind_owner(statement, owners, 2);
   if (!statement.step()) return std::nullopt;
   const auto state = state_from_text(statement.text(0));
   if (!state) throw StoreError("job " + id + " has an unknown state in the database");
@@ -92,24 +109,26 @@ std::optional<api::JobState> select_state(Connection& connection, const std::str
 
 // ---- idempotency keys ----
 
-std::optional<KeyRecord> select_key(Connection& connection, const char* scope, const std::string& key,
-                                    const std::string& not_before) {
+std::optional<KeyRecord> select_key(Connection& connection, const char* scope, const std::string& owner,
+                                    const std::string& key, const std::string& not_before) {
   auto statement = connection.prepare(
-      "SELECT fingerprint, resource_id FROM idempotency_keys WHERE scope = ?1 AND key = ?2 AND created_at >= ?3");
-  statement.bind_text(1, scope).bind_text(2, key).bind_text(3, not_before);
+      "SELECT fingerprint, resource_id FROM idempotency_keys WHERE scope = ?1 AND owner = ?2 AND key = ?3 "
+      "AND created_at >= ?4");
+  statement.bind_text(1, scope).bind_text(2, owner).bind_text(3, key).bind_text(4, not_before);
   if (!statement.step()) return std::nullopt;
   return KeyRecord{statement.text(0), statement.text(1)};
 }
 
-void store_key(Connection& connection, const char* scope, const api::IdempotencyKey& key, const std::string& id,
-               const std::string& now, const std::string& not_before) {
+void store_key(Connection& connection, const char* scope, const std::string& owner, const api::IdempotencyKey& key,
+               const std::string& id, const std::string& now, const std::string& not_before) {
   auto expired = connection.prepare("DELETE FROM idempotency_keys WHERE created_at < ?1");
   expired.bind_text(1, not_before);
   expired.run();
   auto statement = connection.prepare(
-      "INSERT OR REPLACE INTO idempotency_keys (scope, key, fingerprint, resource_id, created_at) "
-      "VALUES (?1, ?2, ?3, ?4, ?5)");
-  statement.bind_text(1, scope).bind_text(2, key.key).bind_text(3, key.fingerprint).bind_text(4, id).bind_text(5, now);
+      "INSERT OR REPLACE INTO idempotency_keys (scope, owner, key, fingerprint, resource_id, created_at) "
+      "VALUES (?1, ?2, ?3, ?4, ?5, ?6)");
+  statement.bind_text(1, scope).bind_text(2, owner).bind_text(3, key.key).bind_text(4, key.fingerprint);
+  statement.bind_text(5, id).bind_text(6, now);
   statement.run();
 }
 

@@ -18,20 +18,26 @@ namespace manipid::server::store::sqlite {
 api::JobInfo read_job(const Statement& row);
 api::DatasetInfo read_dataset(const Statement& row);
 api::RobotInfo read_robot(const Statement& row);
-std::optional<api::RobotInfo> select_robot(Connection& connection, const std::string& id);
-std::optional<api::JobInfo> select_job(Connection& connection, const std::string& id);
-std::optional<api::DatasetInfo> select_dataset(Connection& connection, const std::string& id);
-std::optional<api::JobState> select_state(Connection& connection, const std::string& id);
+/// The record of `id` if it is within `owners` (a row of another owner is not found, as a missing one).
+std::optional<api::RobotInfo> select_robot(Connection& connection, const api::OwnerScope& owners, const std::string& id);
+std::optional<api::JobInfo> select_job(Connection& connection, const api::OwnerScope& owners, const std::string& id);
+std::optional<api::DatasetInfo> select_dataset(Connection& connection, const api::OwnerScope& owners,
+                                               const std::string& id);
+std::optional<api::JobState> select_state(Connection& connection, const api::OwnerScope& owners, const std::string& id);
+/// " AND owner = ?N" when `owners` names one owner, else "": the fragment a statement's WHERE
+/// gets (bind_owner binds it).
+std::string owner_condition(const api::OwnerScope& owners, int parameter);
+void bind_owner(Statement& statement, const api::OwnerScope& owners, int parameter);
 
-/// scope: "job", "dataset" or "robot".
+/// scope: "job", "dataset" or "robot"; `owner`: whose key it is (another owner's same key is another key).
 /// The key's record if it was stored at `not_before` or later (older keys have expired); what
 /// it means for the request is the rule both backends share (answer_from_key, store/idempotency.h).
-std::optional<KeyRecord> select_key(Connection& connection, const char* scope, const std::string& key,
-                                    const std::string& not_before);
-/// Stores the key for `id` (INSERT OR REPLACE: a key whose resource has gone, or that expired, is
-/// taken over by the new one), forgetting every key stored before `not_before` (expired).
-void store_key(Connection& connection, const char* scope, const api::IdempotencyKey& key, const std::string& id,
-               const std::string& now, const std::string& not_before);
+std::optional<KeyRecord> select_key(Connection& connection, const char* scope, const std::string& owner,
+                                    const std::string& key, const std::string& not_before);
+/// Stores `owner`'s key for `id` (INSERT OR REPLACE: a key whose resource has gone, or that expired,
+/// is taken over by the new one), forgetting every key stored before `not_before` (expired).
+void store_key(Connection& connection, const char* scope, const std::string& owner, const api::IdempotencyKey& key,
+               const std::string& id, const std::string& now, const std::string& not_before);
 void forget_keys_of(Connection& connection, const char* scope, const std::string& id);
 
 /// A fresh random id ("ds_"/"job_" + 16 hex) not held by a live row; `exists_sql` selects a

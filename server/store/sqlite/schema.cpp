@@ -11,7 +11,7 @@ namespace manipid::server::store::sqlite {
 namespace {
 
 // kMigrations[i] takes user_version i to i + 1, and sets it.
-constexpr std::array<const char*, 4> kMigrations = {
+constexpr std::array<const char*, 5> kMigrations = {
     // 0 → 1: the first schema.
     R"sql(
     -- seq orders datasets newest first for keyset paging; AUTOINCREMENT never hands out a
@@ -198,6 +198,88 @@ constexpr std::array<const char*, 4> kMigrations = {
     -- Keys expire (StoreOptions::idempotency_ttl): the old ones are found, and forgotten, by age.
     CREATE INDEX idempotency_keys_by_age ON idempotency_keys (created_at);
     PRAGMA user_version = 4;
+    )sql",
+
+    // 4 → 5: owners (`manipid serve --token-file`). Every dataset, robot and job belongs to the name
+    // of the token that made it; the rows from before belong to no one (''), which admin tokens and
+    // servers without named tokens see. datasets and robots are rebuilt so that owner comes before
+    // their blobs and documents (a column after them is read through their overflow pages, on every
+    // list); their AUTOINCREMENT counter is carried over, so a seq is still never handed out twice.
+    // jobs has no such column: owner is appended. An Idempotency-Key is its owner's: the primary key
+    // takes the owner in (SQLite cannot change a primary key: rebuilt too).
+    R"sql(
+    CREATE TABLE datasets_v5 (
+      seq           INTEGER PRIMARY KEY AUTOINCREMENT,
+      id            TEXT    NOT NULL UNIQUE,
+      name          TEXT    NOT NULL,
+      created_at    TEXT    NOT NULL,
+      source_job    TEXT,
+      joints        INTEGER NOT NULL,
+      samples       INTEGER NOT NULL,
+      dt            REAL    NOT NULL,  -- the period (uniform) or the median step (jittery)
+      uniform       INTEGER NOT NULL,
+      has_torque    INTEGER NOT NULL,
+      has_reference INTEGER NOT NULL,
+      has_rates     INTEGER NOT NULL,
+      has_accelerations INTEGER NOT NULL,
+      owner         TEXT    NOT NULL DEFAULT '',
+      t   BLOB,   -- samples doubles, little-endian
+      q   BLOB,   -- samples x joints, column-major
+      tau BLOB,   -- NULL when has_torque = 0
+      ref BLOB,   -- NULL when has_reference = 0
+      qd  BLOB,   -- NULL when has_rates = 0
+      qdd BLOB    -- NULL when has_accelerations = 0
+    );
+    INSERT INTO datasets_v5 (seq, id, name, created_at, source_job, joints, samples, dt, uniform, has_torque,
+                             has_reference, has_rates, has_accelerations, owner, t, q, tau, ref, qd, qdd)
+      SELECT seq, id, name, created_at, source_job, joints, samples, dt, uniform, has_torque, has_reference,
+             has_rates, has_accelerations, '', t, q, tau, ref, qd, qdd FROM datasets;
+    DELETE FROM sqlite_sequence WHERE name = 'datasets_v5';
+    INSERT INTO sqlite_sequence (name, seq) SELECT 'datasets_v5', seq FROM sqlite_sequence WHERE name = 'datasets';
+    DROP TABLE datasets;
+    ALTER TABLE datasets_v5 RENAME TO datasets;
+    CREATE INDEX datasets_by_owner ON datasets (owner, seq);
+
+    CREATE TABLE robots_v5 (
+      seq        INTEGER PRIMARY KEY AUTOINCREMENT,
+      id         TEXT    NOT NULL UNIQUE,
+      name       TEXT    NOT NULL,
+      created_at TEXT    NOT NULL,
+      base       TEXT,
+      tip        TEXT,
+      joints     INTEGER NOT NULL,
+      summary    TEXT    NOT NULL,  -- the robot resource's description, JSON
+      owner      TEXT    NOT NULL DEFAULT '',
+      urdf       TEXT    NOT NULL   -- the document as uploaded, byte for byte; last, so lists never read it
+    );
+    INSERT INTO robots_v5 (seq, id, name, created_at, base, tip, joints, summary, owner, urdf)
+      SELECT seq, id, name, created_at, base, tip, joints, summary, '', urdf FROM robots;
+    DELETE FROM sqlite_sequence WHERE name = 'robots_v5';
+    INSERT INTO sqlite_sequence (name, seq) SELECT 'robots_v5', seq FROM sqlite_sequence WHERE name = 'robots';
+    DROP TABLE robots;
+    ALTER TABLE robots_v5 RENAME TO robots;
+    CREATE INDEX robots_by_owner ON robots (owner, seq);
+
+    ALTER TABLE jobs ADD COLUMN owner TEXT NOT NULL DEFAULT '';
+    CREATE INDEX jobs_by_owner ON jobs (owner, seq);
+
+    CREATE TABLE idempotency_keys_v5 (
+      scope       TEXT NOT NULL CHECK (scope IN ('job', 'dataset', 'robot')),
+      owner       TEXT NOT NULL DEFAULT '',
+      key         TEXT NOT NULL,
+      fingerprint TEXT NOT NULL,
+      resource_id TEXT NOT NULL,
+      created_at  TEXT NOT NULL,
+      PRIMARY KEY (scope, owner, key)
+    ) WITHOUT ROWID;
+    INSERT INTO idempotency_keys_v5 (scope, owner, key, fingerprint, resource_id, created_at)
+      SELECT scope, '', key, fingerprint, resource_id, created_at FROM idempotency_keys;
+    DROP TABLE idempotency_keys;
+    ALTER TABLE idempotency_keys_v5 RENAME TO idempotency_keys;
+    CREATE INDEX idempotency_keys_by_resource ON idempotency_keys (resource_id);
+    CREATE INDEX idempotency_keys_by_age ON idempotency_keys (created_at);
+
+    PRAGMA user_version = 5;
     )sql",
 };
 

@@ -33,9 +33,9 @@ class SqliteStore final : public Store {
 
   // ---- datasets ----
 
-  DatasetOutcome insert_dataset(const std::string& name, const Trajectory& data, const std::string& source_job,
-                                const std::optional<api::IdempotencyKey>& key) override {
-    api::DatasetInfo dataset = describe_dataset(name, data, source_job);
+  DatasetOutcome insert_dataset(const std::string& owner, const std::string& name, const Trajectory& data,
+                                const std::string& source_job, const std::optional<api::IdempotencyKey>& key) override {
+    api::DatasetInfo dataset = describe_dataset(owner, name, data, source_job);
     // Encoded before the transaction (the write lock is held only for the insert itself); on a
     // little-endian machine the dataset's own memory, bound without a copy.
     std::vector<unsigned char> scratch[6];
@@ -50,8 +50,8 @@ class SqliteStore final : public Store {
     return sqlite::run_transaction(*connection, TransactionKind::write, [&]() -> DatasetOutcome {
       if (key) {
         if (auto answer = answer_from_key<DatasetOutcome>(
-                select_key(*connection, "dataset", key->key, keys_not_before), *key,
-                [&](const std::string& earlier) { return select_dataset(*connection, earlier); })) {
+                select_key(*connection, "dataset", owner, key->key, keys_not_before), *key,
+                [&](const std::string& earlier) { return select_dataset(*connection, owner, earlier); })) {
           return *answer;
         }
       }
@@ -60,8 +60,8 @@ class SqliteStore final : public Store {
 
       auto insert = connection->prepare(
           "INSERT INTO datasets (id, name, created_at, source_job, joints, samples, dt, has_torque, "
-          "has_reference, t, q, tau, ref, uniform, has_rates, qd, has_accelerations, qdd) "
-          "VALUES (?1, ?2, ?3, ?4, ?5, ?6, ?7, ?8, ?9, ?10, ?11, ?12, ?13, ?14, ?15, ?16, ?17, ?18)");
+          "has_reference, t, q, tau, ref, uniform, has_rates, qd, has_accelerations, qdd, owner) "
+          "VALUES (?1, ?2, ?3, ?4, ?5, ?6, ?7, ?8, ?9, ?10, ?11, ?12, ?13, ?14, ?15, ?16, ?17, ?18, ?19)");
       insert.bind_text(1, dataset.id)
           .bind_text(2, dataset.name)
           .bind_text(3, dataset.created_at)
@@ -79,25 +79,28 @@ class SqliteStore final : public Store {
           .bind_integer(15, dataset.has_rates ? 1 : 0)
           .bind_blob_or_null(16, qd)
           .bind_integer(17, dataset.has_accelerations ? 1 : 0)
-          .bind_blob_or_null(18, qdd);
+          .bind_blob_or_null(18, qdd)
+          .bind_text(19, owner);
       insert.run();
-      if (key) store_key(*connection, "dataset", *key, dataset.id, dataset.created_at, keys_not_before);
+      if (key) store_key(*connection, "dataset", owner, *key, dataset.id, dataset.created_at, keys_not_before);
       return {SubmitStatus::created, dataset};
     });
   }
 
-  std::optional<api::DatasetInfo> find_dataset(const std::string& id) override {
+  std::optional<api::DatasetInfo> find_dataset(const api::OwnerScope& scope, const std::string& id) override {
     auto connection = pool_.checkout();
-    return sqlite::run_transaction(*connection, TransactionKind::read, [&] { return select_dataset(*connection, id); });
+    return sqlite::run_transaction(*connection, TransactionKind::read,
+                                   [&] { return select_dataset(*connection, scope, id); });
   }
 
-  std::optional<Trajectory> load_dataset(const std::string& id) override {
+  std::optional<Trajectory> load_dataset(const api::OwnerScope& scope, const std::string& id) override {
     auto connection = pool_.checkout();
     return sqlite::run_transaction(*connection, TransactionKind::read, [&]() -> std::optional<Trajectory> {
       auto row = connection->prepare(
           "SELECT samples, joints, has_torque, has_reference, t, q, tau, ref, has_rates, qd, has_accelerations, qdd "
-          "FROM datasets WHERE id = ?1");
+          "FROM datasets WHERE id = ?1" + owner_condition(scope, 2));
       row.bind_text(1, id);
+      bind_owner(row, scope, 2);
       if (!row.step()) return std::nullopt;
       StoredSamples stored;
       stored.samples = row.integer(0);
@@ -116,20 +119,22 @@ class SqliteStore final : public Store {
     });
   }
 
-  api::Page<api::DatasetInfo> list_datasets(const api::PageRequest& page) override {
+  api::Page<api::DatasetInfo> list_datasets(const api::OwnerScope& scope, const api::PageRequest& page) override {
     const int size = effective_page_size(page.page_size);
+    const std::string context = list_context(scope);
     const std::int64_t before =
-        page.page_token.empty() ? INT64_MAX : decode_page_token(page.page_token, "d1", "");
+        page.page_token.empty() ? INT64_MAX : decode_page_token(page.page_token, "d1", context);
     auto connection = pool_.checkout();
     return sqlite::run_transaction(*connection, TransactionKind::read, [&] {
-      auto rows = connection->prepare("SELECT " + kDatasetColumns +
-                                      " FROM datasets WHERE seq < ?1 ORDER BY seq DESC LIMIT ?2");
+      auto rows = connection->prepare("SELECT " + kDatasetColumns + " FROM datasets WHERE seq < ?1" +
+                                      owner_condition(scope, 3) + " ORDER BY seq DESC LIMIT ?2");
       rows.bind_integer(1, before).bind_integer(2, size + 1);  // one more tells whether a next page exists
+      bind_owner(rows, scope, 3);
       api::Page<api::DatasetInfo> result;
       std::int64_t last_seq = 0;
       while (rows.step()) {
         if (static_cast<int>(result.items.size()) == size) {
-          result.next_page_token = encode_page_token("d1", last_seq, "");
+          result.next_page_token = encode_page_token("d1", last_seq, context);
           break;
         }
         result.items.push_back(read_dataset(rows));
@@ -139,9 +144,11 @@ class SqliteStore final : public Store {
     });
   }
 
-  DeleteResult delete_dataset(const std::string& id) override {
+  DeleteResult delete_dataset(const api::OwnerScope& scope, const std::string& id) override {
     auto connection = pool_.checkout();
     return sqlite::run_transaction(*connection, TransactionKind::write, [&] {
+      // Another owner's dataset is not found, whoever's jobs read it.
+      if (!select_dataset(*connection, scope, id)) return DeleteResult::not_found;
       auto readers = connection->prepare(
           "SELECT 1 FROM jobs WHERE (dataset_id = ?1 OR validation_dataset_id = ?1) AND state IN ('queued', 'running') "
           "LIMIT 1");
@@ -164,8 +171,8 @@ class SqliteStore final : public Store {
     return sqlite::run_transaction(*connection, TransactionKind::write, [&]() -> RobotOutcome {
       if (key) {
         if (auto answer = answer_from_key<RobotOutcome>(
-                select_key(*connection, "robot", key->key, keys_not_before), *key,
-                [&](const std::string& earlier) { return sqlite::select_robot(*connection, earlier); })) {
+                select_key(*connection, "robot", robot.owner, key->key, keys_not_before), *key,
+                [&](const std::string& earlier) { return sqlite::select_robot(*connection, robot.owner, earlier); })) {
           return *answer;
         }
       }
@@ -173,8 +180,8 @@ class SqliteStore final : public Store {
       created.id = unused_id(*connection, "rb_", "SELECT 1 FROM robots WHERE id = ?1");
       created.created_at = now_rfc3339();
       auto insert = connection->prepare(
-          "INSERT INTO robots (id, name, created_at, base, tip, joints, summary, urdf) "
-          "VALUES (?1, ?2, ?3, ?4, ?5, ?6, ?7, ?8)");
+          "INSERT INTO robots (id, name, created_at, base, tip, joints, summary, urdf, owner) "
+          "VALUES (?1, ?2, ?3, ?4, ?5, ?6, ?7, ?8, ?9)");
       insert.bind_text(1, created.id)
           .bind_text(2, created.name)
           .bind_text(3, created.created_at)
@@ -182,42 +189,47 @@ class SqliteStore final : public Store {
           .bind_text_or_null(5, created.tip)
           .bind_integer(6, created.joints)
           .bind_text(7, created.summary)
-          .bind_text(8, robot.urdf);
+          .bind_text(8, robot.urdf)
+          .bind_text(9, robot.owner);
       insert.run();
-      if (key) store_key(*connection, "robot", *key, created.id, created.created_at, keys_not_before);
+      if (key) store_key(*connection, "robot", robot.owner, *key, created.id, created.created_at, keys_not_before);
       return {SubmitStatus::created, created};
     });
   }
 
-  std::optional<api::RobotInfo> find_robot(const std::string& id) override {
+  std::optional<api::RobotInfo> find_robot(const api::OwnerScope& scope, const std::string& id) override {
     auto connection = pool_.checkout();
-    return sqlite::run_transaction(*connection, TransactionKind::read, [&] { return sqlite::select_robot(*connection, id); });
+    return sqlite::run_transaction(*connection, TransactionKind::read,
+                                   [&] { return sqlite::select_robot(*connection, scope, id); });
   }
 
-  std::optional<std::string> load_robot_urdf(const std::string& id) override {
+  std::optional<std::string> load_robot_urdf(const api::OwnerScope& scope, const std::string& id) override {
     auto connection = pool_.checkout();
     return sqlite::run_transaction(*connection, TransactionKind::read, [&]() -> std::optional<std::string> {
-      auto row = connection->prepare("SELECT urdf FROM robots WHERE id = ?1");
+      auto row = connection->prepare("SELECT urdf FROM robots WHERE id = ?1" + owner_condition(scope, 2));
       row.bind_text(1, id);
+      bind_owner(row, scope, 2);
       if (!row.step()) return std::nullopt;
       return row.text(0);
     });
   }
 
-  api::Page<api::RobotInfo> list_robots(const api::PageRequest& page) override {
+  api::Page<api::RobotInfo> list_robots(const api::OwnerScope& scope, const api::PageRequest& page) override {
     const int size = effective_page_size(page.page_size);
+    const std::string context = list_context(scope);
     const std::int64_t before =
-        page.page_token.empty() ? INT64_MAX : decode_page_token(page.page_token, "r1", "");
+        page.page_token.empty() ? INT64_MAX : decode_page_token(page.page_token, "r1", context);
     auto connection = pool_.checkout();
     return sqlite::run_transaction(*connection, TransactionKind::read, [&] {
-      auto rows = connection->prepare("SELECT " + kRobotColumns +
-                                      " FROM robots WHERE seq < ?1 ORDER BY seq DESC LIMIT ?2");
+      auto rows = connection->prepare("SELECT " + kRobotColumns + " FROM robots WHERE seq < ?1" +
+                                      owner_condition(scope, 3) + " ORDER BY seq DESC LIMIT ?2");
       rows.bind_integer(1, before).bind_integer(2, size + 1);
+      bind_owner(rows, scope, 3);
       api::Page<api::RobotInfo> result;
       std::int64_t last_seq = 0;
       while (rows.step()) {
         if (static_cast<int>(result.items.size()) == size) {
-          result.next_page_token = encode_page_token("r1", last_seq, "");
+          result.next_page_token = encode_page_token("r1", last_seq, context);
           break;
         }
         result.items.push_back(sqlite::read_robot(rows));
@@ -227,9 +239,11 @@ class SqliteStore final : public Store {
     });
   }
 
-  DeleteResult delete_robot(const std::string& id) override {
+  DeleteResult delete_robot(const api::OwnerScope& scope, const std::string& id) override {
     auto connection = pool_.checkout();
     return sqlite::run_transaction(*connection, TransactionKind::write, [&] {
+      // Another owner's robot is not found, whoever's jobs use it.
+      if (!sqlite::select_robot(*connection, scope, id)) return DeleteResult::not_found;
       auto users = connection->prepare(
           "SELECT 1 FROM jobs WHERE robot_id = ?1 AND state IN ('queued', 'running') LIMIT 1");
       users.bind_text(1, id);
@@ -252,8 +266,8 @@ class SqliteStore final : public Store {
     return sqlite::run_transaction(*connection, TransactionKind::write, [&]() -> SubmitOutcome {
       if (key) {
         if (auto answer = answer_from_key<SubmitOutcome>(
-                select_key(*connection, "job", key->key, keys_not_before), *key,
-                [&](const std::string& earlier) { return select_job(*connection, earlier); })) {
+                select_key(*connection, "job", job.owner, key->key, keys_not_before), *key,
+                [&](const std::string& earlier) { return select_job(*connection, job.owner, earlier); })) {
           return *answer;
         }
       }
@@ -266,30 +280,32 @@ class SqliteStore final : public Store {
       created.created_at = now_rfc3339();
 
       auto insert = connection->prepare(
-          "INSERT INTO jobs (id, kind, state, request, dataset_id, created_at, robot_id, validation_dataset_id) "
-          "VALUES (?1, ?2, 'queued', ?3, ?4, ?5, ?6, ?7)");
+          "INSERT INTO jobs (id, kind, state, request, dataset_id, created_at, robot_id, validation_dataset_id, owner) "
+          "VALUES (?1, ?2, 'queued', ?3, ?4, ?5, ?6, ?7, ?8)");
       insert.bind_text(1, created.id)
           .bind_text(2, kind_text(job.kind))
           .bind_text(3, job.request)
           .bind_text_or_null(4, job.dataset_id)
           .bind_text(5, created.created_at)
           .bind_text_or_null(6, job.robot_id)
-          .bind_text_or_null(7, job.validation_dataset_id);
+          .bind_text_or_null(7, job.validation_dataset_id)
+          .bind_text(8, job.owner);
       insert.run();
-      if (key) store_key(*connection, "job", *key, created.id, created.created_at, keys_not_before);
+      if (key) store_key(*connection, "job", job.owner, *key, created.id, created.created_at, keys_not_before);
       return {SubmitStatus::created, created};
     });
   }
 
-  std::optional<api::JobInfo> find_job(const std::string& id) override {
+  std::optional<api::JobInfo> find_job(const api::OwnerScope& scope, const std::string& id) override {
     auto connection = pool_.checkout();
-    return sqlite::run_transaction(*connection, TransactionKind::read, [&] { return select_job(*connection, id); });
+    return sqlite::run_transaction(*connection, TransactionKind::read, [&] { return select_job(*connection, scope, id); });
   }
 
-  api::Page<api::JobInfo> list_jobs(const api::JobFilter& filter, const api::PageRequest& page) override {
+  api::Page<api::JobInfo> list_jobs(const api::OwnerScope& scope, const api::JobFilter& filter,
+                                    const api::PageRequest& page) override {
     const int size = effective_page_size(page.page_size);
-    // The token is bound to the filter: a token from another filter would skip or repeat jobs.
-    const std::string context = job_list_context(filter);
+    // The token is bound to the scope and filter: a token from another filter would skip or repeat jobs.
+    const std::string context = job_list_context(scope, filter);
     const std::int64_t before =
         page.page_token.empty() ? INT64_MAX : decode_page_token(page.page_token, "j1", context);
     // Fixed SQL fragments per filter combination (no values in the text), so each variant is
@@ -298,6 +314,7 @@ class SqliteStore final : public Store {
     if (filter.state) sql += " AND state = ?2";
     if (filter.kind) sql += " AND kind = ?3";
     if (!filter.robot_id.empty()) sql += " AND robot_id = ?5";
+    sql += owner_condition(scope, 6);
     sql += " ORDER BY seq DESC LIMIT ?4";
 
     auto connection = pool_.checkout();
@@ -307,6 +324,7 @@ class SqliteStore final : public Store {
       if (filter.state) rows.bind_text(2, state_text(*filter.state));
       if (filter.kind) rows.bind_text(3, kind_text(*filter.kind));
       if (!filter.robot_id.empty()) rows.bind_text(5, filter.robot_id);
+      bind_owner(rows, scope, 6);
       api::Page<api::JobInfo> result;
       std::int64_t last_seq = 0;
       while (rows.step()) {
@@ -420,10 +438,10 @@ class SqliteStore final : public Store {
     });
   }
 
-  CancelOutcome cancel_job(const std::string& id) override {
+  CancelOutcome cancel_job(const api::OwnerScope& scope, const std::string& id) override {
     auto connection = pool_.checkout();
     return sqlite::run_transaction(*connection, TransactionKind::write, [&] {
-      const auto state = select_state(*connection, id);
+      const auto state = select_state(*connection, scope, id);
       if (!state) return CancelOutcome::not_found;
       if (*state == api::JobState::queued) {
         auto cancel = connection->prepare("UPDATE jobs SET state = 'cancelled', finished_at = ?2 WHERE id = ?1");
@@ -441,10 +459,10 @@ class SqliteStore final : public Store {
     });
   }
 
-  DeleteResult delete_job(const std::string& id) override {
+  DeleteResult delete_job(const api::OwnerScope& scope, const std::string& id) override {
     auto connection = pool_.checkout();
     return sqlite::run_transaction(*connection, TransactionKind::write, [&] {
-      const auto state = select_state(*connection, id);
+      const auto state = select_state(*connection, scope, id);
       if (!state) return DeleteResult::not_found;
       if (!api::is_terminal(*state)) return DeleteResult::in_use;
       clear_progress(*connection, id);
@@ -456,14 +474,15 @@ class SqliteStore final : public Store {
     });
   }
 
-  std::optional<api::Page<api::HistoryEntry>> history(const std::string& id, const api::PageRequest& page) override {
+  std::optional<api::Page<api::HistoryEntry>> history(const api::OwnerScope& scope, const std::string& id,
+                                                      const api::PageRequest& page) override {
     const int size = effective_page_size(page.page_size);
     const bool first_page = page.page_token.empty();
     const std::int64_t after = first_page ? 0 : decode_page_token(page.page_token, "h1", id);
     auto connection = pool_.checkout();
     return sqlite::run_transaction(
         *connection, TransactionKind::read, [&]() -> std::optional<api::Page<api::HistoryEntry>> {
-          if (!select_state(*connection, id)) return std::nullopt;
+          if (!select_state(*connection, scope, id)) return std::nullopt;
           auto rows = connection->prepare(
               first_page ? "SELECT idx, cost, theta FROM job_history WHERE job_id = ?1 ORDER BY idx LIMIT ?3"
                          : "SELECT idx, cost, theta FROM job_history WHERE job_id = ?1 AND idx > ?2 "
@@ -482,10 +501,11 @@ class SqliteStore final : public Store {
         });
   }
 
-  std::optional<api::HistoryOverview> history_overview(const std::string& id, long max_points) override {
+  std::optional<api::HistoryOverview> history_overview(const api::OwnerScope& scope, const std::string& id,
+                                                       long max_points) override {
     auto connection = pool_.checkout();
     return sqlite::run_transaction(*connection, TransactionKind::read, [&]() -> std::optional<api::HistoryOverview> {
-      if (!select_state(*connection, id)) return std::nullopt;
+      if (!select_state(*connection, scope, id)) return std::nullopt;
       api::HistoryOverview overview;
       auto extent = connection->prepare("SELECT count(*), min(idx), max(idx) FROM job_history WHERE job_id = ?1");
       extent.bind_text(1, id);

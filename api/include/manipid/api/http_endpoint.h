@@ -54,7 +54,7 @@ inline constexpr const char* http_module_name = "manipid-http.so";
 
 /// Raised by each change of the module's entry point or of the types it takes: the executable
 /// refuses, when it loads it, a module built with another.
-inline constexpr int http_module_interface = 2;
+inline constexpr int http_module_interface = 3;  // 2: the reactor's settings; 3: Service calls take the Caller (named tokens)
 
 /// Loads the module, once per process: looked for beside the executable, then in ../lib/manipid/
 /// from it. std::runtime_error saying where it looked and why each place failed. A server calls

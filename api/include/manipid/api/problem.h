@@ -39,6 +39,8 @@ enum class ProblemKind {
   job_failed,            ///< 500 the computation could not finish (a diverging simulation, a store failure)
   not_computable,        ///< 422 the data and starting values give no finite cost to minimise
   worker_lost,           ///< 500 the process running the job died --max-attempts times: never run again
+  // Appended (the codes are a contract; the table in problem.cpp is by name, not position):
+  forbidden,             ///< 403 a known token that may not do this (/metrics with a token that is not an admin's)
 };
 
 struct Problem {

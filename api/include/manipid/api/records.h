@@ -20,10 +20,17 @@ enum class JobKind { simulation, identification, excitation };
 const char* to_string(JobKind kind);
 std::optional<JobKind> parse_job_kind(std::string_view text);
 
+/// Whose datasets, robots and jobs a call sees: one owner's (the name of a non-admin token of
+/// `manipid serve --token-file`), or every owner's (std::nullopt, all_owners: an admin token, a
+/// server without named tokens, the workers and recovery). What is outside it is answered as missing.
+using OwnerScope = std::optional<std::string>;
+inline const OwnerScope all_owners = std::nullopt;
+
 struct DatasetInfo {
   std::string id;           ///< "ds_" + 16 hex digits
   std::string name;
   std::string created_at;   ///< RFC 3339 UTC, millisecond precision
+  std::string owner;        ///< the name of the token that made it (a job's output: its job's); "" without named tokens
   std::string source_job;   ///< the simulation job that made it, else empty
   int joints = 0;
   int samples = 0;
@@ -40,6 +47,7 @@ struct RobotInfo {
   std::string id;           ///< "rb_" + 16 hex digits
   std::string name;
   std::string created_at;   ///< RFC 3339 UTC
+  std::string owner;        ///< the name of the token that uploaded it; "" without named tokens
   std::string base, tip;    ///< the links asked for at upload (empty: the URDF's root, its only leaf)
   int joints = 0;
   std::string summary;      ///< the robot resource's description as JSON text (joints, links, parameters)
@@ -59,6 +67,7 @@ struct JobInfo {
   bool cancel_requested = false;
   int attempts = 0;         ///< times a worker started it (> 1 after a restart)
   std::string worker;       ///< while running: the process that holds its lease, "HOST:PID"
+  std::string owner;        ///< the name of the token that submitted it; "" without named tokens
   std::string result;       ///< JSON text when succeeded
   std::string error;        ///< problem JSON text when failed
 };

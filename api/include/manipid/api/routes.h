@@ -1,8 +1,8 @@
 // routes.h — the HTTP surface of `manipid serve`: registers every route on a cpp-httplib
 // server over a Service (service.h), plus the cross-cutting parts every request passes
-// through: bearer-token check, upload guards (length required, no compressed bodies, size
-// limit), problem+json for every error, one log line per request, request counters for
-// /metrics. The table of routes is in api/openapi.yaml (served at GET /openapi.json); the
+// through: bearer-token check (and whom the token stands for), upload guards (length required,
+// no compressed bodies, size limit), problem+json for every error, one log line per request,
+// request counters for /metrics. The table of routes is in api/openapi.yaml (served at GET /openapi.json); the
 // code is in api/src/http/ (route table, helpers, guards) and api/src/routes/ (one file per resource).
 #pragma once
 
@@ -11,6 +11,7 @@
 #include <cstddef>
 #include <functional>
 #include <string>
+#include <vector>
 
 namespace httplib {
 class Server;
@@ -32,13 +33,27 @@ inline constexpr std::size_t memory_per_body_byte = 3;
 /// before this bound (and SQLite's copies of the bound blobs) was in place, 560 MiB after.
 inline constexpr std::size_t memory_per_dataset_number = 32;
 
+/// A bearer token the server takes and whom it stands for (`manipid serve --token-file`).
+struct NamedToken {
+  std::string name;    ///< its requests act for this owner (1..64 of A-Z a-z 0-9 . _ -); shown in the log
+  std::string token;   ///< the secret; never logged
+  bool admin = false;  ///< sees and acts on every owner's datasets, robots and jobs, and reads /metrics
+};
+
 struct RouteOptions {
   std::size_t max_body = 64u << 20;  ///< bytes; larger bodies get 413
   /// Bytes the bodies being read and handled at once may take, memory_per_body_byte × each
   /// one's Content-Length; a body beyond it gets 503 with Retry-After (and its connection
   /// closes, unread). At least memory_per_body_byte × max_body, so any body fits alone.
   std::size_t memory_budget = std::size_t{1} << 30;
-  std::string token;                 ///< when set, every /v1 request needs "Authorization: Bearer <token>"
+  /// When set, every /v1 request and /metrics need "Authorization: Bearer <token>": one admin
+  /// token (--token, MANIPID_TOKEN), owner "" for what it creates.
+  std::string token;
+  /// Named tokens (--token-file): every /v1 request and /metrics need one of them; a request acts
+  /// for its token's name and sees that owner's datasets, robots and jobs only (an admin token,
+  /// every owner's); another owner's resource is answered 404, as a missing one. /metrics is
+  /// an admin token's only (403). Neither `token` nor `tokens`: no check, everyone the admin.
+  std::vector<NamedToken> tokens;
   double max_wait_seconds = 30.0;    ///< cap of ?wait= long-polls
   /// Long-polls that may wait at once; each holds an HTTP thread while it waits (cpp-httplib
   /// 0.11.4 has no other way), so `manipid serve` gives them half its threads and keeps the
