@@ -55,7 +55,7 @@ void add_job_options(CLI::App& command, JobOptions& options, int fewest_workers)
                      "Memory the running jobs may hold together, each by its estimate from its samples, joints and kind of "
                      "work; a job starts when it fits and waits otherwise, one that could never fit is refused (422)")
       ->capture_default_str();
-  command.add_option("--job-timeout", options.job_timeout, "Longest a job may run, s (a simulation then fails, an identification stops)")
+  command.add_option("--job-timeout", options.job_timeout, "Longest a job may run, s (an identification then stops with its best point; any job still running 0.5 s later fails saying so)")
       ->check(positive_number())
       ->capture_default_str();
   command.add_option("--max-attempts", options.max_attempts,
