@@ -5,7 +5,6 @@
 #include "manipid/core/robot/data.h"
 #include "manipid/core/robot/regressor.h"
 
-
 #include <algorithm>
 #include <cmath>
 #include <cstdio>

@@ -213,23 +213,6 @@ bool overlaps(const double* a, Index a_size, const double* b, Index b_size) {
 
 }  // namespace
 
-void validate_band(double band, const std::string& field) {
-  if (!(band > 0.0 && band <= std::numbers::pi)) {  // also rejects NaN
-    throw InputError(field, "filter band edge must be in (0, pi] rad/sample, got " + std::to_string(band));
-  }
-  // The coefficients scale with band, band² and band³ before they are normalised: far below any
-  // motion's band they underflow to 0 (band 1e-300 made every derivative NaN, and the identification
-  // then failed naming the first parameter as if its value were wrong).
-  if (band < kMinBand) {
-    char text[200];
-    std::snprintf(text, sizeof text,
-                  "filter band edge %.3g rad/sample is below %g, where the filters' coefficients underflow (at dt = "
-                  "1 ms that is a period of %.0f days): give a band that passes the motion",
-                  band, kMinBand, 2.0 * std::numbers::pi / kMinBand * 1e-3 / 86400.0);
-    throw InputError(field, text);
-  }
-}
-
 void FilterSettings::validate() const {
   if (half_length < 2 || half_length > max_half_length) {
     throw InputError("half_length", "filter half-length M must be between 2 and " +

@@ -20,6 +20,8 @@
 
 #include <complex>
 #include <memory>
+#include <cstdio>
+#include <numbers>
 #include <mutex>
 #include <string>
 
@@ -31,8 +33,24 @@ enum class FilterOrder { lowpass = 0, derivative1 = 1, derivative2 = 2 };
 inline constexpr double kMinBand = 1e-9;
 
 /// Throws InputError(field) unless band (rad/sample) lies in [kMinBand, π]: FilterSettings::validate's
-/// rule for the band, for callers that check a request before a filter exists.
-void validate_band(double band, const std::string& field = "band");
+/// rule for the band, for callers that check a request before a filter exists (inline: the parsers'
+/// fuzz targets link no filter code).
+inline void validate_band(double band, const std::string& field = "band") {
+  if (!(band > 0.0 && band <= std::numbers::pi)) {  // also rejects NaN
+    throw InputError(field, "filter band edge must be in (0, pi] rad/sample, got " + std::to_string(band));
+  }
+  // The coefficients scale with band, band² and band³ before they are normalised: far below any
+  // motion's band they underflow to 0 (band 1e-300 made every derivative NaN, and the identification
+  // then failed naming the first parameter as if its value were wrong).
+  if (band < kMinBand) {
+    char text[200];
+    std::snprintf(text, sizeof text,
+                  "filter band edge %.3g rad/sample is below %g, where the filters' coefficients underflow (at dt = "
+                  "1 ms that is a period of %.0f days): give a band that passes the motion",
+                  band, kMinBand, 2.0 * std::numbers::pi / kMinBand * 1e-3 / 86400.0);
+    throw InputError(field, text);
+  }
+}
 
 struct FilterSettings {
   int half_length = 100;  ///< M: the filter has 2M + 1 taps. Must be ≥ 2.
