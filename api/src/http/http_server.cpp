@@ -786,14 +786,21 @@ void HttpServer::reactor_evict(Connection& newest) {
 
 /// Closes a held connection and forgets it (`connection` is gone after).
 void HttpServer::reactor_close(Connection& connection) {
+  const std::unique_ptr<Connection> released = reactor_release(connection);
+  close_connection(*released);
+}
+
+std::unique_ptr<HttpServer::Connection> HttpServer::reactor_release(Connection& connection) {
   const socket_t fd = connection.fd;
   ::epoll_ctl(epoll_, EPOLL_CTL_DEL, fd, nullptr);
   held_order_.erase(connection.in_order);
   const auto mine = held_by_client_.find(connection.client);
   mine->second.erase(connection.in_client);
   if (mine->second.empty()) held_by_client_.erase(mine);
-  close_connection(connection);
-  held_.erase(fd);
+  const auto held = held_.find(fd);
+  std::unique_ptr<Connection> released = std::move(held->second);
+  held_.erase(held);
+  return released;
 }
 
 /// Reads what a held connection has: a lingering one's bytes are dropped; a waiting one's are
@@ -837,16 +844,7 @@ void HttpServer::reactor_read(Connection& c) {
     if (errno != EAGAIN && errno != EWOULDBLOCK && errno != EINTR) reactor_close(c);
     return;
   }
-  const socket_t fd = c.fd;
-  ::epoll_ctl(epoll_, EPOLL_CTL_DEL, fd, nullptr);
-  held_order_.erase(c.in_order);
-  const auto mine = held_by_client_.find(c.client);
-  mine->second.erase(c.in_client);
-  if (mine->second.empty()) held_by_client_.erase(mine);
-  const auto held = held_.find(fd);
-  std::unique_ptr<Connection> connection = std::move(held->second);
-  held_.erase(held);
-  reactor_dispatch(std::move(connection), head == Connection::Head::whole);
+  reactor_dispatch(reactor_release(c), head == Connection::Head::whole);
 }
 
 /// To the HTTP threads: a whole head (`complete`), or one httplib is to refuse as it stands.

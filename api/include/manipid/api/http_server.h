@@ -153,6 +153,8 @@ class HttpServer : public httplib::Server {
   void reactor_take(std::unique_ptr<Connection> connection);
   void reactor_wait(std::unique_ptr<Connection> connection);
   void reactor_close(Connection& connection);
+  /// Takes a held connection out of the reactor (epoll, the waiting order, its client's list) and hands it back.
+  std::unique_ptr<Connection> reactor_release(Connection& connection);
   void reactor_sweep(std::chrono::steady_clock::time_point now);
   void reactor_evict(Connection& newest);
   void reactor_log(std::chrono::steady_clock::time_point now, bool force);
