@@ -7,6 +7,7 @@
 #include "manipid/core/paper/regressor.h"
 
 #include "numbers.h"
+#include "signal/fir.h"
 #include "vector_clones.h"
 
 #include <Eigen/QR>
@@ -16,6 +17,7 @@
 #include <algorithm>
 
 #include <cmath>
+#include <memory>
 #include <optional>
 #include <limits>
 #include <vector>
@@ -122,84 +124,6 @@ double floor_of(const RobotModel& model, const ParameterProducts& products, cons
   return residual.squaredNorm() / samples;
 }
 
-// Four doubles: one AVX2 register (two SSE2 ones). GCC's loop vectoriser makes a poor job of
-// filter_samples' loops (it vectorises the four sums across their lanes and reduces them at
-// every step), so they are written on Lanes. A LanesAt is four doubles in memory, read or
-// written in place whatever their alignment (may_alias: they are doubles).
-using Lanes = double __attribute__((vector_size(32)));
-using LanesAt = double __attribute__((vector_size(32), aligned(8), may_alias));
-using LaneIndices = long long __attribute__((vector_size(32)));
-[[gnu::always_inline]] inline LanesAt& lanes_at(double* at) { return *reinterpret_cast<LanesAt*>(at); }
-[[gnu::always_inline]] inline const LanesAt& lanes_at(const double* at) { return *reinterpret_cast<const LanesAt*>(at); }
-
-// The four sums of `B` bands (filter_samples) over one sample's folds, the bands' taps at
-// `taps`, band b's at b·3K. Two bands at once keep eight sums running: one band's four are a
-// chain of additions each, and wait on the adder's latency.
-template <int B>
-[[gnu::always_inline]] inline void band_sums(const double* taps, Eigen::Index K, const double* f0, const double* f1,
-                                             const double* f2, double* out, Eigen::Index ld) {
-  Lanes sums[B][4] = {};
-  for (Eigen::Index i = 0; i < K; i += 4) {
-    const Lanes even = lanes_at(f0 + i), odd = lanes_at(f1 + i), torque = lanes_at(f2 + i);
-    for (int b = 0; b < B; ++b) {
-      const double* c0 = taps + b * 3 * K;
-      const Lanes lowpass = lanes_at(c0 + i);
-      sums[b][0] += lowpass * even;
-      sums[b][1] += lanes_at(c0 + 2 * K + i) * even;
-      sums[b][2] += lanes_at(c0 + K + i) * odd;
-      sums[b][3] += lowpass * torque;
-    }
-  }
-  for (int b = 0; b < B; ++b) {
-    for (int c = 0; c < 4; ++c) {
-      const Lanes& sum = sums[b][c];
-      out[(4 * b + c) * ld] = (sum[0] + sum[1]) + (sum[2] + sum[3]);
-    }
-  }
-}
-
-// Each band's four filters at each of `rows` thin samples of one joint: centre r·stride + M of
-// q and of the torque signal (the reference when the torque is formed from it). Each sample's
-// window is folded once, as the filters are (filters.cpp): f0[k] = q[c+k] + q[c−k] (q[c] at
-// k = 0) meets the symmetric low-pass and second derivative, f1[k] = q[c+k] − q[c−k] (0 at
-// k = 0) the antisymmetric first derivative, f2 the torque's like f0, which halves the work;
-// the folds are contiguous, so every band's four sums over k stream through them four k at a
-// time. `folds` holds 3·K doubles, K = M + 1 rounded up to a multiple of 4, zero past M (and
-// so are the taps: `taps` holds band g's low-pass, first and second derivative at k = 0..K−1
-// at g·3K, g·3K + K, g·3K + 2K). O is column-major with leading dimension `ld`, column 4g + c:
-// c = 0 q, 1 q̈, 2 q̇, 3 the torque, low-passed. Each output is the same sum in the same order
-// whichever bands share the call, so a band's values do not depend on the others.
-MANIPID_VECTOR_CLONES void filter_samples(const double* q, const double* torque, Eigen::Index rows, Eigen::Index stride,
-                                          Eigen::Index M, const double* taps, Eigen::Index bands, Eigen::Index K,
-                                          double* folds, double* O, Eigen::Index ld) {
-  const LaneIndices reversed = {3, 2, 1, 0};
-  double* f0 = folds;
-  double* f1 = folds + K;
-  double* f2 = folds + 2 * K;
-  for (Eigen::Index r = 0; r < rows; ++r) {
-    const double* x = q + r * stride + M;  // the centre
-    const double* y = torque + r * stride + M;
-    f0[0] = x[0];
-    f1[0] = 0.0;
-    f2[0] = y[0];
-    Eigen::Index k = 1;
-    for (; k + 3 <= M; k += 4) {  // x[k..k+3] and x[−k..−k−3]
-      const Lanes ahead = lanes_at(x + k), behind = __builtin_shuffle(Lanes(lanes_at(x - k - 3)), reversed);
-      lanes_at(f0 + k) = ahead + behind;
-      lanes_at(f1 + k) = ahead - behind;
-      lanes_at(f2 + k) = lanes_at(y + k) + __builtin_shuffle(Lanes(lanes_at(y - k - 3)), reversed);
-    }
-    for (; k <= M; ++k) {
-      f0[k] = x[k] + x[-k];
-      f1[k] = x[k] - x[-k];
-      f2[k] = y[k] + y[-k];
-    }
-    Eigen::Index g = 0;
-    for (; g + 2 <= bands; g += 2) band_sums<2>(taps + g * 3 * K, K, f0, f1, f2, O + 4 * g * ld + r, ld);
-    if (g < bands) band_sums<1>(taps + g * 3 * K, K, f0, f1, f2, O + 4 * g * ld + r, ld);
-  }
-}
-
 // How many of `outputs` filtered samples a thin filtering at `stride` from `offset` keeps:
 // offset, offset + stride, offset + 2·stride, ….
 int every(int outputs, int stride, int offset = 0) { return (std::max(outputs - offset, 0) + stride - 1) / stride; }
@@ -210,27 +134,19 @@ int thin_rows(int samples, int M, int stride, int offset = 0) {
 }
 
 // q, q̇, q̈ and τ of `data` filtered with each band at half-length M (as filter_for_input_error
-// filters them), at every `stride`-th output sample from `offset` only (filter_samples).
+// filters them), at every `stride`-th output sample from `offset` only (the FIR engine's strided mode).
 std::vector<FilteredData> filter_thin(const Trajectory& data, int M, const std::vector<double>& bands, int stride,
                                       int offset, bool use_reference, const std::optional<PdController>& controller) {
   const int n = data.joint_count();
   const int rows = thin_rows(data.samples(), M, stride, offset);
   const int count = static_cast<int>(bands.size());
-  const Eigen::Index K = (M + 1 + 3) / 4 * 4;
-  std::vector<double> taps(static_cast<std::size_t>(count * 3 * K), 0.0);
-  std::vector<double> folds(static_cast<std::size_t>(3 * K), 0.0);
+  std::vector<std::shared_ptr<const DifferentialFilter>> filters;
+  std::vector<const DifferentialFilter*> bank_filters;
   std::vector<FilteredData> thin(static_cast<std::size_t>(count));
   for (int b = 0; b < count; ++b) {
     const FilterSettings settings{M, bands[static_cast<std::size_t>(b)], data.dt()};
-    const auto filter = cached_filter(settings);
-    double* tap = taps.data() + static_cast<std::size_t>(b) * 3 * K;
-    for (FilterOrder order : {FilterOrder::lowpass, FilterOrder::derivative1, FilterOrder::derivative2}) {
-      // The taps at k = 0..M of the (2M + 1)-long filter, centre M; the first derivative's centre
-      // tap is 0 and meets the zero fold.
-      const Eigen::VectorXd& c = filter->coefficients(order);
-      for (int k = 0; k <= M; ++k) tap[k] = c[M + k];
-      tap += K;
-    }
+    filters.push_back(cached_filter(settings));
+    bank_filters.push_back(filters.back().get());
     FilteredData& candidate = thin[static_cast<std::size_t>(b)];
     candidate.filter = settings;
     candidate.q.resize(rows, n);
@@ -238,11 +154,11 @@ std::vector<FilteredData> filter_thin(const Trajectory& data, int M, const std::
     candidate.qdd.resize(rows, n);
     candidate.tau.resize(rows, n);
   }
+  const detail::fir::StridedBank bank(bank_filters);
   Eigen::MatrixXd product(rows, static_cast<Eigen::Index>(count) * 4);
   for (int j = 0; j < n; ++j) {
     const double* torque = (use_reference ? data.ref.col(j) : data.tau.col(j)).data();
-    filter_samples(data.q.col(j).data() + offset, torque + offset, rows, stride, M, taps.data(), count, K, folds.data(),
-                   product.data(), product.rows());
+    bank.apply(data.q.col(j).data() + offset, torque + offset, rows, stride, product.data(), product.rows());
     for (int b = 0; b < count; ++b) {
       FilteredData& candidate = thin[static_cast<std::size_t>(b)];
       const auto filtered = [&](int c) { return product.col(b * 4 + c); };
@@ -409,36 +325,32 @@ std::vector<int> common_instants(int samples, int reach, int stride) {
   return instants;
 }
 
-/// A candidate's rows: q filtered with (M, Ωg) at the instants, the regressor formed from it,
-/// and τ low-passed with the same filter (or formed from the reference through the gains).
+/// A candidate's rows: q filtered with (M, Ωg) at the instants (every `stride`-th sample from the
+/// first: the FIR engine's strided mode), the regressor formed from it, and τ low-passed with the
+/// same filter (or formed from the reference through the gains).
 Rows candidate_rows(const RobotModel& model, const ParameterProducts& products, const Trajectory& data,
                     const FilterSettings& settings, bool use_reference, const std::optional<PdController>& controller,
-                    const std::vector<int>& instants) {
+                    const std::vector<int>& instants, int stride) {
   const auto filter = cached_filter(settings);
+  const detail::fir::StridedBank bank({filter.get()});
   const int M = settings.half_length;
   const int n = data.joint_count();
   const int p = products.size();
-  const Eigen::VectorXd& c0 = filter->coefficients(FilterOrder::lowpass);
-  const Eigen::VectorXd& c1 = filter->coefficients(FilterOrder::derivative1);
-  const Eigen::VectorXd& c2 = filter->coefficients(FilterOrder::derivative2);
-  Rows rows;
-  rows.Y.resize(static_cast<Eigen::Index>(instants.size()) * n, p);
-  rows.tau.resize(static_cast<Eigen::Index>(instants.size()) * n);
   const Eigen::Index count = static_cast<Eigen::Index>(instants.size());
-  Eigen::MatrixXd q(count, n), qd(count, n), qdd(count, n);
-  for (Eigen::Index i = 0; i < count; ++i) {
-    const int start = instants[static_cast<std::size_t>(i)] - M;
-    for (int j = 0; j < n; ++j) {
-      const auto window = data.q.col(j).segment(start, 2 * M + 1);
-      q(i, j) = c0.dot(window);
-      qd(i, j) = c1.dot(window);
-      qdd(i, j) = c2.dot(window);
-      if (use_reference) {
-        const double reference = c0.dot(data.ref.col(j).segment(start, 2 * M + 1));
-        rows.tau[i * n + j] = controller->kp[j] * (reference - q(i, j)) - controller->kd[j] * qd(i, j);
-      } else {
-        rows.tau[i * n + j] = c0.dot(data.tau.col(j).segment(start, 2 * M + 1));
-      }
+  const int first = instants.front() - M;  // the first window's first sample
+  Rows rows;
+  rows.Y.resize(count * n, p);
+  rows.tau.resize(count * n);
+  Eigen::MatrixXd q(count, n), qd(count, n), qdd(count, n), filtered(count, 4);
+  for (int j = 0; j < n; ++j) {
+    const double* torque = (use_reference ? data.ref.col(j) : data.tau.col(j)).data();
+    bank.apply(data.q.col(j).data() + first, torque + first, count, stride, filtered.data(), count);
+    q.col(j) = filtered.col(0);
+    qdd.col(j) = filtered.col(1);
+    qd.col(j) = filtered.col(2);
+    for (Eigen::Index i = 0; i < count; ++i) {
+      rows.tau[i * n + j] = use_reference ? controller->kp[j] * (filtered(i, 3) - q(i, j)) - controller->kd[j] * qd(i, j)
+                                          : filtered(i, 3);
     }
   }
   DynamicsWorkspace workspace(model);
@@ -607,7 +519,8 @@ FilterChoice choose_filter(const RobotModel& model, const Trajectory& data, cons
     for (int length : determined.empty() ? std::vector<int>{} : lengths) {
       for (double band : bands) {
         const FilterSettings candidate{length, band, data.dt()};
-        const Rows rows = candidate_rows(model, products, data, candidate, use_reference, options.controller, instants);
+        const Rows rows =
+            candidate_rows(model, products, data, candidate, use_reference, options.controller, instants, kChoiceStride);
         const Eigen::VectorXd estimate = fit_parameters(products, rows.Y, rows.tau, start);
         double value = 0.0;
         for (int i : determined) value = std::max(value, std::abs(estimate[i] - reference[i]) / std::abs(reference[i]));

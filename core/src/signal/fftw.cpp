@@ -1,7 +1,5 @@
-// fftw.cpp — loads FFTW on first use; real transforms of one length from one complex pair (fftw.h).
+// fftw.cpp — real transforms of one length from one complex pair of FFTW plans, made once per length (fftw.h).
 #include "signal/fftw.h"
-
-#include <dlfcn.h>
 
 #include <map>
 #include <memory>
@@ -11,36 +9,6 @@
 #include <string>
 
 namespace manipid::detail {
-namespace {
-
-constexpr const char* kLibrary = "libfftw3.so.3";
-
-std::unique_ptr<Fftw> load() {
-  // RTLD_LOCAL: FFTW's symbols serve these pointers only. The handle is never closed (plans
-  // and arrays outlive any caller).
-  void* library = dlopen(kLibrary, RTLD_NOW | RTLD_LOCAL);
-  if (library == nullptr) return nullptr;
-  auto functions = std::make_unique<Fftw>();
-  bool complete = true;
-#define MANIPID_FFTW_BIND(name)                                            \
-  if (void* symbol = dlsym(library, #name)) {                              \
-    functions->name = reinterpret_cast<decltype(functions->name)>(symbol); \
-  } else {                                                                 \
-    complete = false;                                                      \
-  }
-  MANIPID_FFTW_FUNCTIONS(MANIPID_FFTW_BIND)
-#undef MANIPID_FFTW_BIND
-  return complete ? std::move(functions) : nullptr;
-}
-
-}  // namespace
-
-const Fftw* fftw() {
-  // A static's initialisation runs once, under the compiler's lock. Never freed: arrays and
-  // plans call through it until the process ends.
-  static const Fftw* const loaded = load().release();
-  return loaded;
-}
 
 const RealTransforms& RealTransforms::of_length(Eigen::Index length) {
   if (length < 4 || length % 4 != 0) throw std::invalid_argument("real transforms need a length divisible by 4, got " + std::to_string(length));
@@ -51,7 +19,6 @@ const RealTransforms& RealTransforms::of_length(Eigen::Index length) {
   const std::lock_guard<std::mutex> lock(planning);
   std::unique_ptr<RealTransforms>& slot = (*made)[length];
   if (!slot) {
-    const Fftw& f = *fftw();
     const Eigen::Index half = length / 2;
     // FFTW_ESTIMATE: plans without running trial transforms on the arrays (FFTW_MEASURE would
     // take tens of milliseconds per length to gain a little per call). Out of place, as run.
@@ -59,8 +26,8 @@ const RealTransforms& RealTransforms::of_length(Eigen::Index length) {
     const int n = static_cast<int>(half);
     auto transforms = std::unique_ptr<RealTransforms>(new RealTransforms());
     transforms->half_ = half;
-    transforms->forward_ = f.fftw_plan_dft_1d(n, a.data(), b.data(), FFTW_FORWARD, FFTW_ESTIMATE);
-    transforms->backward_ = f.fftw_plan_dft_1d(n, a.data(), b.data(), FFTW_BACKWARD, FFTW_ESTIMATE | FFTW_DESTROY_INPUT);
+    transforms->forward_ = fftw_plan_dft_1d(n, a.data(), b.data(), FFTW_FORWARD, FFTW_ESTIMATE);
+    transforms->backward_ = fftw_plan_dft_1d(n, a.data(), b.data(), FFTW_BACKWARD, FFTW_ESTIMATE | FFTW_DESTROY_INPUT);
     if (!transforms->forward_ || !transforms->backward_) throw std::runtime_error("FFTW made no plan for a transform of length " + std::to_string(length));
     transforms->twiddle_.resize(static_cast<std::size_t>(half / 2 + 1));
     const double step = -2.0 * std::numbers::pi / static_cast<double>(length);
@@ -75,7 +42,7 @@ const RealTransforms& RealTransforms::of_length(Eigen::Index length) {
 // X[k] = E[k] + W^k O[k], X[N−k] = conj(E[k] − W^k O[k]) with W = exp(−2πi/B): each pair
 // (k, N−k) is formed from the same two values, so the pass runs in place.
 void RealTransforms::forward(double* in, fftw_complex* out) const {
-  fftw()->fftw_execute_dft(forward_, reinterpret_cast<fftw_complex*>(in), out);
+  fftw_execute_dft(forward_, reinterpret_cast<fftw_complex*>(in), out);
   const Eigen::Index n = half_;
   const double z0_re = out[0][0], z0_im = out[0][1];
   out[0][0] = z0_re + z0_im;
@@ -114,7 +81,7 @@ void RealTransforms::backward(fftw_complex* in, double* out) const {
     in[n - k][0] = e_re + o_im;
     in[n - k][1] = -e_im + o_re;
   }
-  fftw()->fftw_execute_dft(backward_, in, reinterpret_cast<fftw_complex*>(out));
+  fftw_execute_dft(backward_, in, reinterpret_cast<fftw_complex*>(out));
 }
 
 }  // namespace manipid::detail

@@ -1,11 +1,9 @@
-// fftw.h — FFTW's real transforms for the long filters, loaded when one is first needed.
+// fftw.h — the one FFT facade: FFTW's complex transforms, planned once per length, serving the long filters' real transforms.
 //
-// FFTW does a real transform of 4,096 points ~4× faster than Eigen's kissfft, which the long
-// filters (filters.cpp) used before; linked normally, though, its library costs every process
-// ~0.7 ms at start (an empty program with and without -lfftw3), paid by every CLI command that
-// never filters with a long window. Loaded with dlopen on first use instead, only the processes
-// that run a long filter pay, once. The declarations come from fftw3.h; every call goes
-// through fftw().
+// FFTW (Debian's libfftw3-double3) does a real transform of 4,096 points ~4× faster than Eigen's
+// kissfft. It is linked normally: loading it costs a process ~0.7 ms at start (an empty program
+// with and without -lfftw3: 0.86 against 1.57 ms), about 4 % of a whole `manipid identify` on the
+// paper's run, which no user sees — it was loaded at first use until that was measured.
 #pragma once
 
 #include <fftw3.h>
@@ -19,22 +17,6 @@
 
 namespace manipid::detail {
 
-// The functions used; the one list both the table and its loading are built from.
-#define MANIPID_FFTW_FUNCTIONS(X)                                                                        \
-  X(fftw_plan_dft_1d) X(fftw_execute_dft) X(fftw_malloc) X(fftw_free)
-
-/// Pointers to FFTW's functions, named as FFTW names them.
-struct Fftw {
-#define MANIPID_FFTW_MEMBER(name) decltype(&::name) name = nullptr;
-  MANIPID_FFTW_FUNCTIONS(MANIPID_FFTW_MEMBER)
-#undef MANIPID_FFTW_MEMBER
-};
-
-/// FFTW (libfftw3.so.3, Debian package libfftw3-double3), loaded on the first call and kept for
-/// the process's life; null when it cannot be loaded (the long filters then take the direct
-/// sum: the same outputs, slower). Thread-safe.
-const Fftw* fftw();
-
 /// An array FFTW may work on: from fftw_malloc, so every one has the alignment the plans were
 /// made with (FFTW's condition for executing a plan on other arrays than its own).
 template <typename T>
@@ -45,13 +27,13 @@ class FftwArray {
   FftwArray(const FftwArray&) = delete;
   FftwArray& operator=(const FftwArray&) = delete;
   ~FftwArray() {
-    if (data_) fftw()->fftw_free(data_);
+    if (data_) fftw_free(data_);
   }
   /// Holds at least `size` elements afterwards; the contents are not kept.
   void resize(Eigen::Index size) {
     if (size <= capacity_) return;
-    if (data_) fftw()->fftw_free(data_);
-    data_ = static_cast<T*>(fftw()->fftw_malloc(sizeof(T) * static_cast<std::size_t>(size)));
+    if (data_) fftw_free(data_);
+    data_ = static_cast<T*>(fftw_malloc(sizeof(T) * static_cast<std::size_t>(size)));
     if (!data_) throw std::bad_alloc();
     capacity_ = size;
   }
@@ -72,7 +54,7 @@ class FftwArray {
 /// the planner's first plan, ~0.4 ms, which either pays): a cost every one-shot command that
 /// filters with a long window paid once, against ~0.04 ms more a job in a service.
 /// Made once per length under a lock (FFTW's planner is not thread-safe; executing a plan is)
-/// and kept for the process's life. Needs fftw() non-null.
+/// and kept for the process's life.
 class RealTransforms {
  public:
   static const RealTransforms& of_length(Eigen::Index length);

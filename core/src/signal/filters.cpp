@@ -6,7 +6,7 @@
 #include "manipid/core/errors.h"
 
 #include "signal/fftw.h"
-#include "vector_clones.h"
+#include "signal/fir.h"
 
 #include <algorithm>
 #include <array>
@@ -100,97 +100,12 @@ Eigen::VectorXd mirrored(const std::vector<double>& half, int half_length, doubl
   return taps;
 }
 
-// Output blocks small enough that x's window and the outputs stay in L1 across all taps.
-constexpr Index block_size = 512;
-
-// The kernels are compiled for baseline x86-64 and for AVX2 (vector_clones.h). Vectorising
-// across outputs keeps each output's operation order, so both versions agree bit for bit.
-
-// y[j] = c[0] x[j] + Σ_{n=1}^{M} c[n] (x[j+n] + parity·x[j−n]) for j in [0, count), where
-// `centre` points at the input the first output is centred on and `taps` at c[0] (the
-// upper half of a symmetric or antisymmetric filter). Folding halves the multiplies; taps
-// go in the outer loop so the inner loop over outputs is contiguous and vectorises (the
-// dot-product order would need reassociation, which -O3 does not do); four taps per pass
-// cut the loads and stores of y.
-template <int parity>
-[[gnu::always_inline]] inline void correlate_folded(const double* taps, int half_length,
-                                                   const double* centre, double* out, Index count) {
-  for (Index begin = 0; begin < count; begin += block_size) {
-    const Index end = std::min(count, begin + block_size);
-    const double c0 = parity > 0 ? taps[0] : 0.0;
-    for (Index j = begin; j < end; ++j) out[j] = c0 * centre[j];
-    int n = 1;
-    for (; n + 3 <= half_length; n += 4) {
-      const double a = taps[n], b = taps[n + 1], c = taps[n + 2], d = taps[n + 3];
-      for (Index j = begin; j < end; ++j) {
-        out[j] += (a * (centre[j + n] + parity * centre[j - n]) +
-                   b * (centre[j + n + 1] + parity * centre[j - n - 1])) +
-                  (c * (centre[j + n + 2] + parity * centre[j - n - 2]) +
-                   d * (centre[j + n + 3] + parity * centre[j - n - 3]));
-      }
-    }
-    for (; n <= half_length; ++n) {
-      const double a = taps[n];
-      for (Index j = begin; j < end; ++j) out[j] += a * (centre[j + n] + parity * centre[j - n]);
-    }
-  }
-}
-
-MANIPID_VECTOR_CLONES void correlate_symmetric(const double* taps, int half_length, const double* centre,
-                                               double* out, Index count) {
-  correlate_folded<+1>(taps, half_length, centre, out, count);
-}
-
-MANIPID_VECTOR_CLONES void correlate_antisymmetric(const double* taps, int half_length, const double* centre,
-                                                   double* out, Index count) {
-  correlate_folded<-1>(taps, half_length, centre, out, count);
-}
-
-// The three filters in one pass: the folded sum x[j+n] + x[j−n] serves lowpass and
-// derivative2, the difference serves derivative1. Two taps per pass measured best here
-// (three outputs already keep enough work in flight).
-MANIPID_VECTOR_CLONES void correlate_folded_all(const double* lowpass, const double* derivative1, const double* derivative2,
-                          int half_length, const double* centre, double* out0, double* out1, double* out2,
-                          Index count) {
-  for (Index begin = 0; begin < count; begin += block_size) {
-    const Index end = std::min(count, begin + block_size);
-    for (Index j = begin; j < end; ++j) {
-      out0[j] = lowpass[0] * centre[j];
-      out1[j] = 0.0;
-      out2[j] = derivative2[0] * centre[j];
-    }
-    int n = 1;
-    for (; n + 1 <= half_length; n += 2) {
-      const double a0 = lowpass[n], a1 = derivative1[n], a2 = derivative2[n];
-      const double b0 = lowpass[n + 1], b1 = derivative1[n + 1], b2 = derivative2[n + 1];
-      const double *ahead_a = centre + n, *behind_a = centre - n;  // x[j+n], x[j−n]
-      const double *ahead_b = ahead_a + 1, *behind_b = behind_a - 1;
-      for (Index j = begin; j < end; ++j) {
-        const double sum_a = ahead_a[j] + behind_a[j], difference_a = ahead_a[j] - behind_a[j];
-        const double sum_b = ahead_b[j] + behind_b[j], difference_b = ahead_b[j] - behind_b[j];
-        out0[j] += a0 * sum_a + b0 * sum_b;
-        out1[j] += a1 * difference_a + b1 * difference_b;
-        out2[j] += a2 * sum_a + b2 * sum_b;
-      }
-    }
-    for (; n <= half_length; ++n) {
-      const double a0 = lowpass[n], a1 = derivative1[n], a2 = derivative2[n];
-      for (Index j = begin; j < end; ++j) {
-        const double sum = centre[j + n] + centre[j - n], difference = centre[j + n] - centre[j - n];
-        out0[j] += a0 * sum;
-        out1[j] += a1 * difference;
-        out2[j] += a2 * sum;
-      }
-    }
-  }
-}
-
 // Long filters through the FFT, by overlap-save: blocks of B inputs (B a power of two, at least
 // 4(2M + 1), so a block yields B − 2M ≥ 3/4 B outputs) are transformed once, multiplied by
 // each filter's conjugate spectrum (a correlation, as the direct sum), and transformed back;
 // the first B − 2M outputs of a block are free of wrap-around. A direct output costs ~M
 // multiply-adds; an FFT output ~4(log₂ B)/(1 − 2M/B) operations whatever M is. The transforms
-// are FFTW's (fftw.h), loaded on first use; without FFTW every filter takes the direct sum.
+// are FFTW's (fftw.h).
 // B is at least 4,096, one length for every M up to 511: FFTW plans each new length once per
 // process (fftw.h: ~0.05 ms a length after its first plan), and for M = 100 a block of 4,096 costs
 // per output what one of 1,024 does. Rounding differs from the direct sum's, not its size:
@@ -204,7 +119,7 @@ Index fft_block_length(int half_length) {
 // The FFT path pays when the filter is long and there is at least a block's worth of outputs.
 bool use_fft(int half_length, Index outputs) {
   return half_length >= DifferentialFilter::fft_min_half_length && half_length <= DifferentialFilter::fft_max_half_length &&
-         outputs >= fft_block_length(half_length) - 2 * static_cast<Index>(half_length) && detail::fftw() != nullptr;
+         outputs >= fft_block_length(half_length) - 2 * static_cast<Index>(half_length);
 }
 
 bool overlaps(const double* a, Index a_size, const double* b, Index b_size) {
@@ -409,13 +324,8 @@ void DifferentialFilter::apply(FilterOrder order, const Eigen::Ref<const Eigen::
     correlate_by_fft(m, chosen, *fft.transforms, fft.block, input, x.size(), out, outputs);
     return;
   }
-  const double* centre = input + m;
-  const double* upper_taps = taps.data() + m;
-  if (order == FilterOrder::derivative1) {
-    correlate_antisymmetric(upper_taps, m, centre, y.data(), outputs);
-  } else {
-    correlate_symmetric(upper_taps, m, centre, y.data(), outputs);
-  }
+  detail::fir::correlate(order == FilterOrder::derivative1 ? detail::fir::Parity::antisymmetric : detail::fir::Parity::symmetric,
+                         taps.data() + m, m, input + m, y.data(), outputs);
 }
 
 Eigen::VectorXd DifferentialFilter::apply(FilterOrder order, const Eigen::Ref<const Eigen::VectorXd>& x) const {
@@ -446,8 +356,8 @@ void DifferentialFilter::apply_all(const Eigen::Ref<const Eigen::VectorXd>& x, E
                      {lowpass.data(), derivative1.data(), derivative2.data()}, outputs);
     return;
   }
-  correlate_folded_all(lowpass_.data() + m, derivative1_.data() + m, derivative2_.data() + m, m, input + m,
-                       lowpass.data(), derivative1.data(), derivative2.data(), outputs);
+  detail::fir::correlate_three(lowpass_.data() + m, derivative1_.data() + m, derivative2_.data() + m, m, input + m,
+                               lowpass.data(), derivative1.data(), derivative2.data(), outputs);
 }
 
 std::complex<double> DifferentialFilter::frequency_response(FilterOrder order, double omega) const {

@@ -98,14 +98,14 @@ class DifferentialFilter {
   std::complex<double> frequency_response(FilterOrder order, double omega) const;
 
   /// Whether apply() and apply_all() on `input_samples` samples go through the FFT: M at least
-  /// fft_min_half_length, at least a transform block's worth of outputs, and FFTW
-  /// (libfftw3.so.3) loadable — it is loaded on the first call; without it, the direct sum.
+  /// fft_min_half_length and at most fft_max_half_length, and at least a transform block's worth
+  /// of outputs.
   bool uses_fft(int input_samples) const;
 
   /// Half-lengths from which apply() and apply_all() may use the FFT (see filters.cpp). Per
   /// call the FFT is the faster from M ≈ 40 on all three orders (~0.3 ms for 4 × 9,701 samples
-  /// whatever M, against 0.65 ms direct at M = 100), but a process pays once for loading FFTW
-  /// and its first plan (~1 ms): from M = 64, `manipid identify` with the paper's M = 100 took
+  /// whatever M, against 0.65 ms direct at M = 100), but a process pays once for FFTW's first
+  /// plan (~1 ms with loading the library): from M = 64, `manipid identify` with the paper's M = 100 took
   /// as long as with the direct sum (medians of 40, 2026-11-27), so a one-shot command gains
   /// nothing below M = 192, and a service loses little.
   static constexpr int fft_min_half_length = 192;
