@@ -274,7 +274,7 @@ void check_against_data(const IdentificationSpec& spec, int joints, int samples,
                                    "formed from the reference and the PD gains");
   }
 
-  const auto needed = [](int half_length) { return 2 * half_length + 2; };
+  const auto needed = DifferentialFilter::min_input_samples;
   if (options.method == IdentificationMethod::output_error) {
     if (samples < needed(output_error_structure_half_length)) {
       throw InputError(field, noun + " has " + std::to_string(samples) + " samples; output-error needs at least " +

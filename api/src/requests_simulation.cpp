@@ -89,7 +89,7 @@ void check_sampling(const ObjectFields& object, const SimulationSpec& spec) {
                               : object.has("dt")          ? object.path("dt")
                                                           : member_path(reference_path, "half_length");
     throw InputError(field, "the reference pre-filter (half_length " + std::to_string(reference.half_length) +
-                                ") needs more than " + std::to_string(2 * reference.half_length + 2) +
+                                ") needs more than " + std::to_string(DifferentialFilter::min_input_samples(reference.half_length)) +
                                 " samples; the reference's duration / dt gives " +
                                 format_number(reference_intervals + 1.0));
   }

@@ -107,11 +107,11 @@ int run_filter(const FilterOptions& options) {
   } catch (const InputError& error) {
     rethrow_with_source(error, filter_option(error.field()));
   }
-  const int outputs = input.rows() - 2 * settings.half_length - 1;
+  const int outputs = DifferentialFilter::output_length(static_cast<int>(input.rows()), settings.half_length);
   if (outputs < 1) {
     throw InputError("samples", source + ": the filter with --half-length " +
                                     std::to_string(settings.half_length) + " needs at least 2M+2 = " +
-                                    std::to_string(2 * settings.half_length + 2) + " rows, got " +
+                                    std::to_string(DifferentialFilter::min_input_samples(settings.half_length)) + " rows, got " +
                                     std::to_string(input.rows()));
   }
   if (!(dt > 0.0)) {

@@ -279,7 +279,7 @@ expect_error "identify: bad initial value" 2 "--init m2=abc: 'abc' is not a fini
   "$manipid" identify paper.csv --init m2=abc
 expect_error "identify: wrong gain count" 2 "--kp needs 4 comma-separated values" \
   "$manipid" identify paper.csv --kp 1,2,3
-expect_error "identify: too few samples for the filter" 2 "the data has" \
+expect_error "identify: too few samples for the filter" 2 "needs at least 2M+2 = 202 samples, got 99" \
   "$manipid" identify <(head -100 paper.csv) --half-length 100 --band 0.2
 expect_error "identify: output-error without ref, saying why" 2 "needs the reference r the controller followed" \
   "$manipid" identify <(cut -d, -f1-9 paper.csv) --method output-error

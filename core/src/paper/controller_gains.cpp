@@ -36,12 +36,7 @@ double relative(const Eigen::VectorXd& residual, const Eigen::Ref<const Eigen::V
 Eigen::MatrixXd filter_reference(const Trajectory& data, const FilterSettings& filter) {
   if (!data.has_reference()) throw InputError("ref", "the data has no ref columns");
   const auto differential = cached_filter(filter);
-  const int outputs = differential->output_length(data.samples());
-  if (outputs < 1) {
-    throw InputError("samples", "the filter (half-length " + std::to_string(filter.half_length) + ") needs more than " +
-                                    std::to_string(2 * filter.half_length + 1) + " samples, the data has " +
-                                    std::to_string(data.samples()));
-  }
+  const int outputs = differential->checked_output_length(data.samples());
   Eigen::MatrixXd reference(outputs, data.joint_count());
   for (int j = 0; j < data.joint_count(); ++j) {
     differential->apply(FilterOrder::lowpass, data.ref.col(j), reference.col(j));

@@ -62,12 +62,7 @@ FilteredData filter_for_input_error(const Trajectory& data, const FilterSettings
   filter.validate();
   const int n = data.joint_count();
   const auto differential = cached_filter(filter);
-  const int outputs = differential->output_length(data.samples());
-  if (outputs < 1) {
-    throw InputError("samples", "the filter (half-length " + std::to_string(filter.half_length) + ") needs more than " +
-                                    std::to_string(2 * filter.half_length + 1) + " samples, the data has " +
-                                    std::to_string(data.samples()));
-  }
+  const int outputs = differential->checked_output_length(data.samples());
   FilteredData result;
   result.filter = filter;
   result.q.resize(outputs, n);

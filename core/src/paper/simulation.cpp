@@ -228,7 +228,7 @@ SampledReference make_step_reference(const StepReferenceSpec& spec) {
   const int output_samples = filter->output_length(static_cast<int>(raw_samples));
   if (output_samples < 2) {
     throw InputError("duration", "the pre-filter (half_length " + std::to_string(spec.half_length) +
-                                     ") needs more than " + std::to_string(2 * spec.half_length + 2) +
+                                     ") needs more than " + std::to_string(DifferentialFilter::min_input_samples(spec.half_length)) +
                                      " samples; duration / dt gives " + std::to_string(raw_samples));
   }
 

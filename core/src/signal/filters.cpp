@@ -194,19 +194,18 @@ const Eigen::VectorXd& DifferentialFilter::coefficients(FilterOrder order) const
   throw std::invalid_argument("unknown filter order " + std::to_string(static_cast<int>(order)));
 }
 
-namespace {
-
-// Number of outputs for x, or InputError("samples") when x cannot fill one window.
-Index checked_output_length(const DifferentialFilter& filter, Index input_samples) {
-  const Index m = filter.settings().half_length;
-  const Index outputs = input_samples - 2 * m - 1;
+int DifferentialFilter::checked_output_length(int input_samples) const {
+  const int m = settings_.half_length;
+  const int outputs = output_length(input_samples);
   if (outputs < 1) {
     throw InputError("samples", "the differential filter with half-length M = " + std::to_string(m) +
-                                    " needs at least 2M+2 = " + std::to_string(2 * m + 2) +
+                                    " needs at least 2M+2 = " + std::to_string(min_input_samples(m)) +
                                     " samples, got " + std::to_string(input_samples));
   }
   return outputs;
 }
+
+namespace {
 
 void check_output_size(Index expected, Index actual, const char* name) {
   if (expected != actual) {
@@ -305,7 +304,7 @@ void DifferentialFilter::apply_direct(FilterOrder order, const Eigen::Ref<const 
 
 void DifferentialFilter::apply(FilterOrder order, const Eigen::Ref<const Eigen::VectorXd>& x,
                                Eigen::Ref<Eigen::VectorXd> y, bool fft_allowed) const {
-  const Index outputs = checked_output_length(*this, x.size());
+  const Index outputs = checked_output_length(static_cast<int>(x.size()));
   check_output_size(outputs, y.size(), "y");
   const Eigen::VectorXd& taps = coefficients(order);
   const int m = settings_.half_length;
@@ -329,7 +328,7 @@ void DifferentialFilter::apply(FilterOrder order, const Eigen::Ref<const Eigen::
 }
 
 Eigen::VectorXd DifferentialFilter::apply(FilterOrder order, const Eigen::Ref<const Eigen::VectorXd>& x) const {
-  Eigen::VectorXd y(checked_output_length(*this, x.size()));
+  Eigen::VectorXd y(checked_output_length(static_cast<int>(x.size())));
   apply(order, x, y);
   return y;
 }
@@ -337,7 +336,7 @@ Eigen::VectorXd DifferentialFilter::apply(FilterOrder order, const Eigen::Ref<co
 void DifferentialFilter::apply_all(const Eigen::Ref<const Eigen::VectorXd>& x, Eigen::Ref<Eigen::VectorXd> lowpass,
                                    Eigen::Ref<Eigen::VectorXd> derivative1,
                                    Eigen::Ref<Eigen::VectorXd> derivative2) const {
-  const Index outputs = checked_output_length(*this, x.size());
+  const Index outputs = checked_output_length(static_cast<int>(x.size()));
   check_output_size(outputs, lowpass.size(), "lowpass");
   check_output_size(outputs, derivative1.size(), "derivative1");
   check_output_size(outputs, derivative2.size(), "derivative2");

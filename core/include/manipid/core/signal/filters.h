@@ -75,6 +75,11 @@ class DifferentialFilter {
   int output_length(int input_samples) const { return output_length(input_samples, settings_.half_length); }
   /// The same for any filter of half-length M.
   static int output_length(int input_samples, int half_length) { return input_samples - 2 * half_length - 1; }
+  /// The fewest inputs that give an output: 2M + 2 (the one rule every layer counts samples by).
+  static constexpr int min_input_samples(int half_length) { return 2 * half_length + 2; }
+  /// output_length(input_samples), or InputError("samples") saying how many samples the filter
+  /// needs when that is below one.
+  int checked_output_length(int input_samples) const;
   /// Index of the input sample that output j is centred on (0-based): M + j.
   int first_output_index() const { return settings_.half_length; }
 
