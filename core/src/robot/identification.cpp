@@ -167,26 +167,8 @@ std::string far_from_prior(const BaseParameters& base, const Eigen::VectorXd& es
          "trusting them";
 }
 
-/// The runs as the identification uses them: each the caller's own when it needs nothing done, else the
-/// prepared copy kept in `storage`.
-using Runs = std::vector<std::reference_wrapper<const Trajectory>>;
-
-/// Step 1: the runs on one uniform grid (copies only of those that need trimming or resampling).
-Runs prepare_runs(const std::vector<Trajectory>& runs, const DataPreparation& preparation,
-                  std::vector<std::optional<Trajectory>>& storage, std::vector<std::string>& warnings) {
-  Runs prepared;
-  storage.resize(runs.size());
-  DataPreparation same = preparation;
-  for (std::size_t i = 0; i < runs.size(); ++i) {
-    std::vector<std::string> run_warnings;
-    prepared.push_back(std::cref(prepare_data(runs[i], same, storage[i], &run_warnings)));
-    if (i == 0) same.uniform.dt = prepared.front().get().dt();
-    for (std::string& warning : run_warnings) {
-      warnings.push_back(runs.size() > 1 ? "run " + std::to_string(i + 1) + ": " + warning : warning);
-    }
-  }
-  return prepared;
-}
+/// The runs as the identification uses them (step 1: signal/resample.h's prepare_runs).
+using Runs = PreparedRuns;
 
 /// Step 1: the joints with a torque measurement.
 std::vector<int> measured_joints(const Model& model, const Runs& runs, const std::vector<int>& given,

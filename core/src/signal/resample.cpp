@@ -252,4 +252,20 @@ const Trajectory& prepare_data(const Trajectory& data, const DataPreparation& op
   return *storage;
 }
 
+PreparedRuns prepare_runs(const std::vector<Trajectory>& runs, const DataPreparation& options,
+                          std::vector<std::optional<Trajectory>>& storage, std::vector<std::string>& warnings) {
+  PreparedRuns prepared;
+  storage.resize(runs.size());
+  DataPreparation same = options;
+  for (std::size_t i = 0; i < runs.size(); ++i) {
+    std::vector<std::string> run_warnings;
+    prepared.push_back(std::cref(prepare_data(runs[i], same, storage[i], &run_warnings)));
+    if (i == 0) same.uniform.dt = prepared.front().get().dt();
+    for (std::string& warning : run_warnings) {
+      warnings.push_back(runs.size() > 1 ? "run " + std::to_string(i + 1) + ": " + warning : warning);
+    }
+  }
+  return prepared;
+}
+
 }  // namespace manipid

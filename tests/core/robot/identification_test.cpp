@@ -11,6 +11,7 @@
 #include "manipid/core/robot/rnea.h"
 #include "manipid/core/robot/urdf.h"
 #include "robot_test_support.h"
+#include "simulated_runs.h"
 
 #include <gtest/gtest.h>
 
@@ -24,78 +25,12 @@ namespace {
 
 using testing::read_file;
 using testing::source_path;
+using testing::Fourier;
+using testing::measure;
+using testing::perturbed_truth;
+using testing::uniform_times;
 
 Model example(const std::string& name) { return parse_urdf(read_file(source_path("examples/robots/" + name))).model; }
-
-/// A finite Fourier series per joint (Swevers' form): q_k(t) = Σ_l a_kl/(ω l) sin(ω l t) − b_kl/(ω l) cos(ω l t).
-struct Fourier {
-  double period = 10.0;
-  Eigen::MatrixXd a, b;  // n × harmonics
-
-  static Fourier random(int n, int harmonics, std::mt19937_64& engine, double amplitude = 0.25) {
-    std::uniform_real_distribution<double> uniform(-amplitude, amplitude);
-    Fourier f;
-    f.a.resize(n, harmonics);
-    f.b.resize(n, harmonics);
-    for (int k = 0; k < n; ++k) {
-      for (int l = 0; l < harmonics; ++l) {
-        f.a(k, l) = uniform(engine);
-        f.b(k, l) = uniform(engine);
-      }
-    }
-    return f;
-  }
-  void state(double t, Eigen::VectorXd& q, Eigen::VectorXd& qd, Eigen::VectorXd& qdd) const {
-    const double w0 = 2.0 * std::numbers::pi / period;
-    q.setZero(a.rows());
-    qd.setZero(a.rows());
-    qdd.setZero(a.rows());
-    for (Eigen::Index l = 0; l < a.cols(); ++l) {
-      const double w = w0 * static_cast<double>(l + 1), s = std::sin(w * t), c = std::cos(w * t);
-      q += (a.col(l) * s - b.col(l) * c) / w;
-      qd += a.col(l) * c + b.col(l) * s;
-      qdd += (-a.col(l) * s + b.col(l) * c) * w;
-    }
-  }
-};
-
-/// τ = RNEA(π) sampled at the given times along the trajectory.
-Trajectory measure(const Model& model, const ParameterLayout& layout, const Eigen::VectorXd& pi, const Fourier& motion,
-                   const Eigen::VectorXd& times) {
-  const int n = model.joint_count();
-  Trajectory data;
-  data.t = times;
-  data.q.resize(times.size(), n);
-  data.tau.resize(times.size(), n);
-  Data workspace(model);
-  Eigen::VectorXd q, qd, qdd, tau(n);
-  for (Eigen::Index s = 0; s < times.size(); ++s) {
-    motion.state(times[s], q, qd, qdd);
-    inverse_dynamics(model, workspace, layout, pi, q, qd, qdd, tau);
-    data.q.row(s) = q.transpose();
-    data.tau.row(s) = tau.transpose();
-  }
-  return data;
-}
-
-Eigen::VectorXd uniform_times(double duration, double dt) {
-  return Eigen::VectorXd::LinSpaced(static_cast<Eigen::Index>(std::round(duration / dt)) + 1, 0.0, duration);
-}
-
-/// The URDF's values with every entry moved by up to ±20 % and friction of plausible size: the truth the
-/// data are made with, different from the prior identification starts from.
-Eigen::VectorXd perturbed_truth(const Model& model, const ParameterLayout& layout, std::mt19937_64& engine) {
-  const int n = model.joint_count();
-  Eigen::VectorXd pi = standard_parameters(model, layout);
-  std::uniform_real_distribution<double> spread(0.8, 1.2), friction(0.2, 1.5), offset(-0.3, 0.3);
-  for (Eigen::Index i = 0; i < 10 * n; ++i) pi[i] *= spread(engine);
-  for (int k = 0; k < n; ++k) {
-    if (layout.viscous) pi[layout.viscous_begin(n) + k] = friction(engine);
-    if (layout.coulomb) pi[layout.coulomb_begin(n) + k] = 2.0 * friction(engine);
-    if (layout.offset) pi[layout.offset_begin(n) + k] = offset(engine);
-  }
-  return pi;
-}
 
 /// ‖τ(π̂) − τ(π)‖ / ‖τ(π)‖ over random states within the joint limits (q̇, q̈ standard normal).
 double random_state_error(const Model& model, const ParameterLayout& layout, const Eigen::VectorXd& estimate,

@@ -21,6 +21,7 @@
 
 #include "manipid/core/signal/trajectory.h"
 
+#include <functional>
 #include <optional>
 #include <string>
 #include <vector>
@@ -80,5 +81,12 @@ Trajectory prepare_data(const Trajectory& data, const DataPreparation& options,
 /// The same checks, errors and warning as the copying form.
 const Trajectory& prepare_data(const Trajectory& data, const DataPreparation& options, std::optional<Trajectory>& storage,
                                std::vector<std::string>* warnings = nullptr);
+
+/// Several runs prepared alike, every one onto the first one's period: each the caller's own when it needs
+/// nothing done, else the prepared copy kept in `storage` (resized to the runs' count). Warnings are
+/// prefixed "run i: " when there are several runs.
+using PreparedRuns = std::vector<std::reference_wrapper<const Trajectory>>;
+PreparedRuns prepare_runs(const std::vector<Trajectory>& runs, const DataPreparation& options,
+                          std::vector<std::optional<Trajectory>>& storage, std::vector<std::string>& warnings);
 
 }  // namespace manipid

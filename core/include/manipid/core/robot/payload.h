@@ -1,0 +1,130 @@
+// payload.h — a payload's (tool's, load's) 10 inertial parameters from one run of an identified arm, by the torque the arm leaves unexplained.
+//
+// A payload rigidly fixed to the tip link adds its inertial parameters to body n's (robot/model.h):
+//
+//     τ = Y(q, q̇, q̈) (π_arm + E π_B),   π_B = T π_P
+//
+// with E placing body n's 10 entries in π, π_P the payload's parameters in the tip link's frame about its
+// origin, and T the linear map to body n's frame (InertialParameters::expressed_in with the tip's pose in
+// body n, Model::tip_placement). So the residual the arm leaves, r = τ − Y π_arm, is linear in π_P:
+//
+//     L r = (L Y_n T) π_P
+//
+// The steps:
+//   1. prepare the run as an arm's identification does (trim, uniform grid; signal/resample.h);
+//   2. filter as the arm's identification does (robot/filtered_regressor.h): D gives the states, the
+//      regressor is formed on the working grid, the arm's torque Y π_arm is subtracted from τ there, and L
+//      passes the residual and body n's 10 columns alike (parallel filtering);
+//   3. solve by the one linear least-squares rule (estimation/linear_least_squares.h) with the prior 0 (no
+//      payload): a direction the run does not excite stays at 0 and is named, never filled with noise; a
+//      known mass or centre of mass is moved to the right-hand side (or into a combined column) first;
+//   4. report in the units a tool is mounted with: mass (kg), centre of mass (m, tip-link frame), inertia
+//      about the centre of mass in tip-link axes (kg·m², URDF tensor entries), each with its standard error
+//      (σ² of the filtered residual corrected as estimation::filtered_residual_factor says; the delta method
+//      through c = h/m and I_c = I_O − (‖h‖² E − h hᵀ)/m), and the training rows' error without and with it.
+// The arm may be any standard vector whose torque is right: a URDF's values, or manipid's own identification
+// (IdentificationResult::point), whose base parameters need not be physically consistent.
+#pragma once
+
+#include "manipid/core/robot/model.h"
+#include "manipid/core/robot/parameters.h"
+#include "manipid/core/robot/prediction.h"
+#include "manipid/core/signal/judge.h"
+#include "manipid/core/signal/resample.h"
+#include "manipid/core/signal/trajectory.h"
+
+#include <Eigen/Core>
+
+#include <array>
+#include <atomic>
+#include <limits>
+#include <optional>
+#include <string>
+#include <vector>
+
+namespace manipid::robot {
+
+/// The arm the payload is mounted on: its standard vector and its layout (friction, armature).
+struct ArmParameters {
+  ParameterLayout layout;
+  Eigen::VectorXd pi;  ///< dim layout.size(n): a URDF's values or an identification's `point`
+};
+
+struct PayloadOptions {
+  /// Trim and uniform grid (resample.h).
+  DataPreparation preparation;
+  /// The judge: its cut-off is the comparison low-pass L's unless `comparison_cutoff_hz` is given, and its
+  /// trim the rows' (robot/filtered_regressor.h).
+  JudgeOptions judge;
+  /// L's cut-off, Hz; 0 = the judge's (as the arm's identification was judged).
+  double comparison_cutoff_hz = 0.0;
+  /// Joints (0-based) whose torque is fitted; empty = all.
+  std::vector<int> torque_joints;
+  /// Known mass, kg (a scale): only the rest is estimated.
+  std::optional<double> known_mass;
+  /// Known centre of mass in the tip link's frame, m: only the rest is estimated.
+  std::optional<Eigen::Vector3d> known_centre_of_mass;
+  /// Checked per run while the rows are built; identify_payload() returns with `cancelled` set.
+  const std::atomic<bool>* cancel = nullptr;
+};
+
+/// The six entries of a symmetric 3 × 3 tensor in URDF order: ixx, ixy, ixz, iyy, iyz, izz.
+using TensorEntries = std::array<double, 6>;
+
+struct PayloadResult {
+  /// The payload in the tip link's frame about its origin: (m, mx, my, mz, Ixx, Ixy, Ixz, Iyy, Iyz, Izz),
+  /// kg, kg·m, kg·m² (robot/parameters.h's order for one body), and their standard errors (0 for a value
+  /// given, NaN for one the run does not determine).
+  Eigen::Matrix<double, 10, 1> estimate = Eigen::Matrix<double, 10, 1>::Zero();
+  Eigen::Matrix<double, 10, 1> std_errors = Eigen::Matrix<double, 10, 1>::Zero();
+  /// Of each of the 10: the share of its estimate the run determines (1: the data alone; 0: stays at 0).
+  Eigen::Matrix<double, 10, 1> data_share = Eigen::Matrix<double, 10, 1>::Zero();
+  static const std::array<const char*, 10>& names();  ///< m, mx, my, mz, Ixx, Ixy, Ixz, Iyy, Iyz, Izz
+
+  double mass = 0.0;                                          ///< kg
+  double mass_std_error = 0.0;                                ///< kg
+  /// m, tip-link frame; NaN when the mass is not distinguishable from 0 (no payload) or not determined.
+  Eigen::Vector3d centre_of_mass = Eigen::Vector3d::Constant(std::numeric_limits<double>::quiet_NaN());
+  Eigen::Vector3d centre_of_mass_std_errors = Eigen::Vector3d::Constant(std::numeric_limits<double>::quiet_NaN());
+  /// About the centre of mass, tip-link axes, kg·m² (NaN as the centre of mass).
+  TensorEntries inertia{};
+  TensorEntries inertia_std_errors{};
+  /// The payload is a real mass: m > 2 standard errors (a run without one answers ≈ 0 ± its uncertainty).
+  bool detected = false;
+  /// Parameters (names()) the run does not determine (data share < 1/2): they stay at 0, and each is named in
+  /// `warnings` with what motion would determine it.
+  std::vector<std::string> undetermined;
+
+  std::vector<int> torque_joints;   ///< the joints fitted (0-based)
+  int rows = 0;                     ///< least-squares rows
+  double comparison_cutoff_hz = 0;  ///< L's cut-off as used, Hz
+  /// The training rows' filtered torque error relative to the filtered torque, ‖L r‖ / ‖L τ‖ with the arm
+  /// alone and ‖L r − W π̂_P‖ / ‖L τ‖ with the payload.
+  double arm_only_error = 0.0;
+  double with_payload_error = 0.0;
+  double residual_variance = 0.0;   ///< σ² of one filtered residual (N·m)², as corrected
+  std::vector<std::string> warnings;
+  double wall_seconds = 0.0;
+  bool cancelled = false;
+};
+
+/// Identifies the payload on the tip link of `model` (with the arm `arm`) from runs with the payload fixed to
+/// it (q and τ; any time stamps). Throws InputError for unusable input (joint counts, no torque, a wrong-size
+/// or non-finite arm vector, a known mass ≤ 0, runs too short for the filters).
+PayloadResult identify_payload(const Model& model, const ArmParameters& arm, const std::vector<Trajectory>& runs,
+                               const PayloadOptions& options);
+
+/// The arm's standard vector with the payload added to body n (its tip-link parameters moved into body n's
+/// frame): what predicts the arm carrying it.
+Eigen::VectorXd with_payload(const Model& model, const ArmParameters& arm, const Eigen::Matrix<double, 10, 1>& payload);
+
+/// How the arm predicts runs with the payload, without it and with it, under the judge (robot/prediction.h;
+/// runs combined, each prepared as `preparation` says).
+struct PayloadValidation {
+  TorquePrediction arm_only;
+  TorquePrediction with_payload;
+};
+PayloadValidation validate_payload(const Model& model, const ArmParameters& arm, const PayloadResult& payload,
+                                   const std::vector<Trajectory>& runs, const PayloadOptions& options);
+
+}  // namespace manipid::robot

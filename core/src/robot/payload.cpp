@@ -1,0 +1,312 @@
+// payload.cpp — a payload's inertial parameters from the torque an identified arm leaves unexplained (robot/payload.h).
+#include "manipid/core/robot/payload.h"
+
+#include "manipid/core/errors.h"
+#include "manipid/core/estimation/linear_least_squares.h"
+#include "manipid/core/estimation/rules.h"
+#include "manipid/core/robot/filtered_regressor.h"
+#include "numbers.h"
+
+#include <chrono>
+#include <cmath>
+#include <string>
+
+namespace manipid::robot {
+namespace {
+
+using Vector10d = Eigen::Matrix<double, 10, 1>;
+using Matrix10d = Eigen::Matrix<double, 10, 10>;
+using detail::kNaN;
+
+/// A payload parameter whose data share is below this is not determined by the run (as an arm's base
+/// parameter is barely seen below it: robot/identification.cpp).
+constexpr double kDeterminedShare = 0.5;
+/// A mass above this many standard errors is a payload; below, the run cannot tell it from none.
+constexpr double kDetectedMass = 2.0;
+
+/// T: body n's parameters from the tip link's, π_B = T π_P (expressed_in is linear in the 10 entries).
+Matrix10d tip_to_body(const Model& model) {
+  Matrix10d T;
+  for (int i = 0; i < 10; ++i) {
+    T.col(i) = InertialParameters::from_vector(Vector10d::Unit(i)).expressed_in(model.tip_placement).vector();
+  }
+  return T;
+}
+
+/// What a parameter needs to be seen, for the warning naming it.
+std::string what_excites(int index) {
+  if (index == 0) return "vertical accelerations, or the arm held in several poses (gravity)";
+  if (index <= 3) return "poses that turn the tip link relative to gravity";
+  return "rotations of the tip link about several axes (the wrist joints moved fast, alone and together)";
+}
+
+/// The symmetric tensor of entries (xx, xy, xz, yy, yz, zz).
+Eigen::Matrix3d tensor(const double* e) {
+  Eigen::Matrix3d I;
+  I << e[0], e[1], e[2], e[1], e[3], e[4], e[2], e[4], e[5];
+  return I;
+}
+
+/// (m, c, I_c entries) from π_P = (m, h, I_O entries): c = h/m, I_c = I_O − (‖h‖² E − h hᵀ)/m.
+Eigen::Matrix<double, 10, 1> mounted(const Vector10d& pi) {
+  const double m = pi[0];
+  const Eigen::Vector3d h = pi.segment<3>(1);
+  const Eigen::Matrix3d Ic = tensor(pi.data() + 4) - (h.squaredNorm() * Eigen::Matrix3d::Identity() - h * h.transpose()) / m;
+  Eigen::Matrix<double, 10, 1> out;
+  out << m, h / m, Ic(0, 0), Ic(0, 1), Ic(0, 2), Ic(1, 1), Ic(1, 2), Ic(2, 2);
+  return out;
+}
+
+/// ∂ mounted / ∂ π_P, analytic: c = h/m gives ∂c/∂m = −h/m², ∂c/∂h = E/m; I_c = I_O − S(h)/m with
+/// S(h) = ‖h‖² E − h hᵀ gives ∂I_c/∂m = S(h)/m², ∂I_c/∂h_i = −(2 h_i E − e_i hᵀ − h e_iᵀ)/m, ∂I_c/∂I_O = identity.
+Matrix10d mounted_jacobian(const Vector10d& pi) {
+  const double m = pi[0];
+  const Eigen::Vector3d h = pi.segment<3>(1);
+  const auto entries = [](const Eigen::Matrix3d& A) {
+    Eigen::Matrix<double, 6, 1> e;
+    e << A(0, 0), A(0, 1), A(0, 2), A(1, 1), A(1, 2), A(2, 2);
+    return e;
+  };
+  const Eigen::Matrix3d S = h.squaredNorm() * Eigen::Matrix3d::Identity() - h * h.transpose();
+  Matrix10d J = Matrix10d::Zero();
+  J(0, 0) = 1.0;
+  J.block<3, 1>(1, 0) = -h / (m * m);
+  J.block<3, 3>(1, 1) = Eigen::Matrix3d::Identity() / m;
+  J.block<6, 1>(4, 0) = entries(S) / (m * m);
+  for (int i = 0; i < 3; ++i) {
+    const Eigen::Vector3d e = Eigen::Vector3d::Unit(i);
+    const Eigen::Matrix3d dS = 2.0 * h[i] * Eigen::Matrix3d::Identity() - e * h.transpose() - h * e.transpose();
+    J.block<6, 1>(4, 1 + i) = -entries(dS) / m;
+  }
+  J.block<6, 6>(4, 4).setIdentity();
+  return J;
+}
+
+/// The unknowns of step 3 and how π_P follows from them: π_P = G x + g0.
+struct Unknowns {
+  Eigen::MatrixXd G;                     // 10 × k
+  Vector10d g0 = Vector10d::Zero();
+  std::vector<int> parameter;            // x_i is π_P's parameter[i] (for names and shares)
+};
+
+Unknowns unknowns(const PayloadOptions& options) {
+  Unknowns u;
+  const bool mass = options.known_mass.has_value(), centre = options.known_centre_of_mass.has_value();
+  std::vector<Eigen::Matrix<double, 10, 1>> columns;
+  if (!mass) {
+    Vector10d column = Vector10d::Unit(0);
+    if (centre) column.segment<3>(1) = *options.known_centre_of_mass;  // h = m c
+    columns.push_back(column);
+    u.parameter.push_back(0);
+  } else {
+    u.g0[0] = *options.known_mass;
+    if (centre) u.g0.segment<3>(1) = *options.known_mass * *options.known_centre_of_mass;
+  }
+  if (!centre) {
+    for (int i = 1; i <= 3; ++i) {
+      columns.push_back(Vector10d::Unit(i));
+      u.parameter.push_back(i);
+    }
+  }
+  for (int i = 4; i < 10; ++i) {
+    columns.push_back(Vector10d::Unit(i));
+    u.parameter.push_back(i);
+  }
+  u.G.resize(10, static_cast<Eigen::Index>(columns.size()));
+  for (std::size_t c = 0; c < columns.size(); ++c) u.G.col(static_cast<Eigen::Index>(c)) = columns[c];
+  return u;
+}
+
+void check_input(const Model& model, const ArmParameters& arm, const std::vector<Trajectory>& runs,
+                 const PayloadOptions& options) {
+  const int n = model.joint_count();
+  if (runs.empty()) throw InputError("dataset_ids", "a payload identification needs at least one run with the payload");
+  if (arm.pi.size() != arm.layout.size(n)) {
+    throw InputError("arm", "the arm's parameters have " + std::to_string(arm.pi.size()) + " entries, the robot's standard "
+                            "vector with these friction terms " + std::to_string(arm.layout.size(n)));
+  }
+  if (!arm.pi.allFinite()) throw InputError("arm", "the arm's parameters hold a value that is not a finite number");
+  for (std::size_t i = 0; i < runs.size(); ++i) {
+    const std::string which = runs.size() > 1 ? "run " + std::to_string(i + 1) + ": " : "";
+    if (runs[i].joint_count() != n) {
+      throw InputError("q", which + "the data has " + std::to_string(runs[i].joint_count()) + " joints, the robot (" +
+                                model.name + ") has " + std::to_string(n));
+    }
+    if (!runs[i].has_torque()) throw InputError("tau", which + "the data has no tau columns: a payload is identified from torques");
+  }
+  if (options.known_mass && !(std::isfinite(*options.known_mass) && *options.known_mass > 0.0)) {
+    throw InputError("known_mass", "a known payload mass must be a positive number of kg, got " +
+                                       detail::short_number(*options.known_mass));
+  }
+  if (options.known_centre_of_mass && !options.known_centre_of_mass->allFinite()) {
+    throw InputError("known_centre_of_mass", "a known centre of mass must be three finite numbers (m, tip-link frame)");
+  }
+  if (!(options.comparison_cutoff_hz >= 0.0) || !std::isfinite(options.comparison_cutoff_hz)) {
+    throw InputError("comparison_cutoff", "the comparison cut-off must be a positive number of Hz (or 0: the judge's)");
+  }
+  for (int joint : options.torque_joints) {
+    if (joint < 0 || joint >= n) {
+      throw InputError("torque_joints", "joint " + std::to_string(joint + 1) + " is not one of the robot's " + std::to_string(n));
+    }
+  }
+}
+
+}  // namespace
+
+const std::array<const char*, 10>& PayloadResult::names() {
+  static const std::array<const char*, 10> kNames = {"m", "mx", "my", "mz", "Ixx", "Ixy", "Ixz", "Iyy", "Iyz", "Izz"};
+  return kNames;
+}
+
+Eigen::VectorXd with_payload(const Model& model, const ArmParameters& arm, const Eigen::Matrix<double, 10, 1>& payload) {
+  const int n = model.joint_count();
+  Eigen::VectorXd pi = arm.pi;
+  pi.segment<10>(static_cast<Eigen::Index>(kInertialParametersPerBody) * (n - 1)) += tip_to_body(model) * payload;
+  return pi;
+}
+
+PayloadResult identify_payload(const Model& model, const ArmParameters& arm, const std::vector<Trajectory>& measured,
+                               const PayloadOptions& options) {
+  const auto started = std::chrono::steady_clock::now();
+  check_input(model, arm, measured, options);
+  const int n = model.joint_count();
+  const int p = arm.layout.size(n);
+  PayloadResult result;
+  const auto finish = [&]() -> PayloadResult& {
+    result.wall_seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - started).count();
+    return result;
+  };
+
+  // Step 1.
+  std::vector<std::optional<Trajectory>> storage;
+  const PreparedRuns runs = prepare_runs(measured, options.preparation, storage, result.warnings);
+  const double dt = runs.front().get().dt();
+  for (const Trajectory& run : runs) options.judge.validate(dt, run.t[run.samples() - 1] - run.t[0]);
+  if (options.torque_joints.empty()) {
+    for (int k = 0; k < n; ++k) result.torque_joints.push_back(k);
+  } else {
+    result.torque_joints = options.torque_joints;
+  }
+
+  // Step 2: per run, the arm's torque taken from τ on the working grid, then L over the residual and body
+  // n's columns (and, for the figures, over τ itself).
+  const double cutoff = options.comparison_cutoff_hz > 0 ? options.comparison_cutoff_hz : options.judge.cutoff_hz;
+  result.comparison_cutoff_hz = cutoff;
+  const FilterPair filters = differentiation_for(std::max(cutoff, options.judge.cutoff_hz), dt, options.judge.trim_seconds);
+  std::vector<int> body_columns;
+  for (int i = 0; i < kInertialParametersPerBody; ++i) body_columns.push_back(kInertialParametersPerBody * (n - 1) + i);
+  Eigen::MatrixXd W(0, kInertialParametersPerBody);
+  Eigen::VectorXd residual(0), torque(0);
+  int row_step = 1;
+  double lowpass_energy = 1.0;
+  for (const Trajectory& run : runs) {
+    RegressorSignals signals = regressor_signals(model, arm.layout, run, filters, options.cancel);
+    if (signals.t.size() == 0) {
+      result.cancelled = true;
+      return finish();
+    }
+    const FilteredRows measured_rows = filtered_rows(signals, p, cutoff, filters.trim_seconds, result.torque_joints, {body_columns[0]});
+    for (int k = 0; k < n; ++k) {
+      const std::vector<int>& columns = signals.columns[static_cast<std::size_t>(k)];
+      Eigen::VectorXd pi_k(static_cast<Eigen::Index>(columns.size()));
+      for (std::size_t c = 0; c < columns.size(); ++c) pi_k[static_cast<Eigen::Index>(c)] = arm.pi[columns[c]];
+      signals.tau.col(k) -= signals.Y[static_cast<std::size_t>(k)] * pi_k;
+    }
+    const FilteredRows rows = filtered_rows(signals, p, cutoff, filters.trim_seconds, result.torque_joints, body_columns);
+    const Eigen::Index top = W.rows();
+    W.conservativeResize(top + rows.W.rows(), Eigen::NoChange);
+    W.bottomRows(rows.W.rows()) = rows.W;
+    residual.conservativeResize(top + rows.tau.size());
+    residual.tail(rows.tau.size()) = rows.tau;
+    torque.conservativeResize(top + measured_rows.tau.size());
+    torque.tail(measured_rows.tau.size()) = measured_rows.tau;
+    row_step = rows.row_step;
+    lowpass_energy = rows.lowpass_energy;
+  }
+  result.rows = static_cast<int>(W.rows());
+  const Eigen::MatrixXd W_tip = W * tip_to_body(model);  // columns for π_P
+
+  // Step 3: x of the unknowns, A x ≈ L r − W_tip g0.
+  const Unknowns u = unknowns(options);
+  const Eigen::MatrixXd A = W_tip * u.G;
+  const Eigen::VectorXd y = residual - W_tip * u.g0;
+  const estimation::LinearSolution solution = estimation::solve_linear(A, y);
+  const double dof = std::max(1.0, static_cast<double>(y.size() - solution.determined));
+  result.residual_variance =
+      solution.residual.squaredNorm() / dof * estimation::filtered_residual_factor(row_step, lowpass_energy);
+  const Eigen::MatrixXd covariance_x = result.residual_variance * solution.covariance_unit;
+  result.estimate = u.G * solution.estimate + u.g0;
+  const Matrix10d covariance = u.G * covariance_x * u.G.transpose();
+  result.std_errors = covariance.diagonal().cwiseMax(0.0).cwiseSqrt();
+  result.data_share.setOnes();  // a value given is known
+  for (std::size_t i = 0; i < u.parameter.size(); ++i) {
+    const int index = u.parameter[i];
+    const double share = solution.parameter_share[static_cast<Eigen::Index>(i)];
+    result.data_share[index] = share;
+    if (!(share > 0.0)) result.std_errors[index] = kNaN;
+    if (share < kDeterminedShare) {
+      result.undetermined.push_back(PayloadResult::names()[static_cast<std::size_t>(index)]);
+      result.warnings.push_back("the run does not excite " + std::string(PayloadResult::names()[static_cast<std::size_t>(index)]) +
+                                " (its data share " + detail::short_number(100.0 * share) + " %): it is not determined and "
+                                "stays at 0; " + what_excites(index) + " would determine it");
+    }
+  }
+  const double torque_norm = torque.norm();
+  result.arm_only_error = torque_norm > 0 ? residual.norm() / torque_norm : kNaN;
+  result.with_payload_error = torque_norm > 0 ? (y - A * solution.estimate).norm() / torque_norm : kNaN;
+
+  // Step 4.
+  result.mass = result.estimate[0];
+  result.mass_std_error = result.std_errors[0];
+  const bool mass_given = options.known_mass.has_value();
+  result.detected = mass_given || (result.data_share[0] >= kDeterminedShare && result.mass > kDetectedMass * result.mass_std_error);
+  if (!result.detected) {
+    result.warnings.push_back("no payload: the mass, " + detail::short_number(result.mass) + " ± " +
+                              detail::short_number(result.mass_std_error) + " kg, is not distinguishable from 0, so the "
+                              "centre of mass and the inertia are not reported");
+    result.inertia.fill(kNaN);
+    result.inertia_std_errors.fill(kNaN);
+    return finish();
+  }
+  const Vector10d values = mounted(result.estimate);
+  const Matrix10d J = mounted_jacobian(result.estimate);
+  const Vector10d errors = (J * covariance * J.transpose()).diagonal().cwiseMax(0.0).cwiseSqrt();
+  result.centre_of_mass = values.segment<3>(1);
+  result.centre_of_mass_std_errors = errors.segment<3>(1);
+  if (options.known_centre_of_mass) {  // given: as it was given, exactly
+    result.centre_of_mass = *options.known_centre_of_mass;
+    result.centre_of_mass_std_errors.setZero();
+  }
+  for (int i = 0; i < 6; ++i) {
+    result.inertia[static_cast<std::size_t>(i)] = values[4 + i];
+    result.inertia_std_errors[static_cast<std::size_t>(i)] = errors[4 + i];
+  }
+  // A value derived from an undetermined one is not determined either.
+  const auto undetermined = [&](int index) { return result.data_share[index] < kDeterminedShare; };
+  for (int i = 0; i < 3; ++i) {
+    if (undetermined(1 + i)) result.centre_of_mass_std_errors[i] = kNaN;
+  }
+  for (int i = 0; i < 6; ++i) {
+    if (undetermined(4 + i) || undetermined(1) || undetermined(2) || undetermined(3)) {
+      result.inertia_std_errors[static_cast<std::size_t>(i)] = kNaN;
+    }
+  }
+  return finish();
+}
+
+PayloadValidation validate_payload(const Model& model, const ArmParameters& arm, const PayloadResult& payload,
+                                   const std::vector<Trajectory>& measured, const PayloadOptions& options) {
+  if (measured.empty()) throw InputError("validation", "no run to validate the payload on");
+  std::vector<std::optional<Trajectory>> storage;
+  std::vector<std::string> warnings;
+  const PreparedRuns runs = prepare_runs(measured, options.preparation, storage, warnings);
+  const Eigen::VectorXd loaded = with_payload(model, arm, payload.estimate);
+  std::vector<TorquePrediction> without, with;
+  for (const Trajectory& run : runs) {
+    without.push_back(predict_torque(model, arm.layout, arm.pi, run, options.judge, payload.torque_joints));
+    with.push_back(predict_torque(model, arm.layout, loaded, run, options.judge, payload.torque_joints));
+  }
+  return {combine(without), combine(with)};
+}
+
+}  // namespace manipid::robot
