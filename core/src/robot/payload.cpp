@@ -7,6 +7,7 @@
 #include "manipid/core/robot/filtered_regressor.h"
 #include "numbers.h"
 
+#include <algorithm>
 #include <chrono>
 #include <cmath>
 #include <string>
@@ -23,6 +24,8 @@ using detail::kNaN;
 constexpr double kDeterminedShare = 0.5;
 /// A mass above this many standard errors is a payload; below, the run cannot tell it from none.
 constexpr double kDetectedMass = 2.0;
+/// The jackknife's blocks of time (jackknife_inflation).
+constexpr int kJackknifeBlocks = 10;
 
 /// T: body n's parameters from the tip link's, π_B = T π_P (expressed_in is linear in the 10 entries).
 Matrix10d tip_to_body(const Model& model) {
@@ -115,6 +118,40 @@ Unknowns unknowns(const PayloadOptions& options) {
   u.G.resize(10, static_cast<Eigen::Index>(columns.size()));
   for (std::size_t c = 0; c < columns.size(); ++c) u.G.col(static_cast<Eigen::Index>(c)) = columns[c];
   return u;
+}
+
+/// How much larger the estimate's variance is than the white-residual formula says: the median, over the
+/// determined unknowns, of a delete-one-block jackknife's variance (kJackknifeBlocks contiguous spans of
+/// instants) over the formula's, at least 1. A real arm's residual is mostly what its model lacks, correlated
+/// over seconds, not the white noise the formula assumes (the KUKA's run without a tool: 11 ± 3.7 g by the
+/// formula, ± 8.4 g with the jackknife's inflation, 5.3); on simulated white noise the two agree.
+double jackknife_inflation(const Eigen::MatrixXd& A, const Eigen::VectorXd& y, const estimation::LinearSolution& full,
+                           double residual_variance, Eigen::Index joints) {
+  const Eigen::Index instants = A.rows() / std::max<Eigen::Index>(joints, 1);
+  if (instants < 4 * kJackknifeBlocks) return 1.0;
+  const Eigen::Index k = A.cols();
+  std::vector<Eigen::VectorXd> estimates;
+  for (int b = 0; b < kJackknifeBlocks; ++b) {
+    const Eigen::Index first = instants * b / kJackknifeBlocks * joints, last = instants * (b + 1) / kJackknifeBlocks * joints;
+    Eigen::MatrixXd A_b(A.rows() - (last - first), k);
+    Eigen::VectorXd y_b(A_b.rows());
+    A_b << A.topRows(first), A.bottomRows(A.rows() - last);
+    y_b << y.head(first), y.tail(y.size() - last);
+    estimates.push_back(estimation::solve_linear(A_b, y_b).estimate);
+  }
+  Eigen::VectorXd mean = Eigen::VectorXd::Zero(k);
+  for (const Eigen::VectorXd& e : estimates) mean += e / kJackknifeBlocks;
+  std::vector<double> ratios;
+  for (Eigen::Index i = 0; i < k; ++i) {
+    const double formula = residual_variance * full.covariance_unit(i, i);
+    if (!(full.parameter_share[i] >= kDeterminedShare) || !(formula > 0.0)) continue;
+    double spread = 0.0;
+    for (const Eigen::VectorXd& e : estimates) spread += (e[i] - mean[i]) * (e[i] - mean[i]);
+    ratios.push_back(spread * (kJackknifeBlocks - 1.0) / kJackknifeBlocks / formula);
+  }
+  if (ratios.empty()) return 1.0;
+  std::nth_element(ratios.begin(), ratios.begin() + static_cast<std::ptrdiff_t>(ratios.size() / 2), ratios.end());
+  return std::max(1.0, ratios[ratios.size() / 2]);
 }
 
 void check_input(const Model& model, const ArmParameters& arm, const std::vector<Trajectory>& runs,
@@ -234,7 +271,10 @@ PayloadResult identify_payload(const Model& model, const ArmParameters& arm, con
   const double dof = std::max(1.0, static_cast<double>(y.size() - solution.determined));
   result.residual_variance =
       solution.residual.squaredNorm() / dof * estimation::filtered_residual_factor(row_step, lowpass_energy);
-  const Eigen::MatrixXd covariance_x = result.residual_variance * solution.covariance_unit;
+  const double inflation = jackknife_inflation(A, y, solution, result.residual_variance,
+                                               static_cast<Eigen::Index>(result.torque_joints.size()));
+  result.variance_inflation = inflation;
+  const Eigen::MatrixXd covariance_x = inflation * result.residual_variance * solution.covariance_unit;
   result.estimate = u.G * solution.estimate + u.g0;
   const Matrix10d covariance = u.G * covariance_x * u.G.transpose();
   result.std_errors = covariance.diagonal().cwiseMax(0.0).cwiseSqrt();

@@ -20,8 +20,10 @@
 //      known mass or centre of mass is moved to the right-hand side (or into a combined column) first;
 //   4. report in the units a tool is mounted with: mass (kg), centre of mass (m, tip-link frame), inertia
 //      about the centre of mass in tip-link axes (kg·m², URDF tensor entries), each with its standard error
-//      (σ² of the filtered residual corrected as estimation::filtered_residual_factor says; the delta method
-//      through c = h/m and I_c = I_O − (‖h‖² E − h hᵀ)/m), and the training rows' error without and with it.
+//      (σ² of the filtered residual corrected as estimation::filtered_residual_factor says, inflated when a
+//      jackknife over blocks of time finds the residual correlated — a real arm's model error is; the delta
+//      method through c = h/m and I_c = I_O − (‖h‖² E − h hᵀ)/m), and the training rows' error without and
+//      with it.
 // The arm may be any standard vector whose torque is right: a URDF's values, or manipid's own identification
 // (IdentificationResult::point), whose base parameters need not be physically consistent.
 #pragma once
@@ -103,6 +105,9 @@ struct PayloadResult {
   double arm_only_error = 0.0;
   double with_payload_error = 0.0;
   double residual_variance = 0.0;   ///< σ² of one filtered residual (N·m)², as corrected
+  /// The factor the standard errors' variances were multiplied by because the residual is not white: a
+  /// delete-one-block jackknife over 10 spans of time against the formula (≥ 1; ≈ 1 on white noise).
+  double variance_inflation = 1.0;
   std::vector<std::string> warnings;
   double wall_seconds = 0.0;
   bool cancelled = false;
