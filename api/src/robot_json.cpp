@@ -30,18 +30,6 @@ Json filter_json(const FilterSettings& filter) {
           {"cutoff_hz", number(filter.band / (2.0 * std::numbers::pi * filter.dt))}};
 }
 
-Json prediction_json(const robot::TorquePrediction& prediction) {
-  return {{"relative_error", numbers(prediction.relative_error)},
-          {"rms_error", numbers(prediction.rms_error)},
-          {"overall_relative_error", number(prediction.overall_relative_error)}};
-}
-
-Json judge_json(const JudgeOptions& judge) {
-  return {{"lowpass", "zero-phase Butterworth, order 4"},
-          {"cutoff_hz", number(judge.cutoff_hz)},
-          {"trim_seconds", number(judge.trim_seconds)}};
-}
-
 Json vector_json(const Eigen::VectorXd& v) {
   Json array = Json::array();
   for (Eigen::Index i = 0; i < v.size(); ++i) array.push_back(v[i]);  // ±∞ becomes null
@@ -55,6 +43,18 @@ Json rows_json(const Eigen::MatrixXd& m) {
 }
 
 }  // namespace
+
+nlohmann::ordered_json prediction_to_json(const robot::TorquePrediction& prediction) {
+  return {{"relative_error", numbers(prediction.relative_error)},
+          {"rms_error", numbers(prediction.rms_error)},
+          {"overall_relative_error", number(prediction.overall_relative_error)}};
+}
+
+nlohmann::ordered_json judge_to_json(const JudgeOptions& judge) {
+  return {{"lowpass", "zero-phase Butterworth, order 4"},
+          {"cutoff_hz", number(judge.cutoff_hz)},
+          {"trim_seconds", number(judge.trim_seconds)}};
+}
 
 nlohmann::ordered_json robot_description(const robot::Model& model, const std::vector<std::string>& warnings) {
   Json joints = Json::array();
@@ -181,7 +181,7 @@ nlohmann::ordered_json robot_result_to_json(const robot::Model& model, const rob
         {"ridge", number(result.ridge)},
         {"held_out_error", number(result.held_out_error)},
         {"candidates", candidates}}},
-      {"judge", judge_json(result.judge)},
+      {"judge", judge_to_json(result.judge)},
       {"torque_joints", torque_joints},
       {"runs", result.runs},
       {"rows", result.rows},
@@ -238,8 +238,8 @@ nlohmann::ordered_json robot_result_to_json(const robot::Model& model, const rob
                         {"report", fit_summary.brief_report()}};
   }
   if (validation) {
-    Json figures = prediction_json(validation->estimate);
-    figures["prior"] = prediction_json(validation->prior);
+    Json figures = prediction_to_json(validation->estimate);
+    figures["prior"] = prediction_to_json(validation->prior);
     json["validation"] = figures;
   }
   std::vector<std::string> warnings = result.warnings;

@@ -186,6 +186,43 @@ api::CsvTable read_table(const std::string& path) {
   }
 }
 
+Trajectory read_run(const std::string& path, const api::LogFormat& log, const std::string& topic) {
+  const api::CsvTable table = read_run_table(path, log, topic);
+  try {
+    return api::trajectory_from_csv(table, true);
+  } catch (const InputError& error) {
+    rethrow_with_source(error, input_name(path));
+  }
+}
+
+std::string run_names(const std::vector<std::string>& paths) {
+  std::string text;
+  for (const std::string& path : paths) text += (text.empty() ? "" : " + ") + input_name(path);
+  return text;
+}
+
+DataPreparation parse_trim(const std::string& text) {
+  DataPreparation preparation;
+  if (text.empty()) return preparation;
+  const auto comma = text.find(',');
+  if (comma == std::string::npos) throw InputError("trim", "--trim needs START,END: the seconds dropped at each end");
+  preparation.trim_start = parse_number_option(text.substr(0, comma), "--trim");
+  preparation.trim_end = parse_number_option(text.substr(comma + 1), "--trim");
+  return preparation;
+}
+
+std::vector<int> joint_list(const std::string& text, int n, const std::string& option) {
+  std::vector<int> joints;
+  for (const std::string& part : split_list(text)) {
+    const auto dash = part.find('-');
+    const long first = parse_integer_option(part.substr(0, dash), option, 1, n);
+    const long last = dash == std::string::npos ? first : parse_integer_option(part.substr(dash + 1), option, first, n);
+    for (long k = first; k <= last; ++k) joints.push_back(static_cast<int>(k - 1));
+  }
+  if (joints.empty()) throw InputError(option, option + " needs joint numbers, e.g. 1-6 or 1,2,4");
+  return joints;
+}
+
 api::CsvTable read_run_table(const std::string& path, const api::LogFormat& log, const std::string& topic) {
   std::vector<std::string> contents;
   std::error_code error;

@@ -13,6 +13,8 @@
 #include "manipid/core/robot/model.h"
 #include "manipid/core/robot/urdf.h"
 #include "manipid/core/robot/parameters.h"
+#include "manipid/core/signal/resample.h"
+#include "manipid/core/signal/trajectory.h"
 
 #include <CLI/CLI.hpp>
 
@@ -66,6 +68,15 @@ void write_table(const std::string& path, const api::CsvTable& table);
 /// give t, q, qd and tau, the joints matched by `log.joint_names` (a URDF's; empty: the bag's order).
 /// A bag's summary goes to stderr as a note. Errors as read_table's, the source in front.
 api::CsvTable read_run_table(const std::string& path, const api::LogFormat& log, const std::string& topic);
+
+/// A run read as read_run_table() reads it, as a trajectory with torque columns; errors name the file.
+Trajectory read_run(const std::string& path, const api::LogFormat& log, const std::string& topic);
+/// The runs' names for messages: "a.csv + b.csv".
+std::string run_names(const std::vector<std::string>& paths);
+/// --trim START,END (seconds dropped at each end; empty: none) as a data preparation.
+DataPreparation parse_trim(const std::string& text);
+/// "1-6", "1,2,4", "1-3,5" (1-based, of `n` joints) → 0-based joint indices; errors name `option`.
+std::vector<int> joint_list(const std::string& text, int n, const std::string& option);
 
 /// Rethrows an InputError about `source` (a file name or option) with `source` in front.
 [[noreturn]] void rethrow_with_source(const InputError& error, const std::string& source);

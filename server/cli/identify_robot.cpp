@@ -27,34 +27,6 @@ double number_or_auto(const std::string& text, const std::string& option, double
   return text == "auto" ? automatic : parse_number_option(text, option);
 }
 
-/// "1-6", "1,2,4", "1-3,5" (1-based) → 0-based joint indices.
-std::vector<int> joint_list(const std::string& text, int n, const std::string& option) {
-  std::vector<int> joints;
-  for (const std::string& part : split_list(text)) {
-    const auto dash = part.find('-');
-    const long first = parse_integer_option(part.substr(0, dash), option, 1, n);
-    const long last = dash == std::string::npos ? first : parse_integer_option(part.substr(dash + 1), option, first, n);
-    for (long k = first; k <= last; ++k) joints.push_back(static_cast<int>(k - 1));
-  }
-  if (joints.empty()) throw InputError(option, option + " needs joint numbers, e.g. 1-6 or 1,2,4");
-  return joints;
-}
-
-Trajectory read_trajectory(const std::string& path, const api::LogFormat& log, const std::string& topic) {
-  const api::CsvTable table = read_run_table(path, log, topic);
-  try {
-    return api::trajectory_from_csv(table, true);
-  } catch (const InputError& error) {
-    rethrow_with_source(error, input_name(path));
-  }
-}
-
-std::string names(const std::vector<std::string>& paths) {
-  std::string text;
-  for (const std::string& path : paths) text += (text.empty() ? "" : " + ") + input_name(path);
-  return text;
-}
-
 void print_prediction_rows(const char* label, const robot::TorquePrediction& prediction) {
   std::printf("  %-22s", label);
   for (Eigen::Index k = 0; k < prediction.relative_error.size(); ++k) std::printf(" %9s", percent(prediction.relative_error[k]).c_str());
@@ -199,12 +171,7 @@ int run_identify_robot(const IdentifyOptions& options) {
   identification.weighting =
       options.weights == "per-joint" ? robot::JointWeighting::per_joint : robot::JointWeighting::unit;
   identification.physical = options.physical;
-  if (!options.trim.empty()) {
-    const auto comma = options.trim.find(',');
-    if (comma == std::string::npos) throw InputError("trim", "--trim needs START,END: the seconds dropped at each end");
-    identification.preparation.trim_start = parse_number_option(options.trim.substr(0, comma), "--trim");
-    identification.preparation.trim_end = parse_number_option(options.trim.substr(comma + 1), "--trim");
-  }
+  identification.preparation = parse_trim(options.trim);
   identification.preparation.uniform.dt = options.dt;
   if ((options.half_length == "auto") != (options.band == "auto")) {
     throw UsageError("--half-length and --band set the differentiation filter together: give both, or neither");
@@ -233,7 +200,7 @@ int run_identify_robot(const IdentifyOptions& options) {
   api::LogFormat log = options.log;
   for (const robot::Joint& joint : model.joints) log.joint_names.push_back(joint.name);  // what {joint} matches
   std::vector<Trajectory> runs;
-  for (const std::string& path : options.inputs) runs.push_back(read_trajectory(path, log, options.topic));
+  for (const std::string& path : options.inputs) runs.push_back(read_run(path, log, options.topic));
   robot::IdentificationResult result;
   try {
     result = robot::identify(model, runs, identification);
@@ -244,16 +211,16 @@ int run_identify_robot(const IdentifyOptions& options) {
                                         {"ridge", "--ridge"}, {"half_length", "--half-length"}, {"band", "--band"}}) {
       if (error.field() == field) rethrow_with_source(error, option);
     }
-    rethrow_with_source(error, names(options.inputs));
+    rethrow_with_source(error, run_names(options.inputs));
   }
   std::optional<robot::ValidationReport> validation;
   if (!options.validate.empty()) {
     std::vector<Trajectory> held_out;
-    for (const std::string& path : options.validate) held_out.push_back(read_trajectory(path, log, options.topic));
+    for (const std::string& path : options.validate) held_out.push_back(read_run(path, log, options.topic));
     try {
       validation = robot::validate(model, result, held_out, identification.preparation);
     } catch (const InputError& error) {
-      rethrow_with_source(error, names(options.validate));
+      rethrow_with_source(error, run_names(options.validate));
     }
   }
   // The URDF's warnings once the call is known to work: a refused call prints one line.
@@ -263,7 +230,7 @@ int run_identify_robot(const IdentifyOptions& options) {
   std::string urdf_refused;
   if (!options.write_urdf.empty()) {
     try {
-      const std::string note = api::identified_urdf_note(json, names(options.inputs));
+      const std::string note = api::identified_urdf_note(json, run_names(options.inputs));
       write_text(options.write_urdf, robot::write_identified_urdf(read_text(options.urdf.urdf), model, result.layout,
                                                                   result.point, note));
     } catch (const InputError& error) {
@@ -274,7 +241,7 @@ int run_identify_robot(const IdentifyOptions& options) {
   if (options.json) {
     std::printf("%s\n", json.dump(2).c_str());
   } else {
-    print_table(model, result, validation, names(options.inputs), names(options.validate));
+    print_table(model, result, validation, run_names(options.inputs), run_names(options.validate));
   }
   if (!urdf_refused.empty()) {
     std::fflush(stdout);

@@ -5,6 +5,7 @@
 #include "cli/excitation.h"
 #include "cli/filter.h"
 #include "cli/identify.h"
+#include "cli/payload.h"
 #include "cli/serve.h"
 #include "cli/simulate.h"
 #include "cli/torque.h"
@@ -56,6 +57,7 @@ int run(int argc, char** argv) {
   TorqueOptions torque;
   FilterOptions filter;
   IdentifyOptions identify;
+  PayloadOptions payload;
   ServeOptions serve;
   ExcitationOptions excitation;
   DoctorOptions doctor;
@@ -64,11 +66,12 @@ int run(int argc, char** argv) {
   CLI::App* torque_command = add_torque_command(app, torque);
   CLI::App* filter_command = add_filter_command(app, filter);
   CLI::App* identify_command = add_identify_command(app, identify);
+  CLI::App* payload_command = add_payload_command(app, payload);
   CLI::App* serve_command = add_serve_command(app, serve);
   CLI::App* excitation_command = add_excitation_command(app, excitation);
   CLI::App* doctor_command = add_doctor_command(app, doctor);
   CLI::App* worker_command = add_worker_command(app, worker);
-  const CLI::App* commands[] = {simulate_command, torque_command,     filter_command, identify_command,
+  const CLI::App* commands[] = {simulate_command, torque_command,     filter_command, identify_command, payload_command,
                                 serve_command,    excitation_command, doctor_command, worker_command};
 
   try {
@@ -92,7 +95,7 @@ int run(int argc, char** argv) {
     // CLI11 calls a mistyped command an unexpected argument; say what the user meant.
     if (!in_command && argc > 1 && argv[1][0] != '-') {
       return report(std::string("unknown command '") + argv[1] +
-                        "'; expected simulate, torque, filter, identify, serve, worker, excitation or doctor (see 'manipid --help')",
+                        "'; expected simulate, torque, filter, identify, payload, serve, worker, excitation or doctor (see 'manipid --help')",
                     exit_usage);
     }
     return report(std::string(error.what()) + " (see '" + help + "')", exit_usage);
@@ -103,11 +106,12 @@ int run(int argc, char** argv) {
   if (torque_command->parsed()) return run_torque(torque);
   if (filter_command->parsed()) return run_filter(filter);
   if (identify_command->parsed()) return run_identify(identify);
+  if (payload_command->parsed()) return run_payload(payload);
   if (serve_command->parsed()) return run_serve(serve);
   if (worker_command->parsed()) return run_worker(worker);
   if (excitation_command->parsed()) return run_excitation(excitation);
   if (doctor_command->parsed()) return run_doctor(doctor);
-  return report("no command given; expected simulate, torque, filter, identify, serve, worker, excitation or doctor (see 'manipid --help')", exit_usage);
+  return report("no command given; expected simulate, torque, filter, identify, payload, serve, worker, excitation or doctor (see 'manipid --help')", exit_usage);
 }
 
 }  // namespace

@@ -465,6 +465,40 @@ expect_error "excitation: a margin wider than a joint's range" 2 "joint panda_jo
 expect_error "excitation: unknown friction term" 2 "--friction: unknown friction term 'stiction'" \
   "$manipid" excitation --robot "$robots/ur5_like.urdf" --friction viscous,stiction
 
+# ---- payload: a tool's mass, centre of mass and inertia on the tip link ---------------------------
+# The UR5-like arm with a 3 kg tool on tool0 (its centre of mass off the axis): an excitation, the torques
+# with the tool and without it, the payload from the URDF's arm.
+sed 's|<link name="tool0"/>|<link name="tool0"><inertial><origin xyz="0.04 -0.03 0.09"/><mass value="3"/><inertia ixx="0.01" ixy="0" ixz="0" iyy="0.012" iyz="0" izz="0.006"/></inertial></link>|' \
+  "$robots/ur5_like.urdf" >ur5_tool.urdf
+"$manipid" excitation --robot "$robots/ur5_like.urdf" --period 15 --dt 0.002 --max-evaluations 30 --out payload_motion.csv 2>/dev/null
+"$manipid" torque --robot ur5_tool.urdf --in payload_motion.csv --with-states --out payload_run.csv 2>/dev/null
+"$manipid" torque --robot "$robots/ur5_like.urdf" --in payload_motion.csv --with-states --out payload_none.csv 2>/dev/null
+"$manipid" payload payload_run.csv --robot "$robots/ur5_like.urdf" --json >payload.json 2>/dev/null
+check "payload: exit 0" test $? -eq 0
+check "payload: 3 kg at (0.04, -0.03, 0.09) m, ixx 0.01, izz 0.006 kg m^2 (noise-free)" /usr/bin/python3 -c "
+import json; d = json.load(open('payload.json'))
+assert d['detected'] and abs(d['mass'] - 3) < 1e-4, d['mass']
+assert all(abs(a - b) < 1e-5 for a, b in zip(d['centre_of_mass'], [0.04, -0.03, 0.09])), d['centre_of_mass']
+assert abs(d['inertia_about_com']['ixx'] - 0.01) < 1e-4 and abs(d['inertia_about_com']['izz'] - 0.006) < 1e-4
+assert d['fit']['with_payload_error'] < 1e-3 * d['fit']['arm_only_error'] and d['undetermined'] == []"
+"$manipid" payload payload_run.csv --robot "$robots/ur5_like.urdf" --mass 3 --validate payload_run.csv >payload.txt 2>/dev/null
+check "payload --mass 3: the table gives the given mass and the held-out figures" \
+  bash -c "grep -q '^mass kg  *3 ± 0' payload.txt && grep -q '^held-out runs (judged at 5 Hz): arm alone' payload.txt"
+"$manipid" payload payload_none.csv --robot "$robots/ur5_like.urdf" --json >payload_none.json 2>/dev/null
+check "payload: a run without the tool answers no payload, said in a warning" /usr/bin/python3 -c "
+import json; d = json.load(open('payload_none.json'))
+assert not d['detected'] and abs(d['mass']) < 1e-3 and d['centre_of_mass'] == [None] * 3, d
+assert any(w.startswith('no payload: the mass') for w in d['warnings'])"
+expect_error "payload: --mass not positive" 2 "--mass: a known payload mass must be a positive number of kg, got -2" \
+  "$manipid" payload payload_run.csv --robot "$robots/ur5_like.urdf" --mass -2
+expect_error "payload: --com needs three numbers" 2 "--com needs X,Y,Z" \
+  "$manipid" payload payload_run.csv --robot "$robots/ur5_like.urdf" --com 0,0
+expect_error "payload: --arm that is not JSON" 2 "payload_run.csv: not JSON" \
+  "$manipid" payload payload_run.csv --robot "$robots/ur5_like.urdf" --arm payload_run.csv
+"$manipid" torque --robot "$robots/panda_like.urdf" --in panda_lab.csv --with-states --out panda_lab_run.csv 2>/dev/null
+expect_error "payload: a run of another arm" 2 "the data has 7 joints, the robot (ur5_like) has 6" \
+  "$manipid" payload panda_lab_run.csv --robot "$robots/ur5_like.urdf"
+
 # ---- identify --robot, torque --robot: a URDF arm end to end -------------------------------------
 # An excitation (short: 5 s at 2 ms), the torques of the URDF's own values with a little noise, identify,
 # validate on a second seed, write the identified URDF.

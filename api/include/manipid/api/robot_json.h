@@ -69,6 +69,11 @@ std::vector<std::string> friction_names(const robot::ParameterLayout& layout);
 /// flags; throws InputError(field) for an unknown or repeated term.
 void parse_friction(const std::vector<std::string>& terms, robot::ParameterLayout& layout, const std::string& field);
 
+/// A prediction's figures: {"relative_error": [...], "rms_error": [...], "overall_relative_error"}.
+nlohmann::ordered_json prediction_to_json(const robot::TorquePrediction& prediction);
+/// What figures are judged under: {"lowpass", "cutoff_hz", "trim_seconds"}.
+nlohmann::ordered_json judge_to_json(const JudgeOptions& judge);
+
 nlohmann::ordered_json robot_result_to_json(const robot::Model& model, const robot::IdentificationResult& result,
                                             const std::optional<robot::ValidationReport>& validation);
 
