@@ -5,6 +5,7 @@
 #include "manipid/api/payload_json.h"
 #include "manipid/api/robot_json.h"
 #include "manipid/core/robot/payload.h"
+#include "manipid/core/robot/urdf_writer.h"
 
 #include <nlohmann/json.hpp>
 
@@ -90,6 +91,8 @@ CLI::App* add_payload_command(CLI::App& app, PayloadOptions& options) {
       ->check(non_negative_number())
       ->capture_default_str();
   command->add_flag("--json", options.json, "Print the result as JSON");
+  command->add_option("--write-urdf", options.write_urdf,
+                      "Write the URDF (--robot's document) with the payload mounted as a fixed link on the tip link");
   return command;
 }
 
@@ -156,6 +159,21 @@ int run_payload(const PayloadOptions& options) {
     } catch (const InputError& error) {
       rethrow_with_source(error, run_names(options.validate));
     }
+  }
+  if (!options.write_urdf.empty()) {
+    if (!result.detected) {
+      throw UsageError("--write-urdf: no payload to write (the mass is not distinguishable from 0)");
+    }
+    std::string document;
+    try {
+      document = robot::write_payload_urdf(read_text(options.urdf.urdf), model,
+                                           robot::InertialParameters::from_vector(result.estimate),
+                                           "payload identified by manipid payload from " + run_names(options.inputs) +
+                                               ": mass " + format(result.mass, 6) + " kg");
+    } catch (const InputError& error) {
+      rethrow_with_source(error, "--write-urdf");
+    }
+    write_text(options.write_urdf, document);
   }
   print_urdf_warnings(options.urdf, parsed_urdf);
   if (options.json) {

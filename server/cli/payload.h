@@ -27,6 +27,7 @@ struct PayloadOptions {
   double judge_cutoff = 5.0;
   double judge_trim = 0.3;
   bool json = false;
+  std::string write_urdf;             ///< the URDF with the payload as a fixed link on the tip, empty = none
 };
 CLI::App* add_payload_command(CLI::App& app, PayloadOptions& options);
 int run_payload(const PayloadOptions& options);

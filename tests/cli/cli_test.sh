@@ -489,6 +489,12 @@ check "payload: a run without the tool answers no payload, said in a warning" /u
 import json; d = json.load(open('payload_none.json'))
 assert not d['detected'] and abs(d['mass']) < 1e-3 and d['centre_of_mass'] == [None] * 3, d
 assert any(w.startswith('no payload: the mass') for w in d['warnings'])"
+"$manipid" payload payload_run.csv --robot "$robots/ur5_like.urdf" --write-urdf ur5_with_payload.urdf >/dev/null 2>&1
+"$manipid" payload payload_run.csv --robot ur5_with_payload.urdf --json >payload_again.json 2>/dev/null
+check "payload --write-urdf: the written arm explains the run, no payload left" /usr/bin/python3 -c "
+import json; d = json.load(open('payload_again.json'))
+assert not d['detected'] and abs(d['mass']) < 1e-3, d['mass']"
+check "payload --write-urdf: a fixed link on tool0" grep -q '<parent link="tool0" />' ur5_with_payload.urdf
 expect_error "payload: --mass not positive" 2 "--mass: a known payload mass must be a positive number of kg, got -2" \
   "$manipid" payload payload_run.csv --robot "$robots/ur5_like.urdf" --mass -2
 expect_error "payload: --com needs three numbers" 2 "--com needs X,Y,Z" \

@@ -75,5 +75,26 @@ TEST(IdentifiedUrdf, OffsetsAndArmatureBecomeACommentAndUnphysicalBodiesAreRefus
   EXPECT_THROW(write_identified_urdf(xml, model, layout, Eigen::VectorXd::Ones(3)), InputError);
 }
 
+TEST(PayloadUrdf, TheTipBodyReadsBackWithThePayloadAddedAndBadInputIsRefused) {
+  // The UR5-like arm's tip tool0 sits 0.0823 m along z of its last body: the payload written as a fixed link
+  // on it, parsed again, adds exactly its parameters moved into the last body's frame.
+  const std::string xml = read_file(source_path("examples/robots/ur5_like.urdf"));
+  const Model model = parse_urdf(xml).model;
+  const InertialParameters tool =
+      InertialParameters::from_centre_of_mass(1.5, Eigen::Vector3d(0.01, 0.02, 0.05), Eigen::Vector3d(0.004, 0.005, 0.003).asDiagonal());
+  const std::string written = write_payload_urdf(xml, model, tool, "a test -- note");
+  const Model loaded = parse_urdf(written).model;
+  ASSERT_EQ(loaded.joint_count(), model.joint_count());
+  EXPECT_EQ(loaded.tip_link, kPayloadLink);
+  const Eigen::Matrix<double, 10, 1> expected =
+      model.bodies.back().inertia.vector() + tool.expressed_in(model.tip_placement).vector();
+  EXPECT_LT((loaded.bodies.back().inertia.vector() - expected).cwiseAbs().maxCoeff(), 1e-12);
+  EXPECT_NE(written.find("a test - - note"), std::string::npos);
+  EXPECT_THROW(write_payload_urdf(written, model, tool), InputError);  // it has a payload link already
+  EXPECT_THROW(write_payload_urdf(xml, model, InertialParameters::from_centre_of_mass(-1.0, Eigen::Vector3d::Zero(),
+                                                                                      Eigen::Matrix3d::Identity())),
+               InputError);
+}
+
 }  // namespace
 }  // namespace manipid::robot

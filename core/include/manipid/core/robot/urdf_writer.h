@@ -33,4 +33,16 @@ namespace manipid::robot {
 std::string write_identified_urdf(const std::string& xml, const Model& model, const ParameterLayout& layout,
                                   const Eigen::VectorXd& pi, const std::string& note = {});
 
+/// The link and the fixed joint write_payload_urdf() adds.
+inline constexpr const char* kPayloadLink = "manipid_payload";
+inline constexpr const char* kPayloadJoint = "manipid_payload_joint";
+
+/// `xml` (the document `model` was parsed from) with a payload mounted on the tip link: a link kPayloadLink
+/// holding `payload` (its parameters in the tip link's frame, robot/payload.h) and a fixed joint kPayloadJoint
+/// from the tip link at the identity, so a parser that merges fixed links gives the tip body the payload's
+/// inertia added; and `note` as write_identified_urdf's. Throws InputError("urdf") for an unreadable document
+/// or one that already has such a link or joint, InputError("parameters") for a payload a URDF cannot hold.
+std::string write_payload_urdf(const std::string& xml, const Model& model, const InertialParameters& payload,
+                               const std::string& note = {});
+
 }  // namespace manipid::robot
