@@ -186,6 +186,22 @@ api::CsvTable read_table(const std::string& path) {
   }
 }
 
+void add_log_options(CLI::App& command, api::LogFormat& log, std::string& topic) {
+  command.add_option("--columns", log.columns,
+                     "The log's own column names mapped onto manipid's: FILE=MANIPID rules, e.g. "
+                     "time=t,position_{j}=q{j},effort_{j}=tau{j} ({j} a joint number; with --robot also {joint}, a "
+                     "joint's name in the URDF)");
+  command.add_option("--time-unit", log.time_unit, "The time column's unit: s, ms, us or ns (ROS stamps)")
+      ->check(CLI::IsMember({"s", "ms", "us", "ns"}))
+      ->capture_default_str();
+  command.add_option("--angle-unit", log.angle_unit, "The angles' unit (q, qd, qdd, ref): rad or deg")
+      ->check(CLI::IsMember({"rad", "deg"}))
+      ->capture_default_str();
+  command.add_option("--topic", topic,
+                     "For a ROS 2 bag (a .db3 file or a bag's directory): its sensor_msgs/JointState topic, when it has "
+                     "several");
+}
+
 Trajectory read_run(const std::string& path, const api::LogFormat& log, const std::string& topic) {
   const api::CsvTable table = read_run_table(path, log, topic);
   try {

@@ -69,6 +69,9 @@ void write_table(const std::string& path, const api::CsvTable& table);
 /// A bag's summary goes to stderr as a note. Errors as read_table's, the source in front.
 api::CsvTable read_run_table(const std::string& path, const api::LogFormat& log, const std::string& topic);
 
+/// Declares --columns, --time-unit, --angle-unit (how a CSV log names and scales things) and --topic (a ROS 2
+/// bag's JointState topic) on `command`.
+void add_log_options(CLI::App& command, api::LogFormat& log, std::string& topic);
 /// A run read as read_run_table() reads it, as a trajectory with torque columns; errors name the file.
 Trajectory read_run(const std::string& path, const api::LogFormat& log, const std::string& topic);
 /// The runs' names for messages: "a.csv + b.csv".

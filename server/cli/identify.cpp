@@ -114,19 +114,7 @@ CLI::App* add_identify_command(CLI::App& app, IdentifyOptions& options) {
                       "Trajectory CSV file, '-' for stdin, or a ROS 2 bag of sensor_msgs/JointState (a .db3 file or a "
                       "bag's directory); with --robot, one or more runs (each filtered alone, then fitted together)")
       ->required();
-  command->add_option("--columns", options.log.columns,
-                      "The log's own column names mapped onto manipid's: FILE=MANIPID rules, e.g. "
-                      "time=t,position_{j}=q{j},effort_{j}=tau{j} ({j} a joint number; with --robot also {joint}, a "
-                      "joint's name in the URDF)");
-  command->add_option("--time-unit", options.log.time_unit, "The time column's unit: s, ms, us or ns (ROS stamps)")
-      ->check(CLI::IsMember({"s", "ms", "us", "ns"}))
-      ->capture_default_str();
-  command->add_option("--angle-unit", options.log.angle_unit, "The angles' unit (q, qd, qdd, ref): rad or deg")
-      ->check(CLI::IsMember({"rad", "deg"}))
-      ->capture_default_str();
-  command->add_option("--topic", options.topic,
-                      "For a ROS 2 bag (a .db3 file or a bag's directory): its sensor_msgs/JointState topic, when it has "
-                      "several");
+  add_log_options(*command, options.log, options.topic);
   command->add_option("--preset", options.preset, "Robot model")->capture_default_str();
   command->add_option("--kinetic-energy", options.kinetic_energy,
                       "complete (default) or paper (the paper's simplified model)")

@@ -62,14 +62,7 @@ CLI::App* add_payload_command(CLI::App& app, PayloadOptions& options) {
       "Identify a payload (a tool, a gripper, a part) rigidly fixed to the tip link from runs of the arm carrying it: "
       "its mass, centre of mass and inertia from the torque the arm's model leaves unexplained.");
   command->add_option("data", options.inputs, "Runs with the payload (CSV t,q1..qn,tau1..taun, or a ROS 2 bag)")->required();
-  command->add_option("--columns", options.log.columns, "The log's own column names mapped onto manipid's (as identify)");
-  command->add_option("--time-unit", options.log.time_unit, "The time column's unit: s, ms, us or ns")
-      ->check(CLI::IsMember({"s", "ms", "us", "ns"}))
-      ->capture_default_str();
-  command->add_option("--angle-unit", options.log.angle_unit, "The angles' unit: rad or deg")
-      ->check(CLI::IsMember({"rad", "deg"}))
-      ->capture_default_str();
-  command->add_option("--topic", options.topic, "For a ROS 2 bag: its sensor_msgs/JointState topic");
+  add_log_options(*command, options.log, options.topic);
   add_urdf_options(*command, options.urdf, true);
   command->add_option("--arm", options.arm,
                       "The arm as identified: the JSON of `manipid identify --robot ... --json` (default: the URDF's "
