@@ -20,6 +20,7 @@ std::string worker_lost_problem(int losses) {
 
 WorkerPool::WorkerPool(store::Store& store, WorkerPoolOptions options, Log log)
     : store_(store), options_(std::move(options)), log_(std::move(log)) {
+  if (!options_.runner.robots) options_.runner.robots = &robots_;
   statistics_.duration_bucket_bounds = {0.05, 0.1, 0.25, 0.5, 1, 2.5, 5, 10, 30, 60, 300, 3600};
   statistics_.duration_buckets.assign(statistics_.duration_bucket_bounds.size(), 0);
 }

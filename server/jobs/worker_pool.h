@@ -13,6 +13,7 @@
 #pragma once
 
 #include "jobs/job_runner.h"
+#include "manipid/api/robot_cache.h"
 #include "store/store.h"
 
 #include <chrono>
@@ -102,6 +103,8 @@ class WorkerPool {
   PoolStatistics statistics() const;
   /// --job-memory: what a submission's estimate must fit in (JobService refuses it otherwise).
   std::size_t job_memory_budget() const { return options_.job_memory; }
+  /// The process's parsed robots: the jobs' (RunnerOptions::robots) and the routes' (JobService::parsed_robot).
+  api::RobotCache& robots() { return robots_; }
 
  private:
   void work();
@@ -126,6 +129,7 @@ class WorkerPool {
   void give_memory_back(std::size_t bytes);
 
   store::Store& store_;
+  api::RobotCache robots_;  ///< before options_, whose runner options point at it
   WorkerPoolOptions options_;
   Log log_;
   std::vector<std::thread> threads_;
