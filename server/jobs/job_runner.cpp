@@ -6,6 +6,7 @@
 #include "manipid/api/problem.h"
 #include "manipid/api/requests.h"
 #include "manipid/api/result_json.h"
+#include "manipid/api/robot_identification_run.h"
 #include "manipid/api/robot_json.h"
 #include "manipid/api/robot_requests.h"
 #include "manipid/core/robot/excitation.h"
@@ -330,7 +331,9 @@ JobOutcome run_robot_identification_job(const api::JobInfo& job, store::Store& s
   if (auto missing = load(spec.validation_dataset_ids, "validation_dataset_id", held_out)) return *missing;
 
   spec.options.cancel = &live.cancel;
-  const robot::IdentificationResult result = robot::identify(parsed.model, runs, spec.options);
+  const api::RobotIdentificationRun run =
+      api::run_robot_identification(parsed.model, runs, spec.options, [&held_out] { return std::move(held_out); });
+  const robot::IdentificationResult& result = run.result;
   JobOutcome outcome;
   outcome.dataset_id = spec.dataset_id;
   if (result.cancelled) {
@@ -342,9 +345,7 @@ JobOutcome run_robot_identification_job(const api::JobInfo& job, store::Store& s
     outcome.result = nlohmann::ordered_json{{"cancelled", true}, {"dataset_id", spec.dataset_id}}.dump();
     return outcome;
   }
-  std::optional<robot::ValidationReport> validation;
-  if (!held_out.empty()) validation = robot::validate(parsed.model, result, held_out, spec.options.preparation);
-  nlohmann::ordered_json json = api::robot_result_to_json(parsed.model, result, validation);
+  nlohmann::ordered_json json = run.json;
   json["robot_id"] = spec.robot_id;
   json["dataset_id"] = spec.dataset_id;
   json["dataset_ids"] = spec.dataset_ids;
