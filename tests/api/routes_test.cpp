@@ -8,6 +8,7 @@
 #include "manipid/api/dashboard.h"
 #include "manipid/api/job_kinds.h"
 #include "manipid/api/robot_cache.h"
+#include "manipid/api/robot_result.h"
 #include "manipid/api/robot_requests.h"
 #include "manipid/api/routes.h"
 #include "manipid/core/robot/parameters.h"
@@ -1763,6 +1764,63 @@ TEST_F(Routes, ARobotFitShowsWhatFrictionMustExplainOnTheFittedLaw) {
   ASSERT_TRUE(without);
   ASSERT_EQ(without->status, 200) << without->body;
   EXPECT_FALSE(json_of(without).contains("friction"));
+}
+
+TEST(RobotResultDecoder, ReadsAStoredResultAndNamesWhatIsMissing) {
+  const robot::Model model = parse_robot({"two", kTwoJointUrdf, "", ""}).model;
+  const robot::ParameterLayout layout{true, false, false, false};  // viscous only
+  const std::vector<std::string> names = robot::standard_parameter_names(model, layout);
+  Json point = Json::object(), prior = Json::object();
+  for (std::size_t i = 0; i < names.size(); ++i) {
+    point[names[i]] = 0.5 + static_cast<double>(i);
+    prior[names[i]] = -1.0 - static_cast<double>(i);
+  }
+  const Json stored = {{"parameters", {{"friction", {"viscous"}}, {"armature", false}}},
+                       {"point", point},
+                       {"prior", prior},
+                       {"judge", {{"cutoff_hz", 4.0}, {"trim_seconds", 0.25}}},
+                       {"filters", {{"differentiation", {{"dt", 0.002}}}}},
+                       {"torque_joints", {"j2"}}};
+  const RobotResult result = decode_robot_result(model, stored);
+  EXPECT_TRUE(result.layout.viscous);
+  EXPECT_FALSE(result.layout.coulomb);
+  ASSERT_EQ(result.point.size(), static_cast<Eigen::Index>(names.size()));
+  EXPECT_EQ(result.point[1], 1.5);
+  EXPECT_EQ(result.prior[1], -2.0);
+  EXPECT_EQ(result.judge.cutoff_hz, 4.0);
+  EXPECT_EQ(result.judge.trim_seconds, 0.25);
+  EXPECT_EQ(result.dt, 0.002);
+  EXPECT_EQ(result.torque_joints, std::vector<int>{1});
+  // Without a prior: zeros.
+  Json without_prior = stored;
+  without_prior.erase("prior");
+  EXPECT_TRUE(decode_robot_result(model, without_prior).prior.isZero());
+  // What is missing or of the wrong type is named, as InputError("result").
+  const auto refused = [&](Json broken, const std::string& says) {
+    try {
+      (void)decode_robot_result(model, broken);
+      ADD_FAILURE() << "accepted " << broken.dump();
+    } catch (const InputError& error) {
+      EXPECT_EQ(error.field(), "result");
+      EXPECT_NE(std::string(error.what()).find(says), std::string::npos) << error.what();
+    }
+  };
+  Json no_judge = stored;
+  no_judge.erase("judge");
+  refused(no_judge, "judge");
+  Json short_point = stored;
+  short_point["point"].erase(names.back());
+  refused(short_point, "point." + names.back());
+  Json text_dt = stored;
+  text_dt["filters"]["differentiation"]["dt"] = "0.002";
+  refused(text_dt, "filters.differentiation.dt");
+  Json stranger = stored;
+  stranger["torque_joints"] = {"j9"};
+  refused(stranger, "a joint the robot does not have");
+  Json armature_text = stored;
+  armature_text["parameters"]["armature"] = "no";
+  refused(armature_text, "parameters");
+  refused(Json::array(), "not an object");
 }
 
 TEST_F(RoutesWithToken, BodilessCancelNeedsTheTokenToo) {
