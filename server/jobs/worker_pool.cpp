@@ -314,7 +314,7 @@ JobOutcome WorkerPool::run_within_memory(const api::JobInfo& job, LiveJob& live)
   }
   log_("job " + job.id + " " + api::to_string(job.kind) + ": running (" + attempt + "; holds about " +
        api::describe_bytes(need) + " of --job-memory " + api::describe_bytes(options_.job_memory) + ")");
-  JobOutcome outcome = run_job(job, store_, live, options_.runner);
+  JobOutcome outcome = options_.run(job, store_, live, options_.runner);
   give_memory_back(need);
   return outcome;
 }

@@ -56,6 +56,9 @@ struct WorkerPoolOptions {
   /// pool otherwise; one that could never fit is refused at submission (JobService) and, if it was
   /// queued before a restart with a smaller budget, fails with the reason instead of running.
   std::size_t job_memory = std::size_t{4} << 30;
+  /// What runs a claimed job: run_job (job_runner.h), or a test's stand-in that the test steers.
+  std::function<JobOutcome(const api::JobInfo& job, store::Store& store, LiveJob& live, const RunnerOptions& options)> run =
+      run_job;
 };
 
 struct LiveProgress {
