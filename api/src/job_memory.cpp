@@ -1,10 +1,13 @@
-// job_memory.cpp — a job's shape from its request and the memory rule of job_memory.h.
+// job_memory.cpp — a job's shape from its request (each kind's, job_shapes.h) and the memory rule of job_memory.h.
 #include "manipid/api/job_memory.h"
+
+#include "manipid/api/job_kinds.h"
 
 #include "manipid/api/requests.h"
 #include "manipid/api/robot_requests.h"
 #include "manipid/core/errors.h"
 
+#include "job_shapes.h"
 #include "json_fields.h"
 
 #include <algorithm>
@@ -32,7 +35,16 @@ long long resampled(const DatasetInfo& dataset, double dt) {
   return static_cast<long long>(std::ceil((dataset.samples - 1) * dataset.dt / dt)) + 1;
 }
 
-JobShape preset_identification_shape(const nlohmann::json& request, const DatasetLookup& datasets) {
+}  // namespace
+
+namespace shapes {
+
+JobShape simulation(const nlohmann::json& request, const DatasetLookup&, const RobotJointsLookup&) {
+  const SimulationSpec spec = simulation_from_json(request);
+  return {fields::simulation_samples(spec), spec.preset.model.joint_count(), kSimulation, "simulation", "duration"};
+}
+
+JobShape preset_identification(const nlohmann::json& request, const DatasetLookup& datasets, const RobotJointsLookup&) {
   const IdentificationSpec spec = identification_from_json(request);
   JobShape shape;
   shape.joints = spec.preset.model.joint_count();
@@ -49,7 +61,7 @@ JobShape preset_identification_shape(const nlohmann::json& request, const Datase
   return shape;
 }
 
-JobShape robot_identification_shape(const nlohmann::json& request, const DatasetLookup& datasets) {
+JobShape robot_identification(const nlohmann::json& request, const DatasetLookup& datasets, const RobotJointsLookup&) {
   const RobotIdentificationSpec spec = robot_identification_from_json(request);
   JobShape shape;
   shape.field = "dataset_id";
@@ -69,7 +81,7 @@ JobShape robot_identification_shape(const nlohmann::json& request, const Dataset
   return shape;
 }
 
-JobShape excitation_shape(const nlohmann::json& request, const RobotJointsLookup& robots) {
+JobShape excitation(const nlohmann::json& request, const DatasetLookup&, const RobotJointsLookup& robots) {
   const ExcitationSpec spec = excitation_from_json(request);
   JobShape shape;
   shape.field = "duration";
@@ -93,21 +105,11 @@ JobShape excitation_shape(const nlohmann::json& request, const RobotJointsLookup
   return shape;
 }
 
-}  // namespace
+}  // namespace shapes
 
 JobShape job_shape(JobKind kind, const nlohmann::json& request, const DatasetLookup& datasets,
                    const RobotJointsLookup& robots) {
-  switch (kind) {
-    case JobKind::simulation: {
-      const SimulationSpec spec = simulation_from_json(request);
-      return {fields::simulation_samples(spec), spec.preset.model.joint_count(), kSimulation, "simulation", "duration"};
-    }
-    case JobKind::excitation: return excitation_shape(request, robots);
-    case JobKind::identification:
-      return names_a_robot(request) ? robot_identification_shape(request, datasets)
-                                    : preset_identification_shape(request, datasets);
-  }
-  return {};
+  return job_kind_handler(kind).shape(request, datasets, robots);
 }
 
 std::size_t job_memory_bytes(const JobShape& shape) {

@@ -6,6 +6,7 @@
 #include "manipid/api/requests.h"
 #include "manipid/api/robot_requests.h"
 #include "manipid/api/robot_json.h"
+#include "manipid/api/robot_result.h"
 #include "manipid/core/robot/prediction.h"
 #include "manipid/core/robot/parameters.h"
 #include "manipid/core/paper/input_error.h"
@@ -35,15 +36,6 @@ Json columns(const Eigen::MatrixXd& matrix, const std::vector<long>& indices) {
 
 double rms(const Eigen::VectorXd& values) {
   return values.size() == 0 ? 0.0 : std::sqrt(values.squaredNorm() / static_cast<double>(values.size()));
-}
-
-/// A number the stored result must hold; its absence means the result is not an identification's.
-double stored_number(const nlohmann::json& object, const char* key, const std::string& where) {
-  const auto found = object.find(key);
-  if (found == object.end() || !found->is_number()) {
-    throw InputError("result", "the job's result has no number " + where + key);
-  }
-  return found->get<double>();
 }
 
 }  // namespace
@@ -110,15 +102,15 @@ nlohmann::ordered_json torque_fit_to_json(const std::string& request_json, const
   Eigen::VectorXd theta(static_cast<Eigen::Index>(names.size()));
   Json parameters = Json::object();
   for (std::size_t i = 0; i < names.size(); ++i) {
-    theta[static_cast<Eigen::Index>(i)] = stored_number(result["point"], names[i].c_str(), "point.");
+    theta[static_cast<Eigen::Index>(i)] = stored_result_number(result["point"], names[i].c_str(), "point.");
     parameters[names[i]] = theta[static_cast<Eigen::Index>(i)];
   }
 
   // The filter and torque the identification used, as its result reports them.
   if (!result.contains("filter") || !result["filter"].is_object()) throw InputError("result", "the job's result has no filter");
   FilterSettings filter;
-  filter.half_length = static_cast<int>(stored_number(result["filter"], "half_length", "filter."));
-  filter.band = stored_number(result["filter"], "band", "filter.");
+  filter.half_length = static_cast<int>(stored_result_number(result["filter"], "half_length", "filter."));
+  filter.band = stored_result_number(result["filter"], "band", "filter.");
   filter.dt = data.dt();  // the filter's Δ is the data's sample period, whatever the method
   bool from_reference = result.value("torque_source", std::string()) == "reference";
   if (result.value("method", std::string()) == "output-error") {
@@ -167,49 +159,11 @@ nlohmann::ordered_json torque_fit_to_json(const std::string& request_json, const
 
 namespace {
 
-/// What the plots need of a stored robot identification result: its layout, point, prior, judge, joints and
-/// period. Throws InputError("result") when the result lacks one of them.
-struct StoredRobotResult {
-  robot::ParameterLayout layout;
-  Eigen::VectorXd point, prior;
-  JudgeOptions judge;
-  std::vector<int> joints;
-  double dt = 0.0;
-};
-
-StoredRobotResult decode_robot_result(const robot::Model& model, const nlohmann::json& result) {
-  for (const char* key : {"parameters", "point", "judge", "filters", "torque_joints"}) {
-    if (!result.contains(key)) throw InputError("result", std::string("the job's result has no ") + key);
-  }
-  StoredRobotResult stored;
-  std::vector<std::string> terms = result["parameters"].at("friction").get<std::vector<std::string>>();
-  if (terms.empty()) terms.emplace_back("none");
-  parse_friction(terms, stored.layout, "result");
-  stored.layout.armature = result["parameters"].at("armature").get<bool>();
-  const std::vector<std::string> names = robot::standard_parameter_names(model, stored.layout);
-  stored.point.resize(static_cast<Eigen::Index>(names.size()));
-  stored.prior = Eigen::VectorXd::Zero(stored.point.size());
-  for (std::size_t i = 0; i < names.size(); ++i) {
-    stored.point[static_cast<Eigen::Index>(i)] = stored_number(result["point"], names[i].c_str(), "point.");
-    if (result.contains("prior")) stored.prior[static_cast<Eigen::Index>(i)] = stored_number(result["prior"], names[i].c_str(), "prior.");
-  }
-  stored.judge.cutoff_hz = stored_number(result["judge"], "cutoff_hz", "judge.");
-  stored.judge.trim_seconds = stored_number(result["judge"], "trim_seconds", "judge.");
-  stored.dt = stored_number(result["filters"].at("differentiation"), "dt", "filters.differentiation.");
-  for (const auto& name : result["torque_joints"]) {
-    const auto found = std::find_if(model.joints.begin(), model.joints.end(),
-                                    [&](const robot::Joint& joint) { return joint.name == name.get<std::string>(); });
-    if (found == model.joints.end()) throw InputError("result", "the job's result names a joint the robot does not have");
-    stored.joints.push_back(static_cast<int>(found - model.joints.begin()));
-  }
-  return stored;
-}
-
 /// What friction must explain, per judged joint: the measured torque less the rigid-body part of the
 /// prediction (π with fv, fc and fo set to 0; the armature Ia·q̈ stays: it is inertia, not friction), both
 /// through the judge's low-pass, beside the judge's q̇ at the same instants, and the friction law the point
 /// holds. Null when the result estimated none of fv, fc, fo.
-Json friction_to_json(const robot::Model& model, const StoredRobotResult& result, const Trajectory& data,
+Json friction_to_json(const robot::Model& model, const RobotResult& result, const Trajectory& data,
                       const std::vector<long>& indices) {
   const int n = model.joint_count();
   const robot::ParameterLayout& layout = result.layout;
@@ -218,7 +172,7 @@ Json friction_to_json(const robot::Model& model, const StoredRobotResult& result
   for (const int begin : {layout.viscous_begin(n), layout.coulomb_begin(n), layout.offset_begin(n)}) {
     if (begin >= 0) rigid.segment(begin, n).setZero();
   }
-  const robot::TorquePrediction without = robot::predict_torque(model, layout, rigid, data, result.judge, result.joints);
+  const robot::TorquePrediction without = robot::predict_torque(model, layout, rigid, data, result.judge, result.torque_joints);
   const JudgedStates states = judge_states(data, result.judge);
   const JudgedSpan span = judged_span(data.t, result.judge);
   if (span.size() != without.t.size()) throw InputError("result", "the judged span does not match the prediction");
@@ -250,13 +204,13 @@ nlohmann::ordered_json robot_fit_to_json(const robot::Model& model, const std::s
                                          const std::string& result_json, const Trajectory& stored, long max_points,
                                          bool prior) {
   const RobotIdentificationSpec spec = robot_identification_from_json(nlohmann::json::parse(request_json));
-  const StoredRobotResult result = decode_robot_result(model, nlohmann::json::parse(result_json));
+  const RobotResult result = decode_robot_result(model, nlohmann::json::parse(result_json));
   // The samples the identification saw: trimmed, and on its grid.
   DataPreparation preparation = spec.options.preparation;
   preparation.uniform.dt = result.dt;
   std::optional<Trajectory> prepared;
   const Trajectory& data = prepare_data(stored, preparation, prepared);
-  const robot::TorquePrediction fit = robot::predict_torque(model, result.layout, result.point, data, result.judge, result.joints);
+  const robot::TorquePrediction fit = robot::predict_torque(model, result.layout, result.point, data, result.judge, result.torque_joints);
   const std::vector<long> indices = plot_indices(fit.t.size(), max_points);
   Json joints = Json::array();
   for (Eigen::Index j = 0; j < fit.model.cols(); ++j) {
@@ -282,7 +236,7 @@ nlohmann::ordered_json robot_fit_to_json(const robot::Model& model, const std::s
   if (Json friction = friction_to_json(model, result, data, indices); !friction.is_null()) json["friction"] = std::move(friction);
   if (prior) {
     const robot::TorquePrediction by_urdf =
-        robot::predict_torque(model, result.layout, result.prior, data, result.judge, result.joints);
+        robot::predict_torque(model, result.layout, result.prior, data, result.judge, result.torque_joints);
     Json errors = Json::array();
     for (Eigen::Index j = 0; j < by_urdf.relative_error.size(); ++j) errors.push_back(number(by_urdf.relative_error[j]));
     json["prior"] = {{"relative_error", errors}, {"overall_relative_error", number(by_urdf.overall_relative_error)}};

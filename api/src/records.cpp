@@ -27,15 +27,17 @@ std::optional<JobState> parse_job_state(std::string_view text) {
 const char* to_string(JobKind kind) {
   switch (kind) {
     case JobKind::simulation: return "simulation";
+    case JobKind::identification: return "identification";
     case JobKind::excitation: return "excitation";
-    default: return "identification";
+    case JobKind::robot_identification: return "robot_identification";
   }
+  return "identification";  // unreachable for valid enumerators
 }
 
 std::optional<JobKind> parse_job_kind(std::string_view text) {
-  if (text == "simulation") return JobKind::simulation;
-  if (text == "identification") return JobKind::identification;
-  if (text == "excitation") return JobKind::excitation;
+  for (JobKind kind : kJobKinds) {
+    if (text == to_string(kind)) return kind;
+  }
   return std::nullopt;
 }
 

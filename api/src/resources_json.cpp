@@ -3,6 +3,7 @@
 #include "json_numbers.h"
 
 #include "manipid/api/csv.h"
+#include "manipid/api/job_kinds.h"
 #include "manipid/core/paper/model.h"
 
 #include <cmath>
@@ -64,18 +65,16 @@ Json job_head(const JobInfo& job) {
 
 Json job_links(const JobInfo& job) {
   const std::string self = "/v1/jobs/" + job.id;
+  const JobKindHandler& handler = job_kind_handler(job.kind);
   Json links = {{"self", self}, {"cancel", self + "/cancel"}};
-  // Only the paper model's identifications evaluate a cost step by step; the other jobs' history is empty.
-  const bool robot_job = !job.robot_id.empty();
-  if (job.kind == JobKind::identification && !robot_job) links["history"] = self + "/history";
+  // Only the kinds that evaluate a cost step by step (the paper model's identifications) have a history.
+  if (handler.has_history) links["history"] = self + "/history";
   if (!job.dataset_id.empty()) links["dataset"] = "/v1/datasets/" + job.dataset_id;
-  if (!job.robot_id.empty()) links["robot"] = "/v1/robots/" + job.robot_id;
-  if (!job.validation_dataset_id.empty()) {
-    links["validation_dataset"] = "/v1/datasets/" + job.validation_dataset_id;
-    links["validation"] = self + "/validation";
-  }
-  if (job.kind == JobKind::identification) links["fit"] = self + "/fit";
-  if (job.kind == JobKind::identification && robot_job) links["urdf"] = self + "/urdf";
+  if (handler.on_robot && !job.robot_id.empty()) links["robot"] = "/v1/robots/" + job.robot_id;
+  if (!job.validation_dataset_id.empty()) links["validation_dataset"] = "/v1/datasets/" + job.validation_dataset_id;
+  if (handler.has_validation && !job.validation_dataset_id.empty()) links["validation"] = self + "/validation";
+  if (handler.has_fit) links["fit"] = self + "/fit";
+  if (handler.writes_urdf) links["urdf"] = self + "/urdf";
   return links;
 }
 

@@ -1,65 +1,52 @@
-// robot_cache.cpp — parsed robots kept by the document they came from, so a stored robot is parsed once
-// per process, not at every submission, job and view (api/robot_requests.h: parsed_robot).
-#include "manipid/api/robot_requests.h"
+// robot_cache.cpp — stored robots parsed once per process, by robot id (robot_cache.h).
+#include "manipid/api/robot_cache.h"
 
-#include <list>
-#include <mutex>
+#include <utility>
 
 namespace manipid::api {
-namespace {
 
-struct CachedRobot {
-  std::string urdf, base, tip;
-  std::shared_ptr<const ParsedRobot> parsed;
-};
+RobotCache::RobotCache(std::size_t entries, std::size_t bytes) : most_entries_(entries), most_bytes_(bytes) {}
 
-/// Most recently used first.
-class RobotCache {
- public:
-  std::shared_ptr<const ParsedRobot> find(const RobotUpload& upload) {
-    std::lock_guard<std::mutex> lock(mutex_);
-    for (auto it = entries_.begin(); it != entries_.end(); ++it) {
-      if (it->urdf == upload.urdf && it->base == upload.base && it->tip == upload.tip) {
-        entries_.splice(entries_.begin(), entries_, it);
-        return entries_.front().parsed;
-      }
-    }
-    return nullptr;
-  }
-
-  void keep(const RobotUpload& upload, std::shared_ptr<const ParsedRobot> parsed) {
-    std::lock_guard<std::mutex> lock(mutex_);
-    if (upload.urdf.size() > kRobotCacheBytes) return;
-    for (const CachedRobot& entry : entries_) {  // another thread parsed it meanwhile
-      if (entry.urdf == upload.urdf && entry.base == upload.base && entry.tip == upload.tip) return;
-    }
-    entries_.push_front({upload.urdf, upload.base, upload.tip, std::move(parsed)});
-    bytes_ += upload.urdf.size();
-    while (entries_.size() > kRobotCacheEntries || bytes_ > kRobotCacheBytes) {
-      bytes_ -= entries_.back().urdf.size();
-      entries_.pop_back();
+std::shared_ptr<const ParsedRobot> RobotCache::find(const std::string& id) {
+  std::lock_guard<std::mutex> lock(mutex_);
+  for (auto it = entries_.begin(); it != entries_.end(); ++it) {
+    if (it->id == id) {
+      entries_.splice(entries_.begin(), entries_, it);
+      return entries_.front().parsed;
     }
   }
-
- private:
-  std::mutex mutex_;
-  std::list<CachedRobot> entries_;
-  std::size_t bytes_ = 0;
-};
-
-RobotCache& cache() {
-  static RobotCache instance;
-  return instance;
+  return nullptr;
 }
 
-}  // namespace
+std::shared_ptr<const ParsedRobot> RobotCache::get(const RobotInfo& robot,
+                                                   const std::function<std::optional<std::string>()>& load_urdf) {
+  if (std::shared_ptr<const ParsedRobot> found = find(robot.id)) return found;
+  const std::optional<std::string> urdf = load_urdf();
+  if (!urdf) return nullptr;
+  auto parsed = std::make_shared<const ParsedRobot>(parse_robot({robot.name, *urdf, robot.base, robot.tip}));
+  keep(robot.id, parsed, urdf->size());
+  // Another thread's parse, kept first, wins: every caller holds the same model. Not kept (too large): this one.
+  std::shared_ptr<const ParsedRobot> kept = find(robot.id);
+  return kept ? kept : parsed;
+}
 
-std::shared_ptr<const ParsedRobot> parsed_robot(const RobotUpload& upload) {
-  if (std::shared_ptr<const ParsedRobot> found = cache().find(upload)) return found;
-  // Parsed outside the cache's lock: a slow parse keeps no other robot waiting.
-  auto parsed = std::make_shared<const ParsedRobot>(parse_robot(upload));
-  cache().keep(upload, parsed);
-  return parsed;
+void RobotCache::keep(const std::string& id, std::shared_ptr<const ParsedRobot> parsed, std::size_t document_bytes) {
+  std::lock_guard<std::mutex> lock(mutex_);
+  if (document_bytes > most_bytes_ || most_entries_ == 0) return;
+  for (const Entry& entry : entries_) {
+    if (entry.id == id) return;  // another thread parsed it meanwhile
+  }
+  entries_.push_front({id, document_bytes, std::move(parsed)});
+  bytes_ += document_bytes;
+  while (entries_.size() > most_entries_ || bytes_ > most_bytes_) {
+    bytes_ -= entries_.back().bytes;
+    entries_.pop_back();
+  }
+}
+
+std::size_t RobotCache::size() const {
+  std::lock_guard<std::mutex> lock(mutex_);
+  return entries_.size();
 }
 
 }  // namespace manipid::api

@@ -61,9 +61,9 @@ end
 
 function line = progress_line(job)
 line = sprintf('%s %s', job.id, job.state);
-% Evaluations count for the preset's optimisers; a robot identification (linear) has none.
-robot = isfield(job, 'robot_id') && ~isempty(job.robot_id);
-if isfield(job, 'progress') && isstruct(job.progress) && strcmp(job.kind, 'identification') && ~robot
+% Evaluations count for the preset's optimisers (kind identification); a robot_identification (linear)
+% has none.
+if isfield(job, 'progress') && isstruct(job.progress) && strcmp(job.kind, 'identification')
   evaluations = job.progress.evaluations;
   if isempty(evaluations), evaluations = 0; end
   line = sprintf('%s: %d evaluations', line, evaluations);

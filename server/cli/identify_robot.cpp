@@ -4,6 +4,7 @@
 #include "cli/identify.h"
 
 #include "manipid/api/csv.h"
+#include "manipid/api/robot_identification_run.h"
 #include "manipid/api/robot_json.h"
 #include "manipid/core/robot/identification.h"
 #include "manipid/core/robot/link_table.h"
@@ -201,31 +202,28 @@ int run_identify_robot(const IdentifyOptions& options) {
   for (const robot::Joint& joint : model.joints) log.joint_names.push_back(joint.name);  // what {joint} matches
   std::vector<Trajectory> runs;
   for (const std::string& path : options.inputs) runs.push_back(read_run(path, log, options.topic));
-  robot::IdentificationResult result;
-  try {
-    result = robot::identify(model, runs, identification);
-  } catch (const InputError& error) {
-    // An option's value at fault is named by the option, anything else by the data it came from.
-    for (const auto& [field, option] : {std::pair{"judge_cutoff", "--judge-cutoff"}, {"judge_trim", "--judge-trim"},
-                                        {"comparison_cutoff", "--comparison-cutoff"}, {"torque_joints", "--torque-joints"},
-                                        {"ridge", "--ridge"}, {"half_length", "--half-length"}, {"band", "--band"}}) {
-      if (error.field() == field) rethrow_with_source(error, option);
-    }
-    rethrow_with_source(error, run_names(options.inputs));
-  }
-  std::optional<robot::ValidationReport> validation;
-  if (!options.validate.empty()) {
-    std::vector<Trajectory> held_out;
-    for (const std::string& path : options.validate) held_out.push_back(read_run(path, log, options.topic));
-    try {
-      validation = robot::validate(model, result, held_out, identification.preparation);
-    } catch (const InputError& error) {
-      rethrow_with_source(error, run_names(options.validate));
-    }
-  }
+  const api::RobotIdentificationRun run = api::run_robot_identification(
+      model, runs, identification,
+      [&] {
+        std::vector<Trajectory> held_out;
+        for (const std::string& path : options.validate) held_out.push_back(read_run(path, log, options.topic));
+        return held_out;
+      },
+      [&](api::RobotRunStep step, const InputError& error) {
+        if (step == api::RobotRunStep::validate) rethrow_with_source(error, run_names(options.validate));
+        // An option's value at fault is named by the option, anything else by the data it came from.
+        for (const auto& [field, option] : {std::pair{"judge_cutoff", "--judge-cutoff"}, {"judge_trim", "--judge-trim"},
+                                            {"comparison_cutoff", "--comparison-cutoff"}, {"torque_joints", "--torque-joints"},
+                                            {"ridge", "--ridge"}, {"half_length", "--half-length"}, {"band", "--band"}}) {
+          if (error.field() == field) rethrow_with_source(error, option);
+        }
+        rethrow_with_source(error, run_names(options.inputs));
+      });
+  const robot::IdentificationResult& result = run.result;
+  const std::optional<robot::ValidationReport>& validation = run.validation;
   // The URDF's warnings once the call is known to work: a refused call prints one line.
   print_urdf_warnings(options.urdf, parsed_urdf);
-  const nlohmann::ordered_json json = api::robot_result_to_json(model, result, validation);
+  const nlohmann::ordered_json& json = run.json;
   // The URDF first (an estimate it cannot hold is said after the result, which is printed either way).
   std::string urdf_refused;
   if (!options.write_urdf.empty()) {

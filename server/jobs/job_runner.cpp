@@ -1,10 +1,12 @@
 // job_runner.cpp — one job from its stored request to its outcome (job_runner.h).
 #include "jobs/job_runner.h"
 
+#include "manipid/api/job_kinds.h"
 #include "manipid/api/limits.h"
 #include "manipid/api/problem.h"
 #include "manipid/api/requests.h"
 #include "manipid/api/result_json.h"
+#include "manipid/api/robot_identification_run.h"
 #include "manipid/api/robot_json.h"
 #include "manipid/api/robot_requests.h"
 #include "manipid/core/robot/excitation.h"
@@ -15,6 +17,7 @@
 #include <nlohmann/json.hpp>
 
 #include <algorithm>
+#include <array>
 #include <chrono>
 #include <cmath>
 #include <condition_variable>
@@ -219,7 +222,7 @@ std::optional<api::SimulationSpec> simulation_behind(store::Store& store, const 
   if (!source) return std::nullopt;
   try {
     if (source->kind == api::JobKind::simulation) return api::simulation_from_json(nlohmann::json::parse(source->request));
-    if (source->kind == api::JobKind::identification && source->robot_id.empty()) {
+    if (source->kind == api::JobKind::identification) {
       return api::identification_from_json(nlohmann::json::parse(source->request)).simulation;
     }
   } catch (const std::exception&) {
@@ -286,20 +289,31 @@ JobOutcome run_identification_job(const api::JobInfo& job, store::Store& store, 
   return outcome;
 }
 
+/// A stored robot parsed (the process's RobotCache when the runner has one), or nullptr when it is gone.
+std::shared_ptr<const api::ParsedRobot> stored_robot(store::Store& store, const RunnerOptions& options,
+                                                     const std::optional<api::RobotInfo>& robot) {
+  if (!robot) return nullptr;
+  const auto load = [&] { return store.load_robot_urdf(api::all_owners, robot->id); };
+  if (options.robots) return options.robots->get(*robot, load);
+  const std::optional<std::string> urdf = load();
+  if (!urdf) return nullptr;
+  return std::make_shared<const api::ParsedRobot>(api::parse_robot({robot->name, *urdf, robot->base, robot->tip}));
+}
+
 /// A URDF robot's identification: one least-squares solve on its runs (the filters, ridge and friction terms
 /// chosen by held-out prediction), judged on validation runs if asked. No evaluations to stream: the job's
 /// progress is its state.
-JobOutcome run_robot_identification_job(const api::JobInfo& job, store::Store& store, LiveJob& live) {
+JobOutcome run_robot_identification_job(const api::JobInfo& job, store::Store& store, LiveJob& live,
+                                        const RunnerOptions& options) {
   api::RobotIdentificationSpec spec = api::robot_identification_from_json(nlohmann::json::parse(job.request));
   const auto fail_missing = [&](const std::string& what, const std::string& field) {
     JobOutcome outcome = failed(api::problem_to_json({api::ProblemKind::not_found, what + " was deleted before the job ran", field}).dump());
     outcome.dataset_id = spec.dataset_id;
     return outcome;
   };
-  const auto robot = store.find_robot(api::all_owners, spec.robot_id);
-  const auto urdf = store.load_robot_urdf(api::all_owners, spec.robot_id);
-  if (!robot || !urdf) return fail_missing("robot " + spec.robot_id, "robot_id");
-  const std::shared_ptr<const api::ParsedRobot> stored = api::parsed_robot({robot->name, *urdf, robot->base, robot->tip});
+  const std::shared_ptr<const api::ParsedRobot> stored =
+      stored_robot(store, options, store.find_robot(api::all_owners, spec.robot_id));
+  if (!stored) return fail_missing("robot " + spec.robot_id, "robot_id");
   const api::ParsedRobot& parsed = *stored;
   const auto load = [&](const std::vector<std::string>& ids, const std::string& field, std::vector<Trajectory>& runs)
       -> std::optional<JobOutcome> {
@@ -317,7 +331,9 @@ JobOutcome run_robot_identification_job(const api::JobInfo& job, store::Store& s
   if (auto missing = load(spec.validation_dataset_ids, "validation_dataset_id", held_out)) return *missing;
 
   spec.options.cancel = &live.cancel;
-  const robot::IdentificationResult result = robot::identify(parsed.model, runs, spec.options);
+  const api::RobotIdentificationRun run =
+      api::run_robot_identification(parsed.model, runs, spec.options, [&held_out] { return std::move(held_out); });
+  const robot::IdentificationResult& result = run.result;
   JobOutcome outcome;
   outcome.dataset_id = spec.dataset_id;
   if (result.cancelled) {
@@ -329,9 +345,7 @@ JobOutcome run_robot_identification_job(const api::JobInfo& job, store::Store& s
     outcome.result = nlohmann::ordered_json{{"cancelled", true}, {"dataset_id", spec.dataset_id}}.dump();
     return outcome;
   }
-  std::optional<robot::ValidationReport> validation;
-  if (!held_out.empty()) validation = robot::validate(parsed.model, result, held_out, spec.options.preparation);
-  nlohmann::ordered_json json = api::robot_result_to_json(parsed.model, result, validation);
+  nlohmann::ordered_json json = run.json;
   json["robot_id"] = spec.robot_id;
   json["dataset_id"] = spec.dataset_id;
   json["dataset_ids"] = spec.dataset_ids;
@@ -358,13 +372,12 @@ JobOutcome run_excitation_job(const api::JobInfo& job, store::Store& store, Live
   const auto started = Clock::now();
   api::ExcitationSpec spec = api::excitation_from_json(nlohmann::json::parse(job.request));
   const auto robot = store.find_robot(api::all_owners, spec.robot_id);
-  const auto urdf = store.load_robot_urdf(api::all_owners, spec.robot_id);
-  if (!robot || !urdf) {
+  const std::shared_ptr<const api::ParsedRobot> stored = stored_robot(store, options, robot);
+  if (!stored) {
     return failed(api::problem_to_json({api::ProblemKind::not_found, "robot " + spec.robot_id + " was deleted before the job ran",
                                         "robot_id"})
                       .dump());
   }
-  const std::shared_ptr<const api::ParsedRobot> stored = api::parsed_robot({robot->name, *urdf, robot->base, robot->tip});
   const api::ParsedRobot& parsed = *stored;
   robot::ExcitationOptions design_options = api::excitation_options(spec, parsed.model);
   // Four fifths of the job's time for the search: the rest is for the final figures (two SVDs and the
@@ -436,13 +449,43 @@ api::JobShape job_shape(api::JobKind kind, const std::string& request_json, stor
 
 namespace {
 
+/// What a kind's run is given.
+struct JobRun {
+  const api::JobInfo& job;
+  store::Store& store;
+  LiveJob& live;
+  const RunnerOptions& options;
+  const JobClock& clock;
+};
+
+/// The server's side of each job kind (the api side: api/job_kinds.h), indexed by api::JobKind.
+struct KindRunner {
+  api::JobKind kind;
+  JobOutcome (*run)(const JobRun& run);
+};
+
+constexpr std::array<KindRunner, std::size(api::kJobKinds)> kRunners = {{
+    {api::JobKind::simulation, [](const JobRun& run) { return run_simulation_job(run.job, run.store, run.live, run.clock); }},
+    {api::JobKind::identification,
+     [](const JobRun& run) { return run_identification_job(run.job, run.store, run.live, run.options, run.clock); }},
+    {api::JobKind::excitation,
+     [](const JobRun& run) { return run_excitation_job(run.job, run.store, run.live, run.options); }},
+    {api::JobKind::robot_identification,
+     [](const JobRun& run) { return run_robot_identification_job(run.job, run.store, run.live, run.options); }},
+}};
+
+constexpr bool runners_in_kind_order() {
+  for (std::size_t i = 0; i < kRunners.size(); ++i) {
+    if (kRunners[i].kind != api::kJobKinds[i] || static_cast<std::size_t>(api::kJobKinds[i]) != i) return false;
+  }
+  return true;
+}
+static_assert(runners_in_kind_order(), "kRunners has one entry per JobKind, in its order");
+
 JobOutcome run_kind(const api::JobInfo& job, store::Store& store, LiveJob& live, const RunnerOptions& options,
                     const JobClock& clock) {
   try {
-    if (job.kind == api::JobKind::simulation) return run_simulation_job(job, store, live, clock);
-    if (job.kind == api::JobKind::excitation) return run_excitation_job(job, store, live, options);
-    if (!job.robot_id.empty()) return run_robot_identification_job(job, store, live);
-    return run_identification_job(job, store, live, options, clock);
+    return kRunners.at(static_cast<std::size_t>(job.kind)).run({job, store, live, options, clock});
   } catch (const SimulationStopped& stopped) {
     return stopped_simulation(live, clock, stopped);
   } catch (const InputError& error) {
@@ -472,13 +515,6 @@ JobOutcome run_kind(const api::JobInfo& job, store::Store& store, LiveJob& live,
   }
 }
 
-const char* what_it_does(const api::JobInfo& job) {
-  if (job.kind == api::JobKind::simulation) return "simulating";
-  if (job.kind == api::JobKind::excitation) return "designing the excitation";
-  if (!job.robot_id.empty()) return "identifying the robot";
-  return "identifying";
-}
-
 }  // namespace
 
 JobOutcome run_job(const api::JobInfo& job, store::Store& store, LiveJob& live, const RunnerOptions& options) {
@@ -490,7 +526,7 @@ JobOutcome run_job(const api::JobInfo& job, store::Store& store, LiveJob& live, 
   }
   // Stopped by its time limit (not by a user or a shutdown, and not finished first): failed, saying so.
   if (live.timed_out.load() && !outcome.requeue && outcome.state == api::JobState::cancelled) {
-    JobOutcome ended = timed_out(clock, what_it_does(job));
+    JobOutcome ended = timed_out(clock, api::job_kind_handler(job.kind).doing);
     ended.dataset_id = outcome.dataset_id;
     return ended;
   }

@@ -7,6 +7,7 @@
 
 #include "manipid/api/records.h"
 #include "manipid/api/job_memory.h"
+#include "manipid/api/robot_cache.h"
 #include "store/store.h"
 
 #include <atomic>
@@ -33,6 +34,8 @@ struct RunnerOptions {
   /// still running kTimeLimitGrace after it is stopped like a cancel, and fails naming the limit.
   double job_time_limit_seconds = 3600.0;
   int history_batch = 512;                  ///< entries per store write
+  /// The process's parsed robots (the worker pool's); null: a robot is parsed for each job that reads it.
+  api::RobotCache* robots = nullptr;
   double history_flush_seconds = 0.5;       ///< or sooner than a full batch, while running
 };
 

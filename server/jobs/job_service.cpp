@@ -86,13 +86,16 @@ api::DeleteOutcome JobService::delete_dataset(const api::Caller& caller, const s
   return outcome_of(stored([&] { return store_.delete_dataset(caller.scope(), id); }));
 }
 
-api::RobotCreated JobService::create_robot(const api::Caller& caller, const api::RobotUpload& upload, int joints,
-                                           const std::string& description, const std::optional<api::IdempotencyKey>& key) {
+api::RobotCreated JobService::create_robot(const api::Caller& caller, const api::RobotUpload& upload,
+                                           std::shared_ptr<const api::ParsedRobot> parsed, const std::string& description,
+                                           const std::optional<api::IdempotencyKey>& key) {
   if (!accepting()) throw api::ApiError(api::ProblemKind::shutting_down, "the server is shutting down");
+  const int joints = parsed->model.joint_count();
   const store::RobotOutcome outcome = stored([&] {
     return store_.insert_robot({upload.name, upload.urdf, upload.base, upload.tip, joints, description, caller.owner}, key);
   });
   if (outcome.status == store::SubmitStatus::key_reused) key_reused();
+  pool_.robots().keep(outcome.robot.id, std::move(parsed), upload.urdf.size());  // parsed once: its jobs read it here
   return {outcome.robot, outcome.status == store::SubmitStatus::replayed};
 }
 
@@ -101,6 +104,11 @@ std::optional<api::RobotInfo> JobService::robot(const api::Caller& caller, const
 }
 std::optional<std::string> JobService::robot_urdf(const api::Caller& caller, const std::string& id) {
   return reached([&] { return store_.load_robot_urdf(caller.scope(), id); });
+}
+std::shared_ptr<const api::ParsedRobot> JobService::parsed_robot(const api::Caller& caller, const std::string& id) {
+  const std::optional<api::RobotInfo> found = robot(caller, id);
+  if (!found) return nullptr;
+  return pool_.robots().get(*found, [&] { return robot_urdf(caller, id); });
 }
 api::Page<api::RobotInfo> JobService::robots(const api::Caller& caller, const api::PageRequest& page) {
   return page_of([&] { return store_.list_robots(caller.scope(), page); });

@@ -31,10 +31,12 @@ class JobService : public api::Service {
   api::Page<api::DatasetInfo> datasets(const api::Caller& caller, const api::PageRequest& page) override;
   api::DeleteOutcome delete_dataset(const api::Caller& caller, const std::string& id) override;
 
-  api::RobotCreated create_robot(const api::Caller& caller, const api::RobotUpload& upload, int joints,
-                                 const std::string& description, const std::optional<api::IdempotencyKey>& key) override;
+  api::RobotCreated create_robot(const api::Caller& caller, const api::RobotUpload& upload,
+                                 std::shared_ptr<const api::ParsedRobot> parsed, const std::string& description,
+                                 const std::optional<api::IdempotencyKey>& key) override;
   std::optional<api::RobotInfo> robot(const api::Caller& caller, const std::string& id) override;
   std::optional<std::string> robot_urdf(const api::Caller& caller, const std::string& id) override;
+  std::shared_ptr<const api::ParsedRobot> parsed_robot(const api::Caller& caller, const std::string& id) override;
   api::Page<api::RobotInfo> robots(const api::Caller& caller, const api::PageRequest& page) override;
   api::DeleteOutcome delete_robot(const api::Caller& caller, const std::string& id) override;
 

@@ -20,6 +20,7 @@ std::string worker_lost_problem(int losses) {
 
 WorkerPool::WorkerPool(store::Store& store, WorkerPoolOptions options, Log log)
     : store_(store), options_(std::move(options)), log_(std::move(log)) {
+  if (!options_.runner.robots) options_.runner.robots = &robots_;
   statistics_.duration_bucket_bounds = {0.05, 0.1, 0.25, 0.5, 1, 2.5, 5, 10, 30, 60, 300, 3600};
   statistics_.duration_buckets.assign(statistics_.duration_bucket_bounds.size(), 0);
 }
@@ -313,7 +314,7 @@ JobOutcome WorkerPool::run_within_memory(const api::JobInfo& job, LiveJob& live)
   }
   log_("job " + job.id + " " + api::to_string(job.kind) + ": running (" + attempt + "; holds about " +
        api::describe_bytes(need) + " of --job-memory " + api::describe_bytes(options_.job_memory) + ")");
-  JobOutcome outcome = run_job(job, store_, live, options_.runner);
+  JobOutcome outcome = options_.run(job, store_, live, options_.runner);
   give_memory_back(need);
   return outcome;
 }

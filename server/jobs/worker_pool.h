@@ -13,6 +13,7 @@
 #pragma once
 
 #include "jobs/job_runner.h"
+#include "manipid/api/robot_cache.h"
 #include "store/store.h"
 
 #include <chrono>
@@ -55,6 +56,9 @@ struct WorkerPoolOptions {
   /// pool otherwise; one that could never fit is refused at submission (JobService) and, if it was
   /// queued before a restart with a smaller budget, fails with the reason instead of running.
   std::size_t job_memory = std::size_t{4} << 30;
+  /// What runs a claimed job: run_job (job_runner.h), or a test's stand-in that the test steers.
+  std::function<JobOutcome(const api::JobInfo& job, store::Store& store, LiveJob& live, const RunnerOptions& options)> run =
+      run_job;
 };
 
 struct LiveProgress {
@@ -102,6 +106,8 @@ class WorkerPool {
   PoolStatistics statistics() const;
   /// --job-memory: what a submission's estimate must fit in (JobService refuses it otherwise).
   std::size_t job_memory_budget() const { return options_.job_memory; }
+  /// The process's parsed robots: the jobs' (RunnerOptions::robots) and the routes' (JobService::parsed_robot).
+  api::RobotCache& robots() { return robots_; }
 
  private:
   void work();
@@ -126,6 +132,7 @@ class WorkerPool {
   void give_memory_back(std::size_t bytes);
 
   store::Store& store_;
+  api::RobotCache robots_;  ///< before options_, whose runner options point at it
   WorkerPoolOptions options_;
   Log log_;
   std::vector<std::thread> threads_;

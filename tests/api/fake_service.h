@@ -5,11 +5,13 @@
 #pragma once
 
 #include "manipid/api/problem.h"
+#include "manipid/api/robot_cache.h"
 #include "manipid/api/service.h"
 
 #include <algorithm>
 #include <functional>
 #include <map>
+#include <memory>
 #include <mutex>
 #include <optional>
 #include <stdexcept>
@@ -156,8 +158,9 @@ class FakeService : public Service {
     return datasets_.erase(id) + data_.erase(id) > 0 ? DeleteOutcome::deleted : DeleteOutcome::not_found;
   }
 
-  RobotCreated create_robot(const Caller& caller, const RobotUpload& upload, int joints, const std::string& description,
-                            const std::optional<IdempotencyKey>& key) override {
+  RobotCreated create_robot(const Caller& caller, const RobotUpload& upload, std::shared_ptr<const ParsedRobot> parsed,
+                            const std::string& description, const std::optional<IdempotencyKey>& key) override {
+    const int joints = parsed->model.joint_count();
     std::lock_guard lock(mutex_);
     enter(caller);
     if (script_.submit_error) throw ApiError(*script_.submit_error, "scripted refusal");
@@ -188,6 +191,12 @@ class FakeService : public Service {
     const auto info = robots_.find(id);
     if (info != robots_.end() && !sees(caller, info->second.owner)) return std::nullopt;
     return found == urdfs_.end() ? std::nullopt : std::optional(found->second);
+  }
+  /// Parsed once per fake (its ids start again at rb_1 in every test), as a server parses once per process.
+  std::shared_ptr<const ParsedRobot> parsed_robot(const Caller& caller, const std::string& id) override {
+    const std::optional<RobotInfo> found = robot(caller, id);
+    if (!found) return nullptr;
+    return robot_cache_.get(*found, [&] { return robot_urdf(caller, id); });
   }
   Page<RobotInfo> robots(const Caller& caller, const PageRequest& page) override {
     std::lock_guard lock(mutex_);
@@ -354,6 +363,7 @@ class FakeService : public Service {
   std::map<std::string, DatasetInfo> datasets_;
   std::map<std::string, RobotInfo> robots_;
   std::map<std::string, std::string> urdfs_;
+  RobotCache robot_cache_;
   std::vector<std::optional<IdempotencyKey>> robot_keys_;
   std::map<std::string, Trajectory> data_;
   std::map<std::string, JobInfo> jobs_;

@@ -56,16 +56,16 @@ TEST(JobShape, IdentificationOfADatasetOrASimulation) {
 }
 
 TEST(JobShape, RobotIdentificationCountsBothDatasetsAndItsLayout) {
-  const JobShape both = shape(JobKind::identification, {{"robot_id", "rb_7"},
-                                                        {"dataset_id", "ds_7"},
-                                                        {"validation_dataset_id", "ds_7"},
-                                                        {"friction", {"viscous", "coulomb", "offset"}}});
+  const JobShape both = shape(JobKind::robot_identification, {{"robot_id", "rb_7"},
+                                                              {"dataset_id", "ds_7"},
+                                                              {"validation_dataset_id", "ds_7"},
+                                                              {"friction", {"viscous", "coulomb", "offset"}}});
   EXPECT_EQ(both.samples, 20002);
   EXPECT_EQ(both.joints, 7);
   EXPECT_EQ(both.work, "robot identification");
   EXPECT_EQ(both.field, "dataset_id");
   // Resampled onto a finer grid: ten times the samples, and "dt" is what sets them.
-  const JobShape finer = shape(JobKind::identification, {{"robot_id", "rb_7"}, {"dataset_id", "ds_7"}, {"dt", 1e-4}});
+  const JobShape finer = shape(JobKind::robot_identification, {{"robot_id", "rb_7"}, {"dataset_id", "ds_7"}, {"dt", 1e-4}});
   EXPECT_EQ(finer.samples, 100001);
   EXPECT_EQ(finer.field, "dt");
 }

@@ -181,6 +181,9 @@ TEST(Records, JobKindsRoundTrip) {
   EXPECT_STREQ(to_string(JobKind::identification), "identification");
   EXPECT_EQ(parse_job_kind("simulation"), JobKind::simulation);
   EXPECT_EQ(parse_job_kind("identification"), JobKind::identification);
+  EXPECT_STREQ(to_string(JobKind::robot_identification), "robot_identification");
+  EXPECT_EQ(parse_job_kind("robot_identification"), JobKind::robot_identification);
+  for (const JobKind kind : kJobKinds) EXPECT_EQ(parse_job_kind(to_string(kind)), kind);
   EXPECT_FALSE(parse_job_kind("identify"));
   EXPECT_FALSE(parse_job_kind(""));
 }

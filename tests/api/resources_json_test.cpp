@@ -88,10 +88,14 @@ TEST(JobText, ARunningJobShowsItsWorkerAndNoResult) {
 
 TEST(JobText, ARobotIdentificationLinksItsRobotAndUrdfNotAHistory) {
   JobInfo job = finished_identification();
+  job.kind = JobKind::robot_identification;
   job.robot_id = "rb_1";
   job.validation_dataset_id = "ds_2";
-  const OrderedJson links = OrderedJson::parse(job_to_text(job))["links"];
+  const OrderedJson parsed = OrderedJson::parse(job_to_text(job));
+  EXPECT_EQ(parsed["kind"], "robot_identification");
+  const OrderedJson& links = parsed["links"];
   EXPECT_FALSE(links.contains("history"));
+  EXPECT_EQ(links["fit"], "/v1/jobs/job_0123456789abcdef/fit");
   EXPECT_EQ(links["robot"], "/v1/robots/rb_1");
   EXPECT_EQ(links["urdf"], "/v1/jobs/job_0123456789abcdef/urdf");
   EXPECT_EQ(links["validation"], "/v1/jobs/job_0123456789abcdef/validation");

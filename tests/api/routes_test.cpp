@@ -6,6 +6,9 @@
 #include "fake_service.h"
 
 #include "manipid/api/dashboard.h"
+#include "manipid/api/job_kinds.h"
+#include "manipid/api/robot_cache.h"
+#include "manipid/api/robot_result.h"
 #include "manipid/api/robot_requests.h"
 #include "manipid/api/routes.h"
 #include "manipid/core/robot/parameters.h"
@@ -765,6 +768,70 @@ TEST_F(Routes, JobListFiltersAndLeavesTheRequestOut) {
   EXPECT_EQ(fake_.filters().back().robot_id, "rb_1");
 }
 
+TEST_F(Routes, ARobotIdentificationIsAKindOfItsOwn) {
+  JobInfo robot_job = job_info("job_robot", JobKind::robot_identification, JobState::queued);
+  robot_job.robot_id = "rb_1";
+  robot_job.dataset_id = "ds_run";
+  fake_.add_job(robot_job);
+  fake_.add_job(job_info("job_paper", JobKind::identification, JobState::queued));
+  auto listed = get("/v1/jobs?kind=robot_identification");
+  ASSERT_TRUE(listed);
+  ASSERT_EQ(listed->status, 200) << listed->body;
+  Json body = json_of(listed);
+  ASSERT_EQ(body["items"].size(), 1u);
+  EXPECT_EQ(body["items"][0]["id"], "job_robot");
+  EXPECT_EQ(body["items"][0]["kind"], "robot_identification");
+  EXPECT_EQ(fake_.filters().back().kind, JobKind::robot_identification);
+  listed = get("/v1/jobs?kind=identification");
+  ASSERT_TRUE(listed);
+  body = json_of(listed);
+  ASSERT_EQ(body["items"].size(), 1u);
+  EXPECT_EQ(body["items"][0]["id"], "job_paper");
+  const Json refused = expect_problem(get("/v1/jobs?kind=robot"), 422, "INVALID_FIELD", "kind");
+  EXPECT_NE(refused["detail"].get<std::string>().find("robot_identification"), std::string::npos) << refused;
+
+  // Its resource: the robot, its fit and identified URDF, no cost history.
+  const auto got = get("/v1/jobs/job_robot");
+  ASSERT_TRUE(got);
+  const Json job = json_of(got);
+  EXPECT_EQ(job["kind"], "robot_identification");
+  EXPECT_EQ(job["links"]["robot"], "/v1/robots/rb_1");
+  EXPECT_EQ(job["links"]["fit"], "/v1/jobs/job_robot/fit");
+  EXPECT_EQ(job["links"]["urdf"], "/v1/jobs/job_robot/urdf");
+  EXPECT_FALSE(job["links"].contains("history"));
+  EXPECT_FALSE(job["links"].contains("validation"));  // it names no validation dataset
+  // Not finished: no fit yet, no URDF.
+  expect_problem(get("/v1/jobs/job_robot/fit"), 409, "CONFLICT", "id");
+  expect_problem(get("/v1/jobs/job_robot/urdf"), 409, "CONFLICT", "id");
+
+  // The paper's identification has no validation view and no URDF, whatever its row says.
+  JobInfo paper = job_info("job_paper_done", JobKind::identification, JobState::succeeded);
+  paper.validation_dataset_id = "ds_other";
+  paper.result = "{}";
+  fake_.add_job(paper);
+  const Json paper_links = json_of(get("/v1/jobs/job_paper_done"))["links"];
+  EXPECT_EQ(paper_links["history"], "/v1/jobs/job_paper_done/history");
+  EXPECT_FALSE(paper_links.contains("validation"));
+  EXPECT_FALSE(paper_links.contains("urdf"));
+  expect_problem(get("/v1/jobs/job_paper_done/validation"), 409, "CONFLICT", "id");
+  expect_problem(get("/v1/jobs/job_paper_done/urdf"), 409, "CONFLICT", "id");
+  // Kinds without an estimate have no fit, and say what they are.
+  fake_.add_job(job_info("job_design", JobKind::excitation, JobState::succeeded));
+  const Json no_fit = expect_problem(get("/v1/jobs/job_design/fit"), 409, "CONFLICT", "id");
+  EXPECT_NE(no_fit["detail"].get<std::string>().find("is an excitation"), std::string::npos) << no_fit;
+}
+
+TEST(JobKinds, EveryKindHasItsEntryAndPresetIdentificationsStayIdentifications) {
+  for (const JobKind kind : kJobKinds) EXPECT_EQ(job_kind_handler(kind).kind, kind);
+  EXPECT_EQ(identification_kind(Json{{"robot_id", "rb_1"}, {"dataset_id", "ds_1"}}), JobKind::robot_identification);
+  EXPECT_EQ(identification_kind(Json{{"dataset_id", "ds_1"}}), JobKind::identification);
+  EXPECT_EQ(kind_with_article(JobKind::robot_identification), "a robot_identification");
+  EXPECT_EQ(kind_with_article(JobKind::identification), "an identification");
+  EXPECT_STREQ(job_kind_handler(JobKind::robot_identification).doing, "identifying the robot");
+  EXPECT_TRUE(job_kind_handler(JobKind::robot_identification).on_robot);
+  EXPECT_FALSE(job_kind_handler(JobKind::identification).on_robot);
+}
+
 TEST_F(Routes, JobHistoryInPagesAsCsvAndThinned) {
   fake_.add_job(job_info("job_h", JobKind::identification, JobState::succeeded), history_of(5));
 
@@ -1323,10 +1390,13 @@ TEST_F(Routes, ARobotIdentificationIsCheckedAgainstTheRobotAndBothDatasets) {
   EXPECT_EQ(queued->status, 202) << queued->body;
   const auto submissions = fake_.submissions();
   ASSERT_EQ(submissions.size(), 1u);
+  EXPECT_EQ(submissions[0].kind, JobKind::robot_identification);
   EXPECT_EQ(submissions[0].robot_id, "rb_1");
   EXPECT_EQ(submissions[0].dataset_id, "ds_two");
   EXPECT_EQ(submissions[0].validation_dataset_id, "ds_second");
   EXPECT_EQ(json_of(queued)["robot_id"], "rb_1");
+  EXPECT_EQ(json_of(queued)["kind"], "robot_identification");
+  EXPECT_EQ(json_of(queued)["links"]["urdf"], "/v1/jobs/" + json_of(queued)["id"].get<std::string>() + "/urdf");
 
   const auto refused = [&](Json body, const std::string& field) {
     return expect_problem(post("/v1/identifications", body.dump()), 422, "INVALID_FIELD", field);
@@ -1418,7 +1488,7 @@ TEST_F(Routes, OnlyASucceededRobotIdentificationHasAnIdentifiedUrdf) {
   excitation.robot_id = "rb_1";
   excitation.result = R"({"dataset_id": "ds_made", "criterion": "condition"})";
   fake_.add_job(excitation);
-  JobInfo running = job_info("job_running", JobKind::identification, JobState::running);
+  JobInfo running = job_info("job_running", JobKind::robot_identification, JobState::running);
   running.robot_id = "rb_1";
   fake_.add_job(running);
   fake_.add_job(job_info("job_paper", JobKind::identification, JobState::succeeded));
@@ -1532,25 +1602,70 @@ TEST_F(RoutesWithToken, StaticFilesAreNotBehindTheTokenMetricsAre) {
 
 // A stored robot is parsed once per process: the same document, base and tip give the same parsed robot
 // (one object, not a new parse); another tip or document another one; a refusal is not kept.
-TEST(RobotCache, OneParsePerDocumentBaseAndTip) {
-  const RobotUpload upload{"two", kTwoJointUrdf, "", ""};
-  const std::shared_ptr<const ParsedRobot> first = parsed_robot(upload);
-  EXPECT_EQ(parsed_robot(upload).get(), first.get());
-  EXPECT_EQ(parsed_robot({"another name", kTwoJointUrdf, "", ""}).get(), first.get());  // the name is not the model's
-  const std::shared_ptr<const ParsedRobot> shorter = parsed_robot({"two", kTwoJointUrdf, "", "l1"});
+TEST(RobotCache, OneParsePerRobotIdBoundedAndShared) {
+  RobotCache cache(3, 1u << 20);
+  int loads = 0;
+  const auto robot = [](const std::string& id, const std::string& tip = "") {
+    RobotInfo info;
+    info.id = id;
+    info.name = "two";
+    info.tip = tip;
+    return info;
+  };
+  const auto document = [&loads](std::string urdf) {
+    return [&loads, urdf] {
+      ++loads;
+      return std::optional<std::string>(urdf);
+    };
+  };
+  const std::shared_ptr<const ParsedRobot> first = cache.get(robot("rb_1"), document(kTwoJointUrdf));
+  ASSERT_TRUE(first);
+  EXPECT_EQ(first->model.joint_count(), 2);
+  EXPECT_EQ(cache.get(robot("rb_1"), document(kTwoJointUrdf)).get(), first.get());
+  EXPECT_EQ(loads, 1);  // the document is read once, at the first use
+  const std::shared_ptr<const ParsedRobot> shorter = cache.get(robot("rb_2", "l1"), document(kTwoJointUrdf));
   EXPECT_NE(shorter.get(), first.get());
   EXPECT_EQ(shorter->model.joint_count(), 1);
-  EXPECT_EQ(first->model.joint_count(), 2);
-  const RobotUpload broken{"two", std::string(kTwoJointUrdf).substr(0, 60), "", ""};
-  EXPECT_THROW((void)parsed_robot(broken), InputError);
-  EXPECT_THROW((void)parsed_robot(broken), InputError);
-  // Beyond kRobotCacheEntries other robots, the first is parsed afresh (an equal model, a new object).
-  for (std::size_t i = 0; i < kRobotCacheEntries; ++i) {
-    (void)parsed_robot({"two", std::string(kTwoJointUrdf) + "<!-- " + std::to_string(i) + " -->", "", ""});
+  // A robot without its document (deleted meanwhile): none, nothing kept.
+  EXPECT_FALSE(cache.get(robot("rb_gone"), [] { return std::optional<std::string>(); }));
+  // A refusal throws each time and is not kept.
+  const std::string broken = std::string(kTwoJointUrdf).substr(0, 60);
+  EXPECT_THROW((void)cache.get(robot("rb_broken"), document(broken)), InputError);
+  EXPECT_THROW((void)cache.get(robot("rb_broken"), document(broken)), InputError);
+  EXPECT_EQ(cache.size(), 2u);
+  // One parsed at its upload is kept under its id: no document read.
+  const auto uploaded = std::make_shared<const ParsedRobot>(parse_robot({"two", kTwoJointUrdf, "", ""}));
+  cache.keep("rb_3", uploaded, std::string(kTwoJointUrdf).size());
+  loads = 0;
+  EXPECT_EQ(cache.get(robot("rb_3"), document(kTwoJointUrdf)).get(), uploaded.get());
+  EXPECT_EQ(loads, 0);
+  // Beyond its entries the least recently used goes (rb_2 here: rb_1 was used after it), and is parsed afresh.
+  EXPECT_EQ(cache.get(robot("rb_1"), document(kTwoJointUrdf)).get(), first.get());
+  (void)cache.get(robot("rb_4"), document(kTwoJointUrdf));
+  EXPECT_EQ(cache.size(), 3u);
+  EXPECT_EQ(cache.get(robot("rb_1"), document(kTwoJointUrdf)).get(), first.get());
+  const std::shared_ptr<const ParsedRobot> again = cache.get(robot("rb_2", "l1"), document(kTwoJointUrdf));
+  EXPECT_NE(again.get(), shorter.get());
+  EXPECT_EQ(again->model.joint_count(), 1);
+  // A document larger than the cache's bytes is parsed, not kept.
+  RobotCache small(4, 16);
+  EXPECT_TRUE(small.get(robot("rb_1"), document(kTwoJointUrdf)));
+  EXPECT_EQ(small.size(), 0u);
+}
+
+TEST(RobotCache, ThreadsAskingForOneRobotShareOneModel) {
+  RobotCache cache;
+  RobotInfo info;
+  info.id = "rb_1";
+  info.name = "two";
+  std::vector<std::shared_ptr<const ParsedRobot>> seen(8);
+  std::vector<std::thread> threads;
+  for (std::size_t i = 0; i < seen.size(); ++i) {
+    threads.emplace_back([&, i] { seen[i] = cache.get(info, [] { return std::optional<std::string>(kTwoJointUrdf); }); });
   }
-  const std::shared_ptr<const ParsedRobot> again = parsed_robot(upload);
-  EXPECT_NE(again.get(), first.get());
-  EXPECT_EQ(again->model.joint_count(), 2);
+  for (std::thread& thread : threads) thread.join();
+  for (const auto& parsed : seen) EXPECT_EQ(parsed.get(), seen.front().get());  // the first kept wins for all
+  EXPECT_EQ(cache.size(), 1u);
 }
 
 // The robot fit's friction view: on a noise-free run whose torque has viscous and Coulomb friction, what the
@@ -1594,7 +1709,7 @@ TEST_F(Routes, ARobotFitShowsWhatFrictionMustExplainOnTheFittedLaw) {
   Json point = Json::object();
   for (std::size_t i = 0; i < names.size(); ++i) point[names[i]] = pi[static_cast<Eigen::Index>(i)];
   const auto stored = [&](const std::string& id, const Json& friction, const Json& values) {
-    JobInfo job = job_info(id, JobKind::identification, JobState::succeeded);
+    JobInfo job = job_info(id, JobKind::robot_identification, JobState::succeeded);
     job.robot_id = "rb_1";
     job.dataset_id = "ds_run";
     job.request = Json{{"robot_id", "rb_1"}, {"dataset_id", "ds_run"}, {"friction", friction}}.dump();
@@ -1649,6 +1764,63 @@ TEST_F(Routes, ARobotFitShowsWhatFrictionMustExplainOnTheFittedLaw) {
   ASSERT_TRUE(without);
   ASSERT_EQ(without->status, 200) << without->body;
   EXPECT_FALSE(json_of(without).contains("friction"));
+}
+
+TEST(RobotResultDecoder, ReadsAStoredResultAndNamesWhatIsMissing) {
+  const robot::Model model = parse_robot({"two", kTwoJointUrdf, "", ""}).model;
+  const robot::ParameterLayout layout{true, false, false, false};  // viscous only
+  const std::vector<std::string> names = robot::standard_parameter_names(model, layout);
+  Json point = Json::object(), prior = Json::object();
+  for (std::size_t i = 0; i < names.size(); ++i) {
+    point[names[i]] = 0.5 + static_cast<double>(i);
+    prior[names[i]] = -1.0 - static_cast<double>(i);
+  }
+  const Json stored = {{"parameters", {{"friction", {"viscous"}}, {"armature", false}}},
+                       {"point", point},
+                       {"prior", prior},
+                       {"judge", {{"cutoff_hz", 4.0}, {"trim_seconds", 0.25}}},
+                       {"filters", {{"differentiation", {{"dt", 0.002}}}}},
+                       {"torque_joints", {"j2"}}};
+  const RobotResult result = decode_robot_result(model, stored);
+  EXPECT_TRUE(result.layout.viscous);
+  EXPECT_FALSE(result.layout.coulomb);
+  ASSERT_EQ(result.point.size(), static_cast<Eigen::Index>(names.size()));
+  EXPECT_EQ(result.point[1], 1.5);
+  EXPECT_EQ(result.prior[1], -2.0);
+  EXPECT_EQ(result.judge.cutoff_hz, 4.0);
+  EXPECT_EQ(result.judge.trim_seconds, 0.25);
+  EXPECT_EQ(result.dt, 0.002);
+  EXPECT_EQ(result.torque_joints, std::vector<int>{1});
+  // Without a prior: zeros.
+  Json without_prior = stored;
+  without_prior.erase("prior");
+  EXPECT_TRUE(decode_robot_result(model, without_prior).prior.isZero());
+  // What is missing or of the wrong type is named, as InputError("result").
+  const auto refused = [&](Json broken, const std::string& says) {
+    try {
+      (void)decode_robot_result(model, broken);
+      ADD_FAILURE() << "accepted " << broken.dump();
+    } catch (const InputError& error) {
+      EXPECT_EQ(error.field(), "result");
+      EXPECT_NE(std::string(error.what()).find(says), std::string::npos) << error.what();
+    }
+  };
+  Json no_judge = stored;
+  no_judge.erase("judge");
+  refused(no_judge, "judge");
+  Json short_point = stored;
+  short_point["point"].erase(names.back());
+  refused(short_point, "point." + names.back());
+  Json text_dt = stored;
+  text_dt["filters"]["differentiation"]["dt"] = "0.002";
+  refused(text_dt, "filters.differentiation.dt");
+  Json stranger = stored;
+  stranger["torque_joints"] = {"j9"};
+  refused(stranger, "a joint the robot does not have");
+  Json armature_text = stored;
+  armature_text["parameters"]["armature"] = "no";
+  refused(armature_text, "parameters");
+  refused(Json::array(), "not an object");
 }
 
 TEST_F(RoutesWithToken, BodilessCancelNeedsTheTokenToo) {

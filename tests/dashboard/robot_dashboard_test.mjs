@@ -127,6 +127,7 @@ try {
         JSON.stringify(job.request.friction) === JSON.stringify(["viscous", "coulomb"]),
         "the form asked for robot, the file as training run, the stored run as validation run, and viscous + Coulomb friction");
   check(await page.getAttribute("body", "data-job-state") === "succeeded" && job.state === "succeeded", `job ${jobId} reached succeeded on its page`);
+  check(job.kind === "robot_identification", "the job is a robot_identification");
   check((await page.textContent("#job-state")).trim() === "succeeded", "the state badge says succeeded");
   const result = job.result;
 
@@ -536,6 +537,13 @@ try {
   check(true, "... which opens the robots list");
   await page.goBack();
   await page.waitForSelector(`#jobs tr[data-job-id="${jobId}"]`);
+  await page.selectOption("#filter-kind", "robot_identification");
+  await page.waitForFunction((id) => {
+    const rows = [...document.querySelectorAll("#jobs tbody tr")];
+    return rows.length > 0 && rows.every((row) => row.querySelector("td:nth-child(2)")?.textContent === "robot_identification") &&
+           rows.some((row) => row.dataset.jobId === id);
+  }, jobId, { timeout: 10000 });
+  check(true, "the job list's kind filter finds the robot identification under robot_identification");
 
   check(consoleErrors.length === 0, `no console errors${consoleErrors.length ? ": " + consoleErrors.join(" | ") : ""}`);
 

@@ -49,6 +49,7 @@
 #include <string>
 #include <string_view>
 #include <thread>
+#include <utility>
 
 namespace {
 
@@ -129,13 +130,16 @@ class FreshService : public Service {
   DeleteOutcome delete_dataset(const Caller& caller, const std::string& id) override {
     return fake()->delete_dataset(caller, id);
   }
-  RobotCreated create_robot(const Caller& caller, const RobotUpload& upload, int joints, const std::string& description,
-                            const std::optional<IdempotencyKey>& key) override {
-    return fake()->create_robot(caller, upload, joints, description, key);
+  RobotCreated create_robot(const Caller& caller, const RobotUpload& upload, std::shared_ptr<const ParsedRobot> parsed,
+                            const std::string& description, const std::optional<IdempotencyKey>& key) override {
+    return fake()->create_robot(caller, upload, std::move(parsed), description, key);
   }
   std::optional<RobotInfo> robot(const Caller& caller, const std::string& id) override { return fake()->robot(caller, id); }
   std::optional<std::string> robot_urdf(const Caller& caller, const std::string& id) override {
     return fake()->robot_urdf(caller, id);
+  }
+  std::shared_ptr<const ParsedRobot> parsed_robot(const Caller& caller, const std::string& id) override {
+    return fake()->parsed_robot(caller, id);
   }
   Page<RobotInfo> robots(const Caller& caller, const PageRequest& page) override { return fake()->robots(caller, page); }
   DeleteOutcome delete_robot(const Caller& caller, const std::string& id) override {

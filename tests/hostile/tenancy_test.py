@@ -117,7 +117,8 @@ class TwoGroupsOneServer(unittest.TestCase):
     def test_bob_lists_none_of_alices_resources(self):
         alices = {self.job["id"], self.dataset["id"], self.robot["id"]}
         for path in ("/v1/jobs", "/v1/datasets", "/v1/robots", "/v1/jobs?state=queued",
-                     f"/v1/jobs?robot_id={self.robot['id']}", "/v1/jobs?kind=identification"):
+                     f"/v1/jobs?robot_id={self.robot['id']}", "/v1/jobs?kind=identification",
+                     "/v1/jobs?kind=robot_identification"):
             items = self.call("GET", path, BOB, expect=200)["items"]
             self.assertFalse(alices & {item["id"] for item in items}, path)
             self.assertTrue(all(item["owner"] == "bob" for item in items), path)

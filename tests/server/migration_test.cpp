@@ -1,6 +1,7 @@
 // migration_test.cpp — a database written by the last release (manipid 0.1.0, schema version 1) opens
 // with today's schema and keeps every job, dataset, history, estimate and idempotency key; its rows
-// belong to no owner (the admin's to see, no named token's).
+// belong to no owner (the admin's to see, no named token's). And a version 5 database's robot
+// identifications (identification jobs that name a robot) read as robot_identification after 5 → 6.
 //
 // tests/server/data/manipid-0.1.0.db was made by that release's own binary
 // (tests/server/data/make_release_0.1.0_db.sh); this test reads the file's rows with plain SQL first, opens a
@@ -16,6 +17,7 @@
 #include <cstdlib>
 #include <filesystem>
 #include <map>
+#include <set>
 #include <string>
 #include <vector>
 
@@ -133,6 +135,98 @@ TEST_F(ReleaseDatabase, OpensMigratedWithEveryRowKept) {
   EXPECT_EQ(query(path_, "SELECT job_id, name, value, std_error FROM estimates ORDER BY job_id, name"), estimates_before);
   EXPECT_EQ(query(path_, "SELECT id, name, samples, joints, dt, hex(t), hex(q), hex(tau) FROM datasets ORDER BY seq LIMIT 2"),
             datasets_before);
+}
+
+/// Runs SQL on a database file (the rows a test puts in a database of an older schema).
+void execute_sql(const std::string& path, const std::string& sql) {
+  sqlite3* database = nullptr;
+  ASSERT_EQ(sqlite3_open_v2(path.c_str(), &database, SQLITE_OPEN_READWRITE, nullptr), SQLITE_OK);
+  char* message = nullptr;
+  EXPECT_EQ(sqlite3_exec(database, sql.c_str(), nullptr, nullptr, &message), SQLITE_OK) << (message ? message : "");
+  sqlite3_free(message);
+  sqlite3_close(database);
+}
+
+std::set<std::string> job_ids(const api::Page<api::JobInfo>& page) {
+  std::set<std::string> ids;
+  for (const api::JobInfo& job : page.items) ids.insert(job.id);
+  return ids;
+}
+
+TEST_F(ReleaseDatabase, VersionFiveRobotIdentificationsBecomeTheirOwnKind) {
+  const std::string path = (directory_ / "version5.db").string();
+  {
+    sqlite::Connection connection(path);
+    sqlite::prepare_database(connection, 5);
+  }
+  ASSERT_EQ(query(path, "PRAGMA user_version")[0][0], "5");
+  const std::string at = "2026-01-01T00:00:00.000Z";
+  execute_sql(path,
+              "INSERT INTO robots (id, name, created_at, joints, summary, urdf) VALUES ('rb_1', 'arm', '" + at +
+                  "', 2, '{}', '<robot name=\"arm\"/>');"
+                  "INSERT INTO jobs (id, kind, state, request, dataset_id, robot_id, validation_dataset_id, created_at, "
+                  "result, owner) VALUES "
+                  "('job_paper', 'identification', 'succeeded', '{\"dataset_id\": \"ds_1\"}', 'ds_1', NULL, NULL, '" +
+                  at + "', '{\"point\": {}}', ''),"
+                  "('job_robot', 'identification', 'succeeded', '{\"robot_id\": \"rb_1\"}', 'ds_1', 'rb_1', 'ds_2', '" +
+                  at + "', '{\"base_parameters\": []}', 'alice'),"
+                  "('job_waiting', 'identification', 'queued', '{\"robot_id\": \"rb_1\"}', 'ds_1', 'rb_1', NULL, '" + at +
+                  "', NULL, ''),"
+                  "('job_design', 'excitation', 'succeeded', '{\"robot_id\": \"rb_1\"}', 'ds_3', 'rb_1', NULL, '" + at +
+                  "', '{}', ''),"
+                  "('job_gone', 'simulation', 'succeeded', '{}', NULL, NULL, NULL, '" + at + "', NULL, '');"
+                  "INSERT INTO estimates (job_id, name, value, std_error) VALUES ('job_robot', 'm1', 1.5, 0.1);"
+                  "DELETE FROM jobs WHERE id = 'job_gone';");
+  const auto jobs_before = query(path, "SELECT seq, id, state, request, dataset_id, robot_id, validation_dataset_id, "
+                                       "created_at, result, owner FROM jobs ORDER BY seq");
+  const auto estimates_before = query(path, "SELECT job_id, name, value, std_error FROM estimates ORDER BY job_id, name");
+  const long highest_seq = std::stol(query(path, "SELECT seq FROM sqlite_sequence WHERE name = 'jobs'")[0][0]);
+
+  {
+    const auto store = sqlite::open_store(path);
+    const std::map<std::string, api::JobKind> kinds = {{"job_paper", api::JobKind::identification},
+                                                       {"job_robot", api::JobKind::robot_identification},
+                                                       {"job_waiting", api::JobKind::robot_identification},
+                                                       {"job_design", api::JobKind::excitation}};
+    for (const auto& [id, kind] : kinds) {
+      const auto job = store->find_job(api::all_owners, id);
+      ASSERT_TRUE(job) << id;
+      EXPECT_EQ(job->kind, kind) << id;
+    }
+    api::JobFilter robots;
+    robots.kind = api::JobKind::robot_identification;
+    EXPECT_EQ(job_ids(store->list_jobs(api::all_owners, robots, {})), (std::set<std::string>{"job_robot", "job_waiting"}));
+    api::JobFilter papers;
+    papers.kind = api::JobKind::identification;
+    EXPECT_EQ(job_ids(store->list_jobs(api::all_owners, papers, {})), std::set<std::string>{"job_paper"});
+    EXPECT_EQ(job_ids(store->list_jobs(api::OwnerScope("alice"), robots, {})), std::set<std::string>{"job_robot"});
+    // The queued one runs as its kind: a worker claims it as robot_identification.
+    const auto claimed = store->claim_next_job("test:1", std::chrono::seconds(30));
+    ASSERT_TRUE(claimed);
+    EXPECT_EQ(claimed->id, "job_waiting");
+    EXPECT_EQ(claimed->kind, api::JobKind::robot_identification);
+    // The AUTOINCREMENT counter came along: a new job never takes the deleted one's seq.
+    const std::string added = store->submit_job({api::JobKind::robot_identification, "{}", "", "rb_1", "", ""}, std::nullopt, 0).job.id;
+    EXPECT_GT(std::stol(query(path, "SELECT seq FROM jobs WHERE id = '" + added + "'")[0][0]), highest_seq);
+  }
+
+  EXPECT_EQ(query(path, "PRAGMA user_version")[0][0], "6");
+  EXPECT_EQ(query(path, "PRAGMA integrity_check")[0][0], "ok");
+  EXPECT_TRUE(query(path, "PRAGMA foreign_key_check").empty());
+  auto jobs_after = query(path, "SELECT seq, id, state, request, dataset_id, robot_id, validation_dataset_id, created_at, "
+                                "result, owner FROM jobs ORDER BY seq");
+  jobs_after.pop_back();  // the job added above
+  for (auto& row : jobs_after) {
+    if (row[1] == "job_waiting") row[2] = "queued";  // claimed above
+  }
+  EXPECT_EQ(jobs_after, jobs_before);
+  EXPECT_EQ(query(path, "SELECT job_id, name, value, std_error FROM estimates ORDER BY job_id, name"), estimates_before);
+  EXPECT_EQ(query(path, "SELECT name FROM sqlite_master WHERE type = 'index' AND tbl_name = 'jobs' AND sql IS NOT NULL "
+                        "ORDER BY name"),
+            (std::vector<std::vector<std::string>>{
+                {"jobs_by_kind"}, {"jobs_by_lease"}, {"jobs_by_owner"}, {"jobs_by_robot"}, {"jobs_by_state"}}));
+  // The two migrated and the one added.
+  EXPECT_EQ(query(path, "SELECT count(*) FROM jobs WHERE kind = 'robot_identification'")[0][0], "3");
 }
 
 }  // namespace

@@ -21,6 +21,7 @@
 #include <functional>
 #include <ostream>
 #include <limits>
+#include <map>
 #include <mutex>
 #include <random>
 #include <set>
@@ -1431,6 +1432,56 @@ TEST_P(StoreContract, APostgresDatabaseFromBeforeOwnersOpensWithItsRowsTheAdmins
   NewJob alices = identification_job();
   alices.owner = "alice";
   EXPECT_EQ(store_->submit_job(alices, key, 0).status, SubmitStatus::created);  // hers is another key
+}
+
+// Every kind is stored and read back as itself, and listed by it.
+TEST_P(StoreContract, EveryKindIsStoredAndFilteredAsItself) {
+  const std::string robot = store_->insert_robot(some_robot(), std::nullopt).robot.id;
+  std::map<api::JobKind, std::string> ids;
+  for (const api::JobKind kind : api::kJobKinds) {
+    NewJob job = identification_job();
+    job.kind = kind;
+    if (kind == api::JobKind::excitation || kind == api::JobKind::robot_identification) job.robot_id = robot;
+    ids[kind] = submit(job);
+    EXPECT_EQ(store_->find_job(api::all_owners, ids[kind])->kind, kind) << api::to_string(kind);
+  }
+  for (const api::JobKind kind : api::kJobKinds) {
+    const auto page = store_->list_jobs(api::all_owners, {.state = {}, .kind = kind, .robot_id = {}}, {});
+    EXPECT_EQ(ids_of(page), std::set<std::string>{ids[kind]}) << api::to_string(kind);
+  }
+  const auto on_robot = store_->list_jobs(
+      api::all_owners, {.state = {}, .kind = api::JobKind::robot_identification, .robot_id = robot}, {});
+  EXPECT_EQ(ids_of(on_robot), std::set<std::string>{ids[api::JobKind::robot_identification]});
+}
+
+// A PostgreSQL database of schema version 2 (made here by putting back its kinds) opens migrated: its
+// identifications that name a robot are robot_identification, the others stay identification.
+TEST_P(StoreContract, APostgresVersionTwoRobotIdentificationBecomesItsOwnKind) {
+  if (GetParam().name != "postgres") GTEST_SKIP() << "SQLite's migrations: migration_test.cpp";
+  const std::string robot = store_->insert_robot(some_robot(), std::nullopt).robot.id;
+  NewJob on_robot = identification_job(R"({"robot_id": "rb"})");
+  on_robot.kind = api::JobKind::robot_identification;
+  on_robot.robot_id = robot;
+  const std::string robot_job = submit(on_robot);
+  const std::string paper_job = submit(identification_job());
+  NewJob design = identification_job();
+  design.kind = api::JobKind::excitation;
+  design.robot_id = robot;
+  const std::string design_job = submit(design);
+  store_.reset();
+  postgres_admin(
+      "UPDATE jobs SET kind = 'identification' WHERE kind = 'robot_identification'; "
+      "ALTER TABLE jobs DROP CONSTRAINT jobs_kind_check; "
+      "ALTER TABLE jobs ADD CONSTRAINT jobs_kind_check CHECK (kind IN ('simulation', 'identification', 'excitation')); "
+      "DELETE FROM manipid_schema WHERE version > 2",
+      postgres_database(directory_));
+  reopen();
+  EXPECT_EQ(store_->find_job(api::all_owners, robot_job)->kind, api::JobKind::robot_identification);
+  EXPECT_EQ(store_->find_job(api::all_owners, paper_job)->kind, api::JobKind::identification);
+  EXPECT_EQ(store_->find_job(api::all_owners, design_job)->kind, api::JobKind::excitation);
+  EXPECT_EQ(ids_of(store_->list_jobs(api::all_owners, {.state = {}, .kind = api::JobKind::robot_identification, .robot_id = {}}, {})),
+            std::set<std::string>{robot_job});
+  EXPECT_FALSE(submit(on_robot).empty());  // the new CHECK takes the kind in
 }
 
 TEST(IdempotencyRule, ReplaysRefusesOrGoesOn) {

@@ -145,8 +145,15 @@ class RobotThroughTheService(unittest.TestCase):
                                                 "validation_dataset_id": second["id"], "friction": ["viscous", "coulomb"],
                                                 "physical": True})
         self.assertEqual(job["robot_id"], robot["id"])
+        self.assertEqual(job["kind"], "robot_identification")
         job = self.server.wait_job(job["id"])
         self.assertEqual(job["state"], "succeeded", job)
+        # Listed under its own kind (and its robot's), not among the paper's identifications.
+        for query, listed in ((f"kind=robot_identification&robot_id={robot['id']}", True), ("kind=robot_identification", True),
+                              ("kind=identification", False), (f"robot_id={robot['id']}", True)):
+            status, _, page = self.server.request("GET", "/v1/jobs?" + query)
+            self.assertEqual(status, 200, page)
+            self.assertEqual(job["id"] in [item["id"] for item in page["items"]], listed, query)
         result = job["result"]
         self.assertEqual(len(result["base_parameters"]), 57)  # 43 inertial + 14 friction (viscous, Coulomb)
         # Each base parameter is its combination of the point's standard parameters, in full precision.

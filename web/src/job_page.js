@@ -4,7 +4,7 @@
 // live while it runs; then the result table, correlation heat map, identifiability findings,
 // and the filtered measured torque beside the model torque at the estimate with the residual;
 // for every job with data, the measured angles (with the reference) and torques (Fig. 2).
-// A job on a URDF robot (robot_id: an identification or an excitation) shares the header, the
+// A job on a URDF robot (a robot_identification or an excitation) shares the header, the
 // live state and Cancel; its sections are robot_job.js's.
 import { api } from "./api.js";
 import { lineChart, positive, PALETTE } from "./charts.js";
@@ -44,11 +44,11 @@ async function trueValues(job) {
 }
 
 function summaryList(job) {
-  const kind = job.robot_id && job.kind === "identification" ? "identification of a URDF robot's base parameters" : job.kind;
+  const kind = job.kind === "robot_identification" ? "identification of a URDF robot's base parameters" : job.kind;
   const rows = [["Kind", kind], ["Created", when(job.created_at)], ["Started", when(job.started_at)],
                 ["Finished", when(job.finished_at)]];
   if (job.robot_id) rows.push(["Robot", h("a", { href: robotPath(job.robot_id) }, job.robot_id)]);
-  if (job.kind === "identification" && !job.robot_id) {
+  if (job.kind === "identification") {
     rows.push(["Evaluations", String(job.progress.evaluations)], ["Best cost", number(job.progress.best_cost, 6)]);
   }
   if (job.dataset_id) rows.push(["Dataset", h("a", { href: `/v1/datasets/${job.dataset_id}/data?format=csv` }, `${job.dataset_id} (CSV)`)]);
@@ -246,7 +246,7 @@ async function dataSection(parent, datasetId) {
 
 export async function jobView(main, id) {
   let job = await api(`/v1/jobs/${id}`);
-  const onRobot = Boolean(job.robot_id);  // the paper's pictures (history, true values) are the preset's
+  const onRobot = job.kind === "robot_identification" || job.kind === "excitation";  // the paper's pictures (history, true values) are the preset's
   const truth = onRobot ? null : await trueValues(job);
   const badge = h("span", { id: "job-state" }, stateBadge(job.state));
   const summary = h("div", {}, summaryList(job));
@@ -265,7 +265,7 @@ export async function jobView(main, id) {
   });
 
   let history = null;
-  if (job.kind === "identification" && !onRobot) {
+  if (job.kind === "identification") {
     const names = job.request.free || Object.keys((await api(`/v1/presets/${job.request.preset || "cedro2009"}`)).true_parameters);
     history = new HistoryCharts(body, names, truth);
     await history.refresh(id);
@@ -301,7 +301,7 @@ export async function jobView(main, id) {
     }
   };
   if (onRobot) {
-    if (job.kind === "identification" && job.result) await robotIdentificationSections(body, job, drawOrExplain);
+    if (job.kind === "robot_identification" && job.result) await robotIdentificationSections(body, job, drawOrExplain);
     if (job.kind === "excitation" && job.result) await excitationSections(body, job, drawOrExplain);
     document.body.dataset.ready = "true";
     return;

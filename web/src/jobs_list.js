@@ -94,7 +94,7 @@ function paperForm(preset, navigate) {
 
 function jobRow(job, robotNames) {
   const result = job.result || {};
-  const paper = job.kind === "identification" && !job.robot_id;  // cost and evaluations: the paper's method's
+  const paper = job.kind === "identification";  // cost and evaluations: the paper's method's (not a robot_identification's)
   const robotName = robotNames.get(job.robot_id);
   return h("tr", { dataset: { jobId: job.id } },
     h("td", {}, h("a", { href: `/jobs/${job.id}` }, job.id)),
@@ -126,7 +126,7 @@ async function robotNames() {
 export async function jobsListView(main, navigate) {
   const [preset, names] = await Promise.all([api("/v1/presets/cedro2009"), robotNames()]);
   const stateFilter = select("filter-state", "state", ["any", "queued", "running", "succeeded", "failed", "cancelled"], "any");
-  const kindFilter = select("filter-kind", "kind", ["any", "identification", "simulation", "excitation"], "any");
+  const kindFilter = select("filter-kind", "kind", ["any", "identification", "robot_identification", "simulation", "excitation"], "any");
   const body = h("tbody");
   const more = h("button", { type: "button", id: "jobs-more", hidden: true }, "Older jobs");
   const table = h("table", { id: "jobs", class: "data" },

@@ -14,6 +14,7 @@
 
 #include <nlohmann/json.hpp>
 
+#include <functional>
 #include <optional>
 
 #include "http/route_state.h"  // includes httplib.h, after the manipid headers
@@ -36,6 +37,10 @@ void list_presets(RouteState& state, const httplib::Request& request, httplib::R
 void get_preset(RouteState& state, const httplib::Request& request, httplib::Response& response);
 void submit_simulation(RouteState& state, const httplib::Request& request, httplib::Response& response);
 void submit_identification(RouteState& state, const httplib::Request& request, httplib::Response& response);
+/// A submission of the kind `kind_of` says the body asks for: checked by that kind's entry of job_kinds.h against
+/// the caller's datasets and robots, then queued; 202 with the job (Location, Idempotent-Replayed on a replay).
+void submit_job(RouteState& state, const httplib::Request& request, httplib::Response& response,
+                const std::function<JobKind(const nlohmann::json& body)>& kind_of);
 
 // ---- robots.cpp: /v1/robots, /v1/excitations ------------------------------------------------
 
@@ -48,10 +53,6 @@ void submit_excitation(RouteState& state, const httplib::Request& request, httpl
 /// InputError-like ApiError (422, `field`) when there is no such robot (or it is another owner's).
 std::shared_ptr<const ParsedRobot> stored_robot(RouteState& state, const Caller& caller, const std::string& id,
                                                 const std::string& field);
-/// /v1/identifications with a robot_id (submissions.cpp hands those over): checked against the stored
-/// robot and datasets, then queued.
-void submit_robot_identification(RouteState& state, const Caller& caller, const nlohmann::json& body,
-                                 const std::optional<IdempotencyKey>& key, httplib::Response& response);
 
 // ---- jobs.cpp: /v1/jobs ------------------------------------------------------------------
 

@@ -1,6 +1,6 @@
 // jobs.cpp — the /v1/jobs routes: list, state (long-poll, ETag), cost history (pages, CSV,
 // thinned for drawing), torque fit, cancel, delete.
-#include "manipid/api/plots.h"
+#include "manipid/api/job_kinds.h"
 #include "manipid/api/problem.h"
 #include "manipid/api/resources_json.h"
 #include "manipid/api/robot_json.h"
@@ -84,7 +84,8 @@ void list_jobs(RouteState& state, const httplib::Request& request, httplib::Resp
     filter.kind = parse_job_kind(request.get_param_value("kind"));
     if (!filter.kind) {
       throw ApiError(ProblemKind::invalid_field,
-                     "kind must be simulation, identification or excitation, got '" + request.get_param_value("kind") + "'",
+                     "kind must be simulation, identification, robot_identification or excitation, got '" +
+                         request.get_param_value("kind") + "'",
                      "kind");
     }
   }
@@ -155,10 +156,28 @@ namespace {
 
 /// The robot a robot identification ran on, parsed as the job parsed it.
 std::shared_ptr<const ParsedRobot> job_robot(RouteState& state, const Caller& caller, const JobInfo& job) {
-  const auto robot = state.service.robot(caller, job.robot_id);
-  const auto urdf = state.service.robot_urdf(caller, job.robot_id);
-  if (!robot || !urdf) throw ApiError(ProblemKind::conflict, "the robot of job " + job.id + " was deleted", "robot_id");
-  return parsed_robot({robot->name, *urdf, robot->base, robot->tip});
+  std::shared_ptr<const ParsedRobot> parsed = state.service.parsed_robot(caller, job.robot_id);
+  if (!parsed) throw ApiError(ProblemKind::conflict, "the robot of job " + job.id + " was deleted", "robot_id");
+  return parsed;
+}
+
+}  // namespace
+
+namespace {
+
+/// The fit of `job` on `data` by its kind's entry (job_kinds.h): its robot parsed as the job parsed it, when it
+/// has one. A stored result that does not fit the request and data is a conflict, not the server's fault.
+nlohmann::ordered_json fit_of(RouteState& state, const Caller& caller, const JobInfo& job, const Trajectory& data,
+                              long max_points, bool validation) {
+  const JobKindHandler& handler = job_kind_handler(job.kind);
+  try {
+    const std::shared_ptr<const ParsedRobot> robot = handler.on_robot ? job_robot(state, caller, job) : nullptr;
+    return handler.fit({job, data, max_points, validation, robot ? &robot->model : nullptr});
+  } catch (const nlohmann::json::exception&) {
+    throw ApiError(ProblemKind::conflict, "job " + job.id + " has no usable stored result", "id");
+  } catch (const InputError&) {
+    throw ApiError(ProblemKind::conflict, "job " + job.id + " has no usable stored result", "id");
+  }
 }
 
 }  // namespace
@@ -169,10 +188,9 @@ void job_fit(RouteState& state, const httplib::Request& request, httplib::Respon
   const long max_points = max_points_parameter(request, 2000);
   const auto job = state.service.job(caller, id);
   if (!job) throw ApiError(ProblemKind::not_found, "no job " + id, "id");
-  if (job->kind != JobKind::identification) {
-    const std::string kind = to_string(job->kind);
-    const char* article = kind.front() == 'e' ? "an " : "a ";
-    throw ApiError(ProblemKind::conflict, "job " + id + " is " + article + kind + "; only identifications have a fit", "id");
+  if (!job_kind_handler(job->kind).has_fit) {
+    throw ApiError(ProblemKind::conflict, "job " + id + " is " + kind_with_article(job->kind) + "; only identifications have a fit",
+                   "id");
   }
   if (job->result.empty()) {
     throw ApiError(ProblemKind::conflict,
@@ -180,18 +198,7 @@ void job_fit(RouteState& state, const httplib::Request& request, httplib::Respon
   }
   const auto data = state.service.dataset_data(caller, job->dataset_id);
   if (!data) throw ApiError(ProblemKind::conflict, "the dataset of job " + id + " was deleted", "dataset_id");
-  try {
-    if (!job->robot_id.empty()) {
-      send_json(response, 200,
-                robot_fit_to_json(job_robot(state, caller, *job)->model, job->request, job->result, *data, max_points, false));
-      return;
-    }
-    send_json(response, 200, torque_fit_to_json(job->request, job->result, *data, max_points));
-  } catch (const nlohmann::json::exception&) {
-    throw ApiError(ProblemKind::conflict, "job " + id + " has no usable stored result", "id");
-  } catch (const InputError&) {
-    throw ApiError(ProblemKind::conflict, "job " + id + " has no usable stored result", "id");
-  }
+  send_json(response, 200, fit_of(state, caller, *job, *data, max_points, false));
 }
 
 void job_validation(RouteState& state, const httplib::Request& request, httplib::Response& response) {
@@ -200,7 +207,7 @@ void job_validation(RouteState& state, const httplib::Request& request, httplib:
   const long max_points = max_points_parameter(request, 2000);
   const auto job = state.service.job(caller, id);
   if (!job) throw ApiError(ProblemKind::not_found, "no job " + id, "id");
-  if (job->robot_id.empty() || job->validation_dataset_id.empty()) {
+  if (!job_kind_handler(job->kind).has_validation || job->validation_dataset_id.empty()) {
     throw ApiError(ProblemKind::conflict,
                    "job " + id + " has no validation run: only a robot identification with a validation_dataset_id has one",
                    "id");
@@ -212,14 +219,7 @@ void job_validation(RouteState& state, const httplib::Request& request, httplib:
   if (!data) {
     throw ApiError(ProblemKind::conflict, "the validation dataset of job " + id + " was deleted", "validation_dataset_id");
   }
-  try {
-    send_json(response, 200,
-              robot_fit_to_json(job_robot(state, caller, *job)->model, job->request, job->result, *data, max_points, true));
-  } catch (const nlohmann::json::exception&) {
-    throw ApiError(ProblemKind::conflict, "job " + id + " has no usable stored result", "id");
-  } catch (const InputError&) {
-    throw ApiError(ProblemKind::conflict, "job " + id + " has no usable stored result", "id");
-  }
+  send_json(response, 200, fit_of(state, caller, *job, *data, max_points, true));
 }
 
 void job_urdf(RouteState& state, const httplib::Request& request, httplib::Response& response) {
@@ -227,13 +227,13 @@ void job_urdf(RouteState& state, const httplib::Request& request, httplib::Respo
   const std::string id = request.matches[1];
   const auto job = state.service.job(caller, id);
   if (!job) throw ApiError(ProblemKind::not_found, "no job " + id, "id");
-  if (job->kind != JobKind::identification || job->robot_id.empty() || job->state != JobState::succeeded) {
+  if (!job_kind_handler(job->kind).writes_urdf || job->state != JobState::succeeded) {
     throw ApiError(ProblemKind::conflict, "job " + id + " is not a succeeded robot identification: no estimate to write", "id");
   }
   const auto robot = state.service.robot(caller, job->robot_id);
   const auto urdf = state.service.robot_urdf(caller, job->robot_id);
   if (!robot || !urdf) throw ApiError(ProblemKind::conflict, "the robot of job " + id + " was deleted", "robot_id");
-  const std::shared_ptr<const ParsedRobot> stored = parsed_robot({robot->name, *urdf, robot->base, robot->tip});
+  const std::shared_ptr<const ParsedRobot> stored = job_robot(state, caller, *job);
   const ParsedRobot& parsed = *stored;
   // The result's point names its layout (fv…, fc…, fo…, Ia…).
   const nlohmann::json result = nlohmann::json::parse(job->result);

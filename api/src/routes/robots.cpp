@@ -13,10 +13,9 @@ namespace manipid::api::http {
 
 std::shared_ptr<const ParsedRobot> stored_robot(RouteState& state, const Caller& caller, const std::string& id,
                                                 const std::string& field) {
-  const auto robot = state.service.robot(caller, id);
-  const auto urdf = state.service.robot_urdf(caller, id);
-  if (!robot || !urdf) throw ApiError(ProblemKind::invalid_field, "no robot " + id, field);
-  return parsed_robot({robot->name, *urdf, robot->base, robot->tip});
+  std::shared_ptr<const ParsedRobot> parsed = state.service.parsed_robot(caller, id);
+  if (!parsed) throw ApiError(ProblemKind::invalid_field, "no robot " + id, field);
+  return parsed;
 }
 
 void create_robot(RouteState& state, const httplib::Request& request, httplib::Response& response) {
@@ -41,12 +40,10 @@ void create_robot(RouteState& state, const httplib::Request& request, httplib::R
   } else {
     upload = robot_from_json(json_body(request));  // refuses other media types with 415
   }
-  const std::shared_ptr<const ParsedRobot> parsed_upload = parsed_robot(upload);  // kept for its jobs
-  const ParsedRobot& parsed = *parsed_upload;
-  if (upload.name.empty()) upload.name = parsed.model.name;
-  const std::string description = robot_description(parsed.model, parsed.warnings).dump();
-  const RobotCreated created =
-      state.service.create_robot(caller, upload, parsed.model.joint_count(), description, key);
+  auto parsed = std::make_shared<const ParsedRobot>(parse_robot(upload));  // kept for its jobs (robot_cache.h)
+  if (upload.name.empty()) upload.name = parsed->model.name;
+  const std::string description = robot_description(parsed->model, parsed->warnings).dump();
+  const RobotCreated created = state.service.create_robot(caller, upload, parsed, description, key);
   response.set_header("Location", "/v1/robots/" + created.robot.id);
   if (created.replayed) response.set_header("Idempotent-Replayed", "true");
   send_json(response, 201, robot_to_json(created.robot));
@@ -93,46 +90,7 @@ void delete_robot(RouteState& state, const httplib::Request& request, httplib::R
 }
 
 void submit_excitation(RouteState& state, const httplib::Request& request, httplib::Response& response) {
-  const Caller caller = caller_of(state, request);
-  const auto key = idempotency_key(request);
-  const nlohmann::json body = json_body(request);
-  const ExcitationSpec spec = excitation_from_json(body);
-  check_excitation(spec, stored_robot(state, caller, spec.robot_id, "robot_id")->model);
-  const SubmitResult submitted =
-      state.service.submit(caller, {JobKind::excitation, body.dump(), "", spec.robot_id, ""}, key);
-  response.set_header("Location", "/v1/jobs/" + submitted.job.id);
-  if (submitted.replayed) response.set_header("Idempotent-Replayed", "true");
-  send_job(response, 202, submitted.job);
-}
-
-void submit_robot_identification(RouteState& state, const Caller& caller, const nlohmann::json& body,
-                                 const std::optional<IdempotencyKey>& key, httplib::Response& response) {
-  const RobotIdentificationSpec spec = robot_identification_from_json(body);
-  const std::shared_ptr<const ParsedRobot> stored = stored_robot(state, caller, spec.robot_id, "robot_id");
-  const ParsedRobot& robot = *stored;
-  const int joints = robot.model.joint_count();
-  for (const auto& [ids, field] : {std::pair{spec.dataset_ids, std::string("dataset_id")},
-                                   std::pair{spec.validation_dataset_ids, std::string("validation_dataset_id")}}) {
-    for (std::size_t i = 0; i < ids.size(); ++i) {
-      const std::string where = ids.size() > 1 ? field + "s[" + std::to_string(i) + "]" : field;
-      const auto dataset = state.service.dataset(caller, ids[i]);
-      if (!dataset) throw ApiError(ProblemKind::invalid_field, "no dataset " + ids[i], where);
-      check_robot_data(joints, robot.model.name, dataset->joints, dataset->has_torque, where);
-    }
-  }
-  for (int k : spec.options.torque_joints) {
-    if (k >= joints) {
-      throw ApiError(ProblemKind::invalid_field,
-                     "torque_joints names joint " + std::to_string(k + 1) + "; the robot " + robot.model.name + " has " +
-                         std::to_string(joints),
-                     "torque_joints");
-    }
-  }
-  const SubmitResult submitted = state.service.submit(
-      caller, {JobKind::identification, body.dump(), spec.dataset_id, spec.robot_id, spec.validation_dataset_id}, key);
-  response.set_header("Location", "/v1/jobs/" + submitted.job.id);
-  if (submitted.replayed) response.set_header("Idempotent-Replayed", "true");
-  send_job(response, 202, submitted.job);
+  submit_job(state, request, response, [](const nlohmann::json&) { return JobKind::excitation; });
 }
 
 }  // namespace manipid::api::http

@@ -1,6 +1,7 @@
-// submissions.cpp — what starts jobs: the robot presets a request starts from (/v1/presets),
-// and the two submissions, /v1/simulations and /v1/identifications, validated in full before
-// anything is queued.
+// submissions.cpp — what starts jobs: the robot presets a request starts from (/v1/presets), and every
+// submission (/v1/simulations, /v1/identifications, /v1/excitations), validated in full by its kind's entry of
+// job_kinds.h before anything is queued.
+#include "manipid/api/job_kinds.h"
 #include "manipid/api/problem.h"
 #include "manipid/api/requests.h"
 #include "manipid/api/resources_json.h"
@@ -10,52 +11,30 @@
 #include "http/responses.h"
 #include "routes/handlers.h"
 
-#include <cmath>
 
 namespace manipid::api::http {
-namespace {
 
-void submit(RouteState& state, const httplib::Request& request, httplib::Response& response, JobKind kind) {
+void submit_job(RouteState& state, const httplib::Request& request, httplib::Response& response,
+                const std::function<JobKind(const nlohmann::json& body)>& kind_of) {
   const Caller caller = caller_of(state, request);
   const auto key = idempotency_key(request);
   const nlohmann::json body = json_body(request);
-  std::string dataset_id;
-  if (kind == JobKind::simulation) {
-    (void)simulation_from_json(body);  // validates; the worker parses the stored text again
-  } else {
-    const IdentificationSpec spec = identification_from_json(body);
-    if (spec.simulation) {
-      const SimulationOptions& run = spec.simulation->preset.simulation;
-      const int samples = static_cast<int>(std::floor(run.duration / run.dt + 1e-9)) + 1;
-      check_against_data(spec, spec.simulation->preset.model.joint_count(), samples, true, true);
-    } else {
-      dataset_id = spec.dataset_id;
-      const auto dataset = state.service.dataset(caller, dataset_id);
-      if (!dataset) throw ApiError(ProblemKind::invalid_field, "no dataset " + dataset_id, "dataset_id");
-      check_against_data(spec, dataset->joints, dataset->samples, dataset->has_torque, dataset->has_reference);
-    }
-  }
-  const SubmitResult submitted = state.service.submit(caller, {kind, body.dump(), dataset_id, "", ""}, key);
+  const SubmissionLookups lookups{
+      [&](const std::string& id) { return state.service.dataset(caller, id); },
+      [&](const std::string& id, const std::string& field) { return stored_robot(state, caller, id, field); }};
+  const JobSubmission submission = job_kind_handler(kind_of(body)).submission(body, lookups);
+  const SubmitResult submitted = state.service.submit(caller, submission, key);
   response.set_header("Location", "/v1/jobs/" + submitted.job.id);
   if (submitted.replayed) response.set_header("Idempotent-Replayed", "true");
   send_job(response, 202, submitted.job);
 }
 
-}  // namespace
-
 void submit_simulation(RouteState& state, const httplib::Request& request, httplib::Response& response) {
-  submit(state, request, response, JobKind::simulation);
+  submit_job(state, request, response, [](const nlohmann::json&) { return JobKind::simulation; });
 }
 
 void submit_identification(RouteState& state, const httplib::Request& request, httplib::Response& response) {
-  const Caller caller = caller_of(state, request);
-  const auto key = idempotency_key(request);
-  const nlohmann::json body = json_body(request);
-  if (names_a_robot(body)) {
-    submit_robot_identification(state, caller, body, key, response);
-    return;
-  }
-  submit(state, request, response, JobKind::identification);
+  submit_job(state, request, response, identification_kind);  // the preset's, or a stored robot's
 }
 
 void list_presets(RouteState&, const httplib::Request&, httplib::Response& response) {

@@ -115,8 +115,9 @@ class History(NamedTuple):
 
 
 class Job:
-    """A simulation, identification or excitation job. `data` is the JSON last seen from the
-    server; `refresh()` fetches it again, `wait()` long-polls until the job ends."""
+    """A simulation, identification (the paper's preset), robot_identification (a URDF robot's) or
+    excitation job. `data` is the JSON last seen from the server; `refresh()` fetches it again,
+    `wait()` long-polls until the job ends."""
 
     def __init__(self, client: "Client", data: Mapping[str, Any]) -> None:
         self.client = client
@@ -134,6 +135,8 @@ class Job:
 
     @property
     def kind(self) -> Optional[str]:
+        """simulation, identification (the paper's preset), robot_identification (submitted with a
+        robot: a URDF robot's base parameters) or excitation."""
         return self.data.get("kind")
 
     @property
@@ -623,14 +626,18 @@ class Client:
         """A job by id (e.g. one submitted by another script), fetched anew."""
         return Job(self, self._request("GET", f"/v1/jobs/{_quote(_job_id(job_id))}"))
 
-    def jobs(self, state: Optional[str] = None, kind: Optional[str] = None, page_size: int = 50) -> Iterator[Job]:
-        """Every job, newest first, optionally of one state and/or kind (paged as you iterate).
-        Listed jobs carry no `request`; refresh() one for the full record."""
+    def jobs(self, state: Optional[str] = None, kind: Optional[str] = None, page_size: int = 50,
+             robot: Union[None, str, Robot, Mapping[str, Any]] = None) -> Iterator[Job]:
+        """Every job, newest first, optionally of one state, kind (simulation, identification,
+        robot_identification, excitation) and/or robot (its identifications and excitations), paged
+        as you iterate. Listed jobs carry no `request`; refresh() one for the full record."""
         query: Dict[str, Any] = {"page_size": page_size}
         if state is not None:
             query["state"] = state
         if kind is not None:
             query["kind"] = kind
+        if robot is not None:
+            query["robot_id"] = _robot_id(robot)
         for item in self._pages("/v1/jobs", query):
             yield Job(self, item)
 

@@ -261,7 +261,11 @@ class RobotsAgainstServer(unittest.TestCase):
         self.assertEqual(request, {"robot_id": self.arm.id, "dataset_id": self.jitter.id,
                                    "validation_dataset_id": self.check.id,
                                    "friction": ["viscous", "coulomb", "offset"]})
-        self.assertEqual((self.job.kind, self.job.state, self.job.robot_id), ("identification", "succeeded", self.arm.id))
+        self.assertEqual((self.job.kind, self.job.state, self.job.robot_id),
+                         ("robot_identification", "succeeded", self.arm.id))
+        # Listed by its kind and its robot; not among the paper's identifications.
+        self.assertIn(self.job.id, [job.id for job in self.client.jobs(kind="robot_identification", robot=self.arm)])
+        self.assertNotIn(self.job.id, [job.id for job in self.client.jobs(kind="identification")])
         self.assertEqual((self.result.robot_id, self.result.dataset_id), (self.arm.id, self.jitter.id))
         self.assertEqual(self.result["validation_dataset_id"], self.check.id)
 

@@ -16,7 +16,7 @@ constexpr const char* kMigrationLock = "1835101801";
 
 // kMigrations[i] takes version i to i + 1. A migration is appended, never edited: databases in the
 // field have run the old ones.
-constexpr std::array<const char*, 2> kMigrations = {
+constexpr std::array<const char*, 3> kMigrations = {
     R"sql(
     -- seq orders rows newest first for keyset paging; a sequence never hands a value out twice.
     -- The samples come last: reading a description (find, list) never fetches them (TOAST).
@@ -133,6 +133,16 @@ constexpr std::array<const char*, 2> kMigrations = {
     CREATE INDEX jobs_by_owner ON jobs (owner, seq);
     ALTER TABLE idempotency_keys ADD COLUMN owner text NOT NULL DEFAULT '';
     ALTER TABLE idempotency_keys DROP CONSTRAINT idempotency_keys_pkey, ADD PRIMARY KEY (scope, owner, key);
+    )sql",
+
+    // 2 → 3: a URDF robot's identification is a kind of its own, robot_identification (it was an
+    // identification with a robot_id), as in the SQLite store's 5 → 6: the CHECK on kind takes it in and the
+    // old robot identifications are renamed.
+    R"sql(
+    ALTER TABLE jobs DROP CONSTRAINT jobs_kind_check;
+    ALTER TABLE jobs ADD CONSTRAINT jobs_kind_check
+      CHECK (kind IN ('simulation', 'identification', 'excitation', 'robot_identification'));
+    UPDATE jobs SET kind = 'robot_identification' WHERE kind = 'identification' AND robot_id IS NOT NULL AND robot_id <> '';
     )sql",
 };
 

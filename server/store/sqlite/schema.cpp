@@ -11,7 +11,7 @@ namespace manipid::server::store::sqlite {
 namespace {
 
 // kMigrations[i] takes user_version i to i + 1, and sets it.
-constexpr std::array<const char*, 5> kMigrations = {
+constexpr std::array<const char*, 6> kMigrations = {
     // 0 → 1: the first schema.
     R"sql(
     -- seq orders datasets newest first for keyset paging; AUTOINCREMENT never hands out a
@@ -281,6 +281,58 @@ constexpr std::array<const char*, 5> kMigrations = {
 
     PRAGMA user_version = 5;
     )sql",
+
+    // 5 → 6: a URDF robot's identification is a kind of its own, robot_identification (it was an
+    // identification with a robot_id). The CHECK on kind changes, which SQLite cannot alter: jobs is rebuilt
+    // as in 2 → 3 (foreign keys off around it), its rows copied with the old robot identifications renamed,
+    // its AUTOINCREMENT counter carried over (as in 4 → 5), and its indexes made again.
+    R"sql(
+    CREATE TABLE jobs_v6 (
+      seq                   INTEGER PRIMARY KEY AUTOINCREMENT,
+      id                    TEXT    NOT NULL UNIQUE,
+      kind                  TEXT    NOT NULL
+                            CHECK (kind IN ('simulation', 'identification', 'excitation', 'robot_identification')),
+      state                 TEXT    NOT NULL
+                            CHECK (state IN ('queued', 'running', 'succeeded', 'failed', 'cancelled')),
+      request               TEXT    NOT NULL,
+      dataset_id            TEXT,
+      robot_id              TEXT,
+      validation_dataset_id TEXT,
+      created_at            TEXT    NOT NULL,
+      started_at            TEXT,
+      finished_at           TEXT,
+      evaluations           INTEGER NOT NULL DEFAULT 0,
+      best_cost             REAL,
+      cancel_requested      INTEGER NOT NULL DEFAULT 0,
+      attempts              INTEGER NOT NULL DEFAULT 0,
+      worker_losses         INTEGER NOT NULL DEFAULT 0,
+      result                TEXT,
+      error                 TEXT,
+      worker                TEXT,
+      lease_expires_at      REAL,
+      owner                 TEXT    NOT NULL DEFAULT ''
+    );
+    INSERT INTO jobs_v6 (seq, id, kind, state, request, dataset_id, robot_id, validation_dataset_id, created_at,
+                         started_at, finished_at, evaluations, best_cost, cancel_requested, attempts, worker_losses,
+                         result, error, worker, lease_expires_at, owner)
+      SELECT seq, id,
+             CASE WHEN kind = 'identification' AND robot_id IS NOT NULL AND robot_id <> '' THEN 'robot_identification'
+                  ELSE kind END,
+             state, request, dataset_id, robot_id, validation_dataset_id, created_at, started_at, finished_at,
+             evaluations, best_cost, cancel_requested, attempts, worker_losses, result, error, worker,
+             lease_expires_at, owner FROM jobs;
+    DELETE FROM sqlite_sequence WHERE name = 'jobs_v6';
+    INSERT INTO sqlite_sequence (name, seq) SELECT 'jobs_v6', seq FROM sqlite_sequence WHERE name = 'jobs';
+    DROP TABLE jobs;
+    ALTER TABLE jobs_v6 RENAME TO jobs;
+    CREATE INDEX jobs_by_state ON jobs (state, seq);
+    CREATE INDEX jobs_by_kind ON jobs (kind, seq);
+    CREATE INDEX jobs_by_robot ON jobs (robot_id) WHERE robot_id IS NOT NULL;
+    CREATE INDEX jobs_by_lease ON jobs (lease_expires_at) WHERE state = 'running';
+    CREATE INDEX jobs_by_owner ON jobs (owner, seq);
+
+    PRAGMA user_version = 6;
+    )sql",
 };
 
 int read_user_version(Connection& connection) {
@@ -292,7 +344,7 @@ int read_user_version(Connection& connection) {
 
 int current_schema_version() { return static_cast<int>(kMigrations.size()); }
 
-void prepare_database(Connection& connection) {
+void prepare_database(Connection& connection, int target) {
   // journal_mode is kept in the file, so only this first connection sets it.
   std::string mode;
   for (int attempt = 1;; ++attempt) {
@@ -318,16 +370,16 @@ void prepare_database(Connection& connection) {
                      "what is wrong)");
   }
 
-  const int newest = current_schema_version();
+  const int newest = std::min(target, current_schema_version());
   // Migrations rebuild tables that others reference (lang_altertable.html §7): foreign keys off for
   // the transaction (the pragma is a no-op inside one), checked before the commit, on again after.
   connection.execute("PRAGMA foreign_keys = OFF");
   try {
     run_transaction(connection, TransactionKind::write, [&] {
       const int version = read_user_version(connection);
-      if (version > newest) {
+      if (version > current_schema_version()) {
         throw StoreError("the database has schema version " + std::to_string(version) + ", newer than version " +
-                         std::to_string(newest) + " this manipid understands; use a newer manipid");
+                         std::to_string(current_schema_version()) + " this manipid understands; use a newer manipid");
       }
       for (int step = version; step < newest; ++step) connection.execute(kMigrations[static_cast<std::size_t>(step)]);
       auto violations = connection.prepare("PRAGMA foreign_key_check");

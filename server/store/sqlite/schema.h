@@ -14,7 +14,8 @@ int current_schema_version();
 /// Switches the file to WAL, checks its structure (PRAGMA quick_check), then brings the schema
 /// to the current version in one BEGIN IMMEDIATE transaction (so concurrent openers migrate
 /// once). Throws StoreError when the file is damaged, from a newer manipid or not a database.
-void prepare_database(Connection& connection);
+/// `version` below the current one stops there: how the migration tests make a database of an older schema.
+void prepare_database(Connection& connection, int version = current_schema_version());
 
 /// What is wrong with the file, at most `limit` findings; empty when it is sound. `full`: PRAGMA
 /// integrity_check (every index against its table, every row's fields) and foreign_key_check —

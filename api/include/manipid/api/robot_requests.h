@@ -37,14 +37,10 @@ struct ParsedRobot {
 };
 ParsedRobot parse_robot(const RobotUpload& upload);
 
-/// parse_robot once per document: a stored robot is parsed at its upload and then read from here by every
-/// submission, job and view (they used to parse it again each time). Keyed by the document, base and tip
-/// themselves (a robot's row never changes, and a different document is a different key); the last
-/// kRobotCacheEntries robots used, at most kRobotCacheBytes of documents. Thread-safe; refusals are not
-/// kept (they throw as parse_robot does).
+/// How many parsed robots a process keeps (robot_cache.h): the last kRobotCacheEntries used, at most
+/// kRobotCacheBytes of their documents.
 inline constexpr std::size_t kRobotCacheEntries = 32;
 inline constexpr std::size_t kRobotCacheBytes = 64u << 20;
-std::shared_ptr<const ParsedRobot> parsed_robot(const RobotUpload& upload);
 
 // ---- Identifications of a URDF robot -----------------------------------------------------
 

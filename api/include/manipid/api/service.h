@@ -11,6 +11,7 @@
 #include "manipid/api/requests.h"
 #include "manipid/api/robot_requests.h"
 
+#include <memory>
 #include <optional>
 #include <string>
 
@@ -61,12 +62,16 @@ class Service {
   virtual Page<DatasetInfo> datasets(const Caller& caller, const PageRequest& page) = 0;
   virtual DeleteOutcome delete_dataset(const Caller& caller, const std::string& id) = 0;
 
-  /// A URDF robot, parsed already (`description`: robot_json.h's robot_description as JSON text).
-  virtual RobotCreated create_robot(const Caller& caller, const RobotUpload& upload, int joints,
-                                    const std::string& description, const std::optional<IdempotencyKey>& key) = 0;
+  /// A URDF robot, parsed already (`parsed`: kept for its jobs and views; `description`: robot_json.h's
+  /// robot_description as JSON text).
+  virtual RobotCreated create_robot(const Caller& caller, const RobotUpload& upload,
+                                    std::shared_ptr<const ParsedRobot> parsed, const std::string& description,
+                                    const std::optional<IdempotencyKey>& key) = 0;
   virtual std::optional<RobotInfo> robot(const Caller& caller, const std::string& id) = 0;
   /// The URDF document as uploaded.
   virtual std::optional<std::string> robot_urdf(const Caller& caller, const std::string& id) = 0;
+  /// The stored robot parsed, once per process (robot_cache.h), or nullptr when the caller has none by that id.
+  virtual std::shared_ptr<const ParsedRobot> parsed_robot(const Caller& caller, const std::string& id) = 0;
   virtual Page<RobotInfo> robots(const Caller& caller, const PageRequest& page) = 0;
   /// Conflict while a queued or running job uses it.
   virtual DeleteOutcome delete_robot(const Caller& caller, const std::string& id) = 0;
