@@ -17,7 +17,7 @@ namespace {
 
 using Vector10d = Eigen::Matrix<double, 10, 1>;
 using Matrix10d = Eigen::Matrix<double, 10, 10>;
-using detail::kNaN;
+using manipid::detail::kNaN;
 
 /// A payload parameter whose data share is below this is not determined by the run (as an arm's base
 /// parameter is barely seen below it: robot/identification.cpp).
@@ -173,7 +173,7 @@ void check_input(const Model& model, const ArmParameters& arm, const std::vector
   }
   if (options.known_mass && !(std::isfinite(*options.known_mass) && *options.known_mass > 0.0)) {
     throw InputError("known_mass", "a known payload mass must be a positive number of kg, got " +
-                                       detail::short_number(*options.known_mass));
+                                       manipid::detail::short_number(*options.known_mass));
   }
   if (options.known_centre_of_mass && !options.known_centre_of_mass->allFinite()) {
     throw InputError("known_centre_of_mass", "a known centre of mass must be three finite numbers (m, tip-link frame)");
@@ -287,7 +287,7 @@ PayloadResult identify_payload(const Model& model, const ArmParameters& arm, con
     if (share < kDeterminedShare) {
       result.undetermined.push_back(PayloadResult::names()[static_cast<std::size_t>(index)]);
       result.warnings.push_back("the run does not excite " + std::string(PayloadResult::names()[static_cast<std::size_t>(index)]) +
-                                " (its data share " + detail::short_number(100.0 * share) + " %): it is not determined and "
+                                " (its data share " + manipid::detail::short_number(100.0 * share) + " %): it is not determined and "
                                 "stays at 0; " + what_excites(index) + " would determine it");
     }
   }
@@ -301,8 +301,8 @@ PayloadResult identify_payload(const Model& model, const ArmParameters& arm, con
   const bool mass_given = options.known_mass.has_value();
   result.detected = mass_given || (result.data_share[0] >= kDeterminedShare && result.mass > kDetectedMass * result.mass_std_error);
   if (!result.detected) {
-    result.warnings.push_back("no payload: the mass, " + detail::short_number(result.mass) + " ± " +
-                              detail::short_number(result.mass_std_error) + " kg, is not distinguishable from 0, so the "
+    result.warnings.push_back("no payload: the mass, " + manipid::detail::short_number(result.mass) + " ± " +
+                              manipid::detail::short_number(result.mass_std_error) + " kg, is not distinguishable from 0, so the "
                               "centre of mass and the inertia are not reported");
     result.inertia.fill(kNaN);
     result.inertia_std_errors.fill(kNaN);
