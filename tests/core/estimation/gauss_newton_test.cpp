@@ -85,7 +85,7 @@ class DenseProblem final : public GaussNewtonProblem {
 Eigen::VectorXd unbounded(int n, double sign) { return Eigen::VectorXd::Constant(n, sign * std::numeric_limits<double>::infinity()); }
 
 /// Rosenbrock as residuals, r = (10 (x2 − x1²), 1 − x1): the minimum 0 at (1, 1) along a curved valley.
-void rosenbrock(const Eigen::VectorXd& x, Eigen::VectorXd& r, Eigen::MatrixXd& j) {
+void rosenbrock_residuals(const Eigen::VectorXd& x, Eigen::VectorXd& r, Eigen::MatrixXd& j) {
   r.resize(2);
   r << 10.0 * (x[1] - x[0] * x[0]), 1.0 - x[0];
   j.resize(2, 2);
@@ -116,7 +116,7 @@ TEST(GaussNewtonMinimizer, SolvesLinearLeastSquaresExactly) {
 }
 
 TEST(GaussNewtonMinimizer, FollowsRosenbrocksValleyToItsMinimum) {
-  DenseProblem problem(rosenbrock, Eigen::Vector2d(-1.2, 1.0), Eigen::Vector2d(-5, -5), Eigen::Vector2d(5, 5));
+  DenseProblem problem(rosenbrock_residuals, Eigen::Vector2d(-1.2, 1.0), Eigen::Vector2d(-5, -5), Eigen::Vector2d(5, 5));
   GaussNewtonOptions options;
   options.gradient_tolerance = 0.0;
   options.function_tolerance = 0.0;
@@ -134,7 +134,7 @@ TEST(GaussNewtonMinimizer, FollowsRosenbrocksValleyToItsMinimum) {
 
 TEST(GaussNewtonMinimizer, StopsOnTheBoundThatBecomesActive) {
   // Rosenbrock with x1 ≤ 0.5: the minimum on the bound is x1 = 0.5, x2 = x1² = 0.25.
-  DenseProblem problem(rosenbrock, Eigen::Vector2d(-1.2, 1.0), Eigen::Vector2d(-5, -5), Eigen::Vector2d(0.5, 5));
+  DenseProblem problem(rosenbrock_residuals, Eigen::Vector2d(-1.2, 1.0), Eigen::Vector2d(-5, -5), Eigen::Vector2d(0.5, 5));
   GaussNewtonOptions options;
   options.gradient_tolerance = 1e-8;  // cos = 2|r1| along x2: |x2 − x1²| ≤ 5e-10
   options.function_tolerance = 0.0;
@@ -153,7 +153,7 @@ TEST(GaussNewtonMinimizer, SaysWhyItStopped) {
   const Eigen::Vector2d start(-1.2, 1.0);
   const Eigen::Vector2d lower(-5, -5), upper(5, 5);
   {  // the iteration limit
-    DenseProblem problem(rosenbrock, start, lower, upper);
+    DenseProblem problem(rosenbrock_residuals, start, lower, upper);
     GaussNewtonOptions options;
     options.max_iterations = 2;
     const GaussNewtonSummary summary = GaussNewtonMinimizer(options).minimize(problem);
@@ -163,7 +163,7 @@ TEST(GaussNewtonMinimizer, SaysWhyItStopped) {
     EXPECT_FALSE(converged(summary.stop));
   }
   {  // the cancel flag, before the first step
-    DenseProblem problem(rosenbrock, start, lower, upper);
+    DenseProblem problem(rosenbrock_residuals, start, lower, upper);
     const std::atomic<bool> cancel{true};
     GaussNewtonOptions options;
     options.cancel = &cancel;
@@ -173,7 +173,7 @@ TEST(GaussNewtonMinimizer, SaysWhyItStopped) {
     EXPECT_EQ(summary.final_cost, summary.initial_cost);
   }
   {  // the problem's own budget
-    DenseProblem problem(rosenbrock, start, lower, upper);
+    DenseProblem problem(rosenbrock_residuals, start, lower, upper);
     problem.set_budget(3);
     const GaussNewtonSummary summary = GaussNewtonMinimizer(GaussNewtonOptions{}).minimize(problem);
     EXPECT_EQ(summary.stop, GaussNewtonStop::stopped);
@@ -181,7 +181,7 @@ TEST(GaussNewtonMinimizer, SaysWhyItStopped) {
     EXPECT_LE(summary.final_cost, summary.initial_cost);
   }
   {  // a loose cost tolerance
-    DenseProblem problem(rosenbrock, start, lower, upper);
+    DenseProblem problem(rosenbrock_residuals, start, lower, upper);
     GaussNewtonOptions options;
     options.function_tolerance = 0.5;
     const GaussNewtonSummary summary = GaussNewtonMinimizer(options).minimize(problem);

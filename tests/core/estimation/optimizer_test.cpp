@@ -18,7 +18,7 @@ double quadratic(const Eigen::VectorXd& theta, Eigen::VectorXd* gradient) {
   return difference.cwiseAbs2().dot(weight);
 }
 
-MinimizeSettings settings_for(const std::string& algorithm) {
+MinimizeSettings nlopt_settings(const std::string& algorithm) {
   MinimizeSettings settings;
   settings.algorithm = algorithm;
   settings.free.assign(3, true);
@@ -34,7 +34,7 @@ const Eigen::Vector3d kStart(0.5, -1.0, 2.0);
 
 TEST(NloptAdapter, FindsTheQuadraticsMinimumWithAndWithoutGradients) {
   for (const char* algorithm : {"LN_BOBYQA", "LN_SBPLX", "LD_LBFGS", "LD_SLSQP"}) {
-    const MinimizeOutcome outcome = minimize(quadratic, kStart, settings_for(algorithm));
+    const MinimizeOutcome outcome = minimize(quadratic, kStart, nlopt_settings(algorithm));
     EXPECT_NEAR(outcome.theta[0], 1.0, 1e-5) << algorithm;
     EXPECT_NEAR(outcome.theta[1], -2.0, 1e-5) << algorithm;
     EXPECT_NEAR(outcome.theta[2], 3.0, 1e-5) << algorithm;
@@ -51,7 +51,7 @@ TEST(NloptAdapter, FindsTheQuadraticsMinimumWithAndWithoutGradients) {
 
 TEST(NloptAdapter, BoundsHoldAtEveryEvaluationAndTheMinimumOnThemIsFound) {
   for (const char* algorithm : {"LN_BOBYQA", "LD_LBFGS"}) {
-    MinimizeSettings settings = settings_for(algorithm);
+    MinimizeSettings settings = nlopt_settings(algorithm);
     settings.upper[2] = 2.5;  // the unconstrained minimum θ3 = 3 lies outside
     bool inside = true;
     EvaluationLog log(100, [&](long, double, const Eigen::VectorXd& theta) {
@@ -68,7 +68,7 @@ TEST(NloptAdapter, BoundsHoldAtEveryEvaluationAndTheMinimumOnThemIsFound) {
 }
 
 TEST(NloptAdapter, AFixedParameterStaysAtItsStart) {
-  MinimizeSettings settings = settings_for("LN_BOBYQA");
+  MinimizeSettings settings = nlopt_settings("LN_BOBYQA");
   settings.free[1] = false;
   const MinimizeOutcome outcome = minimize(quadratic, kStart, settings);
   EXPECT_EQ(outcome.theta[1], kStart[1]);
@@ -82,7 +82,7 @@ TEST(NloptAdapter, AFixedParameterStaysAtItsStart) {
 }
 
 TEST(NloptAdapter, SaysWhyItStopped) {
-  MinimizeSettings budget = settings_for("LN_BOBYQA");
+  MinimizeSettings budget = nlopt_settings("LN_BOBYQA");
   budget.max_evaluations = 5;
   const MinimizeOutcome out_of_budget = minimize(quadratic, kStart, budget);
   EXPECT_EQ(out_of_budget.stop_reason, "maxeval_reached");
@@ -92,10 +92,10 @@ TEST(NloptAdapter, SaysWhyItStopped) {
   const CostFunction overflowing = [](const Eigen::VectorXd&, Eigen::VectorXd*) {
     return std::numeric_limits<double>::infinity();
   };
-  EXPECT_EQ(minimize(overflowing, kStart, settings_for("LN_BOBYQA")).stop_reason, "non_finite_start");
+  EXPECT_EQ(minimize(overflowing, kStart, nlopt_settings("LN_BOBYQA")).stop_reason, "non_finite_start");
 
-  EXPECT_THROW(minimize(quadratic, kStart, settings_for("LN_NO_SUCH_ALGORITHM")), InputError);
-  EXPECT_THROW(minimize(quadratic, kStart, settings_for(kLeastSquaresAlgorithm)), InputError);  // no residuals given
+  EXPECT_THROW(minimize(quadratic, kStart, nlopt_settings("LN_NO_SUCH_ALGORITHM")), InputError);
+  EXPECT_THROW(minimize(quadratic, kStart, nlopt_settings(kLeastSquaresAlgorithm)), InputError);  // no residuals given
   EXPECT_TRUE(algorithm_uses_gradient("LD_LBFGS"));
   EXPECT_FALSE(algorithm_uses_gradient("LN_BOBYQA"));
   EXPECT_TRUE(algorithm_uses_gradient(kLeastSquaresAlgorithm));
@@ -108,7 +108,7 @@ TEST(NloptAdapter, CancelAndStopEndTheRunWithTheBestPointSoFar) {
     if (++evaluations == 10) cancel = true;
     return quadratic(theta, gradient);
   };
-  MinimizeSettings settings = settings_for("LN_BOBYQA");
+  MinimizeSettings settings = nlopt_settings("LN_BOBYQA");
   settings.cancel = &cancel;
   const MinimizeOutcome cancelled = minimize(counting, kStart, settings);
   EXPECT_TRUE(cancelled.cancelled);
@@ -118,7 +118,7 @@ TEST(NloptAdapter, CancelAndStopEndTheRunWithTheBestPointSoFar) {
   EXPECT_EQ(quadratic(cancelled.theta, nullptr), cancelled.cost);
 
   int asked = 0;
-  MinimizeSettings stopping = settings_for("LD_LBFGS");
+  MinimizeSettings stopping = nlopt_settings("LD_LBFGS");
   stopping.stop = [&] { return ++asked > 3; };
   const MinimizeOutcome stopped = minimize(quadratic, kStart, stopping);
   EXPECT_TRUE(stopped.stopped);
@@ -131,7 +131,7 @@ TEST(NloptAdapter, ScalesByTheStartUnlessTold) {
   // A first step of 1 % of each scaled parameter: with scale_by_start the first move of θ3 is
   // about 1 % of |θ3| = 2; without it about 1 % of 1.
   for (const bool scaled : {true, false}) {
-    MinimizeSettings settings = settings_for("LN_BOBYQA");
+    MinimizeSettings settings = nlopt_settings("LN_BOBYQA");
     settings.scale_by_start = scaled;
     settings.max_evaluations = 7;  // the 2n + 1 points of its first model
     double largest_move = 0.0;
