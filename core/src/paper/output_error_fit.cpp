@@ -196,6 +196,12 @@ GaussNewtonOutcome gauss_newton_output_error(const OutputErrorCost& cost, const 
   outcome.cost = fit.evaluate(outcome.theta, outcome.start, &outcome.residual);
   log.record(outcome.cost, outcome.theta);
   fit.measure_jacobian();
+  // Measured against the fit's own loop before it ran on the shared minimiser (Marquardt's ×10 / ×0.1
+  // from λ = 0, eight refusals a stop; manipid simulate --noise-q 1e-4 --quantize-q 16
+  // --noise-tau-relative 0.01 --seed S; manipid identify --method two-stage --json), seeds 1–7:
+  // estimates within 7.5e-5 relative (0.38 standard errors at most, < 0.1 on six seeds), the final
+  // cost lower on five, higher by ≤ 2.1e-6 relative on two, simulations 620 → 579 in all; clean data:
+  // estimates within 2.5e-7, cost 9.14e-17 → 9.03e-17, simulations 59 → 75.
   GaussNewtonOptions settings;
   settings.noise_tolerance = 1e-2;                  // the step under a tenth of a standard error
   settings.gradient_tolerance = 0.0;
