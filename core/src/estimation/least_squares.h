@@ -8,7 +8,9 @@
 // the Jacobian's columns by their norms (Marquardt's scaling, the largest seen so far, as in
 // MINPACK), so kg and m look alike. Each step solves the damped normal equations through an SVD
 // of the scaled Jacobian: a direction the data cannot see (a zero singular value, m1/l1 of the
-// paper's robot) gets no step rather than a huge one.
+// paper's robot) gets no step rather than a huge one. The iteration — Nielsen's damping update,
+// the acceptance of a step, the stop tests — is core's one minimiser's (gauss_newton.h); this is
+// its problem.
 #pragma once
 
 #include "estimation/optimizer.h"
@@ -16,9 +18,11 @@
 namespace manipid::detail {
 
 /// Stops (Summary-style, in words):
-///   "converged: relative step below <xtol>"        ‖Δx‖ ≤ xtol (‖x‖ + xtol), x the scaled parameters;
+///   "converged: relative step below <xtol>"        an accepted step had ‖Δx‖ ≤ xtol (‖x‖ + xtol), x the
+///                                                   scaled parameters;
 ///   "converged: relative cost change below <ftol>" an accepted step lowered the cost by ≤ ftol of it;
 ///   "converged: gradient zero"                      no free parameter can move the cost;
+///   "converged: no step lowers the cost in double precision"  the damping ran past its limit;
 ///   "maxeval_reached", "maxtime_reached", "cancelled", "non_finite_start" as on the NLopt path.
 MinimizeOutcome minimize_least_squares(const LeastSquaresFunction& function, const Eigen::VectorXd& initial,
                                        const MinimizeSettings& settings);

@@ -6,6 +6,7 @@
 #include "manipid/core/paper/dynamics.h"
 #include "manipid/core/paper/input_error.h"
 #include "manipid/core/paper/output_error.h"
+#include "estimation/gauss_newton.h"
 #include "estimation/optimizer.h"
 #include "paper/output_error_fit.h"
 #include "paper/uncertainty.h"
@@ -383,68 +384,135 @@ void assess_output_error_residual(const detail::NoiseLevels& noise, const Eigen:
                  noise.noise_free(false), result);
 }
 
-// Gauss–Newton polish of an input-error minimum. The Gram form makes each step exact and
-// cheap (H = Gᵀ A G, g = Gᵀ A (β − β*)); steps are solved in relative coordinates with the
-// unidentifiable directions truncated, so a derivative-free optimiser that stalled in the
-// paper robot's flat m1/l1 valley or its narrow m3/m4/l4 one still ends at the minimum.
-int refine_input_error(const InputErrorCost& cost, Eigen::VectorXd& theta, double& value, const Setup& setup,
-                       const IdentificationOptions& options, detail::EvaluationLog& log) {
-  std::vector<int> free_index;
-  for (int i = 0; i < theta.size(); ++i) {
-    if (setup.free[i]) free_index.push_back(i);
+// Gauss–Newton polish of an input-error minimum, a run of core's one Levenberg–Marquardt
+// minimiser (estimation/gauss_newton.h: the damping rule and the stop tests) with this problem:
+// the Gram form makes each model exact and cheap (H = Gᵀ A G, g = Gᵀ A (β − β*)); steps are
+// solved in relative coordinates (δ_a = Δθ_a / |θ_a|) with the unidentifiable directions
+// truncated, so a derivative-free optimiser that stalled in the paper robot's flat m1/l1 valley
+// or its narrow m3/m4/l4 one still ends at the minimum. A candidate is projected on the bounds.
+class InputErrorPolish final : public detail::GaussNewtonProblem {
+ public:
+  InputErrorPolish(const InputErrorCost& cost, Eigen::VectorXd& theta, double& value, const Setup& setup,
+                   detail::EvaluationLog& log)
+      : cost_(cost), theta_(theta), value_(value), setup_(setup), log_(log) {
+    for (int i = 0; i < theta.size(); ++i) {
+      if (setup.free[i]) free_index_.push_back(i);
+    }
   }
-  const int p = static_cast<int>(free_index.size());
-  // A relative change of the cost below this is its rounding: the polish stops there.
-  constexpr double kRoundingLevel = 1e-13;
-  int steps = 0;
-  for (int iteration = 0; iteration < 30 && p > 0; ++iteration) {
-    if (options.cancel && options.cancel->load()) break;
-    const Parameters parameters = Parameters::from_vector(theta);
+  int parameter_count() const { return static_cast<int>(free_index_.size()); }
+
+  double cost() const override { return value_; }
+
+  // g = ½ D ∇cost and H = D (GᵀAG / N) D (D = diag|θ|) over the free parameters; the eigen-
+  // decomposition of H over those the bounds do not hold.
+  bool linearise(detail::GaussNewtonModel& model) override {
+    const int p = parameter_count();
+    const Parameters parameters = Parameters::from_vector(theta_);
     Eigen::VectorXd gradient;
-    cost.evaluate(parameters, &gradient);
-    const Eigen::MatrixXd information = cost.gauss_newton_matrix(parameters) / cost.data().samples();
-    Eigen::VectorXd scale(p), g(p);
-    Eigen::MatrixXd H(p, p);
+    cost_.evaluate(parameters, &gradient);
+    const Eigen::MatrixXd information = cost_.gauss_newton_matrix(parameters) / cost_.data().samples();
+    scale_.resize(p);
+    g_.resize(p);
+    h_.resize(p, p);
     for (int a = 0; a < p; ++a) {
-      scale[a] = std::max(std::abs(theta[free_index[a]]), 1e-12);
-      g[a] = 0.5 * gradient[free_index[a]] * scale[a];
+      scale_[a] = std::max(std::abs(theta_[free_index_[a]]), 1e-12);
+      g_[a] = 0.5 * gradient[free_index_[a]] * scale_[a];
     }
     for (int a = 0; a < p; ++a)
-      for (int b = 0; b < p; ++b) H(a, b) = scale[a] * information(free_index[a], free_index[b]) * scale[b];
-    if (!H.allFinite() || !g.allFinite()) break;  // nothing to polish with; never NaN into a solver
-    const Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd> eigen(H);
-    const double largest = eigen.eigenvalues().maxCoeff();
-    Eigen::VectorXd step = Eigen::VectorXd::Zero(p);
-    for (int k = 0; k < p; ++k) {
-      const double lambda = eigen.eigenvalues()[k];
-      if (lambda > detail::kUnidentifiableRatio * detail::kUnidentifiableRatio * largest) {
-        const Eigen::VectorXd v = eigen.eigenvectors().col(k);
-        step -= v * (v.dot(g) / lambda);
-      }
+      for (int b = 0; b < p; ++b) h_(a, b) = scale_[a] * information(free_index_[a], free_index_[b]) * scale_[b];
+    if (!h_.allFinite() || !g_.allFinite()) return false;  // nothing to polish with; never NaN into a solver
+    model.gradient = g_;
+    model.curvature_diagonal = h_.diagonal();
+    model.free.clear();
+    for (int a = 0; a < p; ++a) {
+      const int i = free_index_[a];
+      if (!detail::held_on_bound(theta_[i], setup_.lower[i], setup_.upper[i], g_[a])) model.free.push_back(a);
     }
-    // What the full step would gain by the quadratic model; below the cost's rounding nothing
-    // can be measured, and a line search there only spends evaluations on noise.
-    const double expected_gain = -g.dot(step);
-    if (!(expected_gain > kRoundingLevel * value)) break;
-    bool improved = false;
-    for (double fraction = 1.0; fraction > 1e-3 && !improved; fraction *= 0.5) {
-      Eigen::VectorXd candidate = theta;
-      for (int a = 0; a < p; ++a) candidate[free_index[a]] += fraction * step[a] * scale[a];
-      candidate = candidate.cwiseMax(setup.lower).cwiseMin(setup.upper);
-      const double candidate_value = cost.evaluate(Parameters::from_vector(candidate));
-      log.record(candidate_value, candidate);
-      if (candidate_value < value) {
-        const double change = (value - candidate_value) / std::max(value, 1e-300);
-        theta = candidate;
-        value = candidate_value;
-        improved = true;
-        ++steps;
-        if (change < kRoundingLevel) iteration = 30;
-      }
-    }
-    if (!improved) break;
+    free_ = model.free;
+    const int f = static_cast<int>(free_.size());
+    Eigen::MatrixXd block(f, f);
+    for (int a = 0; a < f; ++a)
+      for (int b = 0; b < f; ++b) block(a, b) = h_(free_[a], free_[b]);
+    eigen_.compute(block);
+    largest_ = f > 0 ? eigen_.eigenvalues().maxCoeff() : 0.0;
+    return true;
   }
-  return steps;
+
+  // δ_F = −Σ_k v_k (v_kᵀ g_F) / (κ_k + λ κ_max) over the eigenpairs (κ_k, v_k) of H_FF with
+  // κ_k > kUnidentifiableRatio² κ_max: the directions the data cannot see get no step.
+  bool solve(double damping, Eigen::VectorXd& step) override {
+    const int f = static_cast<int>(free_.size());
+    Eigen::VectorXd g(f);
+    for (int a = 0; a < f; ++a) g[a] = g_[free_[a]];
+    Eigen::VectorXd solved = Eigen::VectorXd::Zero(f);
+    for (int k = 0; k < f; ++k) {
+      const double kappa = eigen_.eigenvalues()[k];
+      if (kappa > detail::kUnidentifiableRatio * detail::kUnidentifiableRatio * largest_) {
+        const Eigen::VectorXd v = eigen_.eigenvectors().col(k);
+        solved -= v * (v.dot(g) / (kappa + damping * largest_));
+      }
+    }
+    step = Eigen::VectorXd::Zero(parameter_count());
+    for (int a = 0; a < f; ++a) step[free_[a]] = solved[a];
+    return true;
+  }
+
+  // θ + D δ projected on the bounds; the model's decrease for the step as taken, −(2gᵀt + tᵀHt).
+  double candidate(const Eigen::VectorXd& step) override {
+    candidate_ = theta_;
+    Eigen::VectorXd taken(parameter_count());
+    for (int a = 0; a < parameter_count(); ++a) {
+      const int i = free_index_[a];
+      candidate_[i] = std::clamp(theta_[i] + step[a] * scale_[a], setup_.lower[i], setup_.upper[i]);
+      taken[a] = (candidate_[i] - theta_[i]) / scale_[a];
+    }
+    return -(2.0 * g_.dot(taken) + taken.dot(h_ * taken));
+  }
+
+  Evaluation evaluate_candidate(double& value) override {
+    candidate_value_ = value = cost_.evaluate(Parameters::from_vector(candidate_));
+    log_.record(candidate_value_, candidate_);
+    return std::isfinite(candidate_value_) ? Evaluation::ok : Evaluation::not_finite;
+  }
+
+  double accept() override {
+    const double size = (candidate_ - theta_).norm();
+    theta_ = candidate_;
+    value_ = candidate_value_;
+    return size;
+  }
+
+ private:
+  const InputErrorCost& cost_;
+  Eigen::VectorXd& theta_;
+  double& value_;
+  const Setup& setup_;
+  detail::EvaluationLog& log_;
+  std::vector<int> free_index_, free_;
+  Eigen::VectorXd scale_, g_, candidate_;
+  Eigen::MatrixXd h_;
+  Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd> eigen_;
+  double largest_ = 0.0, candidate_value_ = 0.0;
+};
+
+// The polish's stop rules: a relative change of the cost below kRoundingLevel is its rounding — a
+// step promising less is not tried, and a step gaining less ends it.
+constexpr double kRoundingLevel = 1e-13;
+
+/// Polishes θ (and its cost `value`) in place; returns the accepted steps.
+int refine_input_error(const InputErrorCost& cost, Eigen::VectorXd& theta, double& value, const Setup& setup,
+                       const IdentificationOptions& options, detail::EvaluationLog& log) {
+  InputErrorPolish polish(cost, theta, value, setup, log);
+  if (polish.parameter_count() == 0) return 0;
+  detail::GaussNewtonOptions settings;
+  settings.initial_damping = settings.min_damping;  // Gauss–Newton's step first: the start is a minimum's neighbour
+  settings.rounding_level = kRoundingLevel;
+  settings.function_tolerance = kRoundingLevel;
+  settings.gradient_tolerance = 0.0;
+  settings.step_tolerance = 0.0;
+  settings.max_iterations = 300;
+  settings.cancel = options.cancel;
+  return detail::GaussNewtonMinimizer(settings).minimize(polish).accepted_steps;
 }
 
 /// What every method works on: the model, the prepared data, the options, the validated setup, the log.

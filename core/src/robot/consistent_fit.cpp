@@ -17,9 +17,13 @@
 // O(p²·10 + p³/3) and never touches the samples.
 //
 // fit_consistent() checks the input (check_problem()) and runs a ConsistentFitMinimizer, a
-// class with one method per step of the fit (its comment lists them).
+// class with one method per step of the fit (its comment lists them); each stage of its barrier
+// continuation is a run of core's one Levenberg–Marquardt minimiser (estimation/gauss_newton.h:
+// the damping rule and the stop tests), the fit being its problem (the model, the damped step,
+// the fraction to the boundary and the retraction through π).
 #include "manipid/core/robot/consistent_fit.h"
 
+#include "estimation/gauss_newton.h"
 #include "robot/inertia_internal.h"
 #include "manipid/core/errors.h"
 #include "manipid/core/robot/log_cholesky.h"
@@ -46,15 +50,10 @@ using manipid::detail::kNaN;
 using manipid::detail::kInfinity;
 using manipid::detail::short_number;
 
-constexpr double kEpsilon = std::numeric_limits<double>::epsilon();
-// Marquardt damping λ stays in [kMinDamping, kMaxDamping] (Ceres: trust region radius 1e16 ↔
-// λ = 1e-16). Past kMaxDamping every step is a rounding-sized gradient step that still fails
-// to decrease F: nothing more can be gained in double precision.
-constexpr double kMinDamping = 1e-15;
-constexpr double kMaxDamping = 1e32;
-// A step is accepted when it achieves this fraction of the decrease the model predicted
-// (Ceres's min_relative_decrease).
-constexpr double kMinRelativeDecrease = 1e-3;
+using manipid::detail::GaussNewtonMinimizer;
+using manipid::detail::GaussNewtonModel;
+using manipid::detail::GaussNewtonOptions;
+using manipid::detail::GaussNewtonStop;
 // The continuation on the barrier weight μ: the cap on the first stage's weight relative to
 // σ_max(R S)², the last stage's weight relative to γ (and, when γ = 0, to σ_max(R S)²), and the
 // relative tolerances that end an intermediate stage.
@@ -403,15 +402,16 @@ void check_problem(const ParameterStructure& structure, const ConsistentFitProbl
 //   choose_start()      the projection's cost; the start and the barriers' centre
 //   enter_interior()    the start in y, strictly inside the margins; the barriers; the start's costs
 //   barrier_weights()   the continuation μ₀ > … > μ_last
-//   run_stage()         one μ: LM iterations until a stop test (cancel and max_iterations
-//                       before each), each of them
-//     linearise_and_test()    at a new point: g, H, and the tests that need them (exact, gradient)
-//     iterate()               one damped step: damped_step(), fraction_to_boundary(),
-//                             evaluate_candidate(), then accept_step() or reject_step() (which
-//                             hold the cost, step and damping tests)
+//   run_stage()         one μ: a run of the shared minimiser (estimation/gauss_newton.h: the
+//                       damping rule, the stop tests) on this object as its problem:
+//     linearise()             at a new point: g, H and the free variables
+//     solve()                 the damped step (damped_step())
+//     candidate()             fraction_to_boundary(), the retraction through π; the model's decrease
+//     evaluate_candidate()    F there
+//     accept()                the candidate becomes the current point; the step's size
 //   summarise()         the summary
 // One object per fit: minimize() runs once (it hands the summary over).
-class ConsistentFitMinimizer {
+class ConsistentFitMinimizer final : public manipid::detail::GaussNewtonProblem {
  public:
   ConsistentFitMinimizer(const ParameterStructure& structure, const ConsistentFitProblem& problem,
                          const ConsistentFitOptions& options)
@@ -438,11 +438,6 @@ class ConsistentFitMinimizer {
   }
 
  private:
-  // The stop rules of one stage: the requested ones in the last, kStageTolerance before it.
-  struct Tolerances {
-    double gradient = 0.0, function = 0.0, step = 0.0;
-  };
-
   double data_cost(const Eigen::VectorXd& pi) const { return (d_.R * pi - d_.z).squaredNorm() + d_.offset; }
 
   // Reduces R to at most p rows (one QR of [R | z]; the rest of z's norm joins J⊥) and prices
@@ -641,65 +636,91 @@ class ConsistentFitMinimizer {
   }
 
   // One stage of the continuation: Levenberg–Marquardt with bounds (projection and an active
-  // set) and the π retraction at barrier weight μ, warm-started from the last stage's point,
-  // until a stop rule holds.
+  // set) and the π retraction at barrier weight μ, warm-started from the last stage's point and
+  // damping, until a stop test holds: the requested tolerances in the last stage, kStageTolerance
+  // before it.
   FitTermination run_stage(double weight, bool last) {
-    const Tolerances tolerances =
-        last ? Tolerances{options_.gradient_tolerance, options_.function_tolerance, options_.step_tolerance}
-             : Tolerances{kStageTolerance, kStageTolerance, kStageTolerance};
     d_.barrier_weight = weight;
     evaluate(d_, current_);
-    linearised_ = false;
-    damping_ = std::min(damping_, options_.initial_damping);
-    growth_ = 2.0;
-    for (;;) {
-      if (options_.cancel && options_.cancel->load()) return FitTermination::cancelled;
-      if (!linearised_) {
-        if (const std::optional<FitTermination> stop = linearise_and_test(last, tolerances)) return *stop;
-      }
-      if (summary_.iterations >= options_.max_iterations) return FitTermination::max_iterations;
-      if (const std::optional<FitTermination> stop = iterate(tolerances)) return *stop;
+    GaussNewtonOptions stage;
+    stage.initial_damping = std::min(damping_, options_.initial_damping);
+    stage.gradient_tolerance = last ? options_.gradient_tolerance : kStageTolerance;
+    stage.function_tolerance = last ? options_.function_tolerance : kStageTolerance;
+    stage.step_tolerance = last ? options_.step_tolerance : kStageTolerance;
+    if (last) stage.exact_fit_scale = z_norm_;  // an exact fit: a few ε of ‖z‖ is rounding
+    stage.max_iterations = options_.max_iterations - summary_.iterations;
+    stage.cancel = options_.cancel;
+    const manipid::detail::GaussNewtonSummary run = GaussNewtonMinimizer(stage).minimize(*this);
+    damping_ = run.damping;
+    last_message_ = run.message;
+    switch (run.stop) {
+      case GaussNewtonStop::converged_exact: return FitTermination::converged_exact;
+      case GaussNewtonStop::converged_gradient:
+      case GaussNewtonStop::converged_noise: return FitTermination::converged_gradient;  // (no noise test here)
+      case GaussNewtonStop::converged_cost: return FitTermination::converged_cost;
+      case GaussNewtonStop::converged_step: return FitTermination::converged_step;
+      case GaussNewtonStop::rounding_limited: return FitTermination::rounding_limited;
+      case GaussNewtonStop::max_iterations: return FitTermination::max_iterations;
+      case GaussNewtonStop::cancelled:
+      case GaussNewtonStop::stopped: return FitTermination::cancelled;
     }
+    return FitTermination::max_iterations;
   }
 
-  // g, H and the free variables at a new point, and the stop tests that need them.
-  std::optional<FitTermination> linearise_and_test(bool last, const Tolerances& tolerances) {
-    linearise(d_, current_, g_, curvature_, gp_, h_);
-    linearised_ = true;
-    if (!g_.allFinite() || !h_.allFinite()) return FitTermination::rounding_limited;  // never NaN into Cholesky
-    const double objective_root = std::sqrt(current_.objective());
-    // An exact fit: the residual is rounding (a few ε of ‖z‖) and cannot shrink further.
-    if (last && objective_root <= 32.0 * kEpsilon * z_norm_) return FitTermination::converged_exact;
-    // Free variables: all but those on their bound that the gradient pushes outward (the
-    // KKT conditions hold for those; they stay put this iteration).
+  // The shared minimiser's problem (estimation/gauss_newton.h). F is the stage's objective
+  // ‖Rπ − z‖² + γ‖S⁻¹(π − π₀)‖² + μ Σ 2B_k (without J⊥).
+  double cost() const override { return current_.objective(); }
+
+  // g, H and the free variables: all but those on their bound that the gradient pushes outward
+  // (the KKT conditions hold for those; they stay put this iteration).
+  bool linearise(GaussNewtonModel& model) override {
+    manipid::robot::linearise(d_, current_, g_, curvature_, gp_, h_);
+    if (!g_.allFinite() || !h_.allFinite()) return false;  // never NaN into Cholesky
     free_variables_.clear();
-    double cosine = 0.0;
     for (int i = 0; i < p_; ++i) {
-      if (current_.y[i] <= d_.lower[i] && g_[i] > 0.0) continue;
-      free_variables_.push_back(i);
-      if (h_(i, i) > 0.0) cosine = std::max(cosine, std::abs(g_[i]) / (std::sqrt(h_(i, i)) * objective_root));
+      if (!manipid::detail::held_on_bound(current_.y[i], d_.lower[i], kInfinity, g_[i])) free_variables_.push_back(i);
     }
-    if (free_variables_.empty() || cosine <= tolerances.gradient) return FitTermination::converged_gradient;
-    return std::nullopt;
+    model.gradient = g_;
+    model.curvature_diagonal = h_.diagonal();
+    model.free = free_variables_;
+    return true;
   }
 
-  // One iteration: the damped step, cut to the boundary, its candidate point, and the verdict.
-  std::optional<FitTermination> iterate(const Tolerances& tolerances) {
+  bool solve(double damping, Eigen::VectorXd& step) override {
+    damping_ = damping;
+    std::optional<Eigen::VectorXd> solved = damped_step();
+    if (!solved) return false;
+    step = std::move(*solved);
+    return true;
+  }
+
+  // The step cut to the boundary, its candidate point (trial_), and the model's decrease of F
+  // for the step as taken, 2 × −(gᵀδ + ½ δᵀHδ); NaN when a link lands outside.
+  double candidate(const Eigen::VectorXd& step) override {
+    const Eigen::VectorXd cut = step * fraction_to_boundary(step);
+    Eigen::VectorXd taken;
+    if (!retract(cut, taken)) return std::numeric_limits<double>::quiet_NaN();
+    return 2.0 * -(g_.dot(taken) + 0.5 * taken.dot(h_ * taken));
+  }
+
+  Evaluation evaluate_candidate(double& cost) override {
+    evaluate(d_, trial_);
+    cost = trial_.objective();
+    return trial_.finite() ? Evaluation::ok : Evaluation::not_finite;
+  }
+
+  // The candidate becomes the current point; the step's size is the largest scaled move of π.
+  double accept() override {
+    const double moved = ((trial_.pi - current_.pi).cwiseProduct(d_.inv_scale)).cwiseAbs().maxCoeff();
+    std::swap(current_, trial_);
+    return moved;
+  }
+
+  void on_step(bool accepted, double damping) override {
     ++summary_.iterations;
-    std::optional<Eigen::VectorXd> step = damped_step();
-    if (step) {
-      *step *= fraction_to_boundary(*step);
-      Eigen::VectorXd taken;
-      const bool inside = evaluate_candidate(*step, taken);
-      // The model's decrease of ½F for the step taken: −(gᵀδ + ½ δᵀHδ).
-      const double predicted = -(g_.dot(taken) + 0.5 * taken.dot(h_ * taken));
-      if (inside && trial_.finite() && predicted > 0.0) {
-        const double actual = 0.5 * (current_.objective() - trial_.objective());
-        const double ratio = actual / predicted;
-        if (ratio > kMinRelativeDecrease) return accept_step(ratio, tolerances);
-      }
-    }
-    return reject_step();
+    if (accepted) ++summary_.accepted_steps;
+    damping_ = damping;
+    notify(accepted);
   }
 
   // (H_FF + λ D_FF) δ_F = −g_F with Marquardt's D = diag(H) (so the damping is invariant to the
@@ -740,9 +761,9 @@ class ConsistentFitMinimizer {
     return fraction;
   }
 
-  // The candidate point for `step` in trial_, evaluated when inside; `taken` is the step as
-  // taken in y (the bounded entries projected). False when a link lands outside.
-  bool evaluate_candidate(const Eigen::VectorXd& step, Eigen::VectorXd& taken) {
+  // The candidate point for `step` in trial_ (not evaluated); `taken` is the step as taken in y
+  // (the bounded entries projected). False when a link lands outside.
+  bool retract(const Eigen::VectorXd& step, Eigen::VectorXd& taken) {
     // The bounded entries: y + δ projected onto x ≥ 0.
     trial_.y = (current_.y + step).cwiseMax(d_.lower);
     taken = trial_.y - current_.y;
@@ -761,34 +782,7 @@ class ConsistentFitMinimizer {
       inside = moved.allFinite() && detail::try_log_cholesky(moved, theta) == detail::LogCholeskyStatus::ok;
       if (inside) trial_.y.segment<10>(offset) = theta;
     }
-    if (inside) evaluate(d_, trial_);
     return inside;
-  }
-
-  // The candidate becomes the current point; Nielsen's damping update; the cost and step tests.
-  std::optional<FitTermination> accept_step(double ratio, const Tolerances& tolerances) {
-    const double before = current_.objective();
-    const double decrease = before - trial_.objective();
-    const double moved = ((trial_.pi - current_.pi).cwiseProduct(d_.inv_scale)).cwiseAbs().maxCoeff();
-    std::swap(current_, trial_);
-    linearised_ = false;
-    ++summary_.accepted_steps;
-    damping_ = std::max(kMinDamping, damping_ * std::max(1.0 / 3.0, 1.0 - std::pow(2.0 * ratio - 1.0, 3)));
-    growth_ = 2.0;
-    notify(true);
-    if (decrease <= tolerances.function * before) return FitTermination::converged_cost;
-    if (moved <= tolerances.step) return FitTermination::converged_step;
-    return std::nullopt;
-  }
-
-  // More damping (Nielsen: by a factor that doubles with each refusal in a row); past
-  // kMaxDamping nothing more can be gained in double precision.
-  std::optional<FitTermination> reject_step() {
-    damping_ *= growth_;
-    growth_ *= 2.0;
-    notify(false);
-    if (damping_ > kMaxDamping) return FitTermination::rounding_limited;
-    return std::nullopt;
   }
 
   void notify(bool accepted) const {
@@ -817,22 +811,13 @@ class ConsistentFitMinimizer {
         summary_.final_cost > 0.0 ? summary_.regularization_cost / summary_.final_cost : kNaN;
     switch (termination) {
       case FitTermination::converged_gradient:
-        summary_.message = "the gradient is orthogonal to every direction the parameters can still move in (cosine ≤ " +
-                           short_number(options_.gradient_tolerance) + ")";
-        break;
       case FitTermination::converged_cost:
-        summary_.message = "the last step decreased the cost by less than " +
-                           short_number(options_.function_tolerance) + " of its value";
-        break;
       case FitTermination::converged_step:
-        summary_.message = "the last step moved no parameter by more than " + short_number(options_.step_tolerance) +
-                           " of its scale";
+      case FitTermination::rounding_limited:
+        summary_.message = last_message_;  // the minimiser's words, with the last stage's (the requested) tolerances
         break;
       case FitTermination::converged_exact:
         summary_.message = "the parameters fit the data and the prior exactly, to rounding";
-        break;
-      case FitTermination::rounding_limited:
-        summary_.message = "no step decreases the cost any more in double precision";
         break;
       case FitTermination::max_iterations:
         summary_.message = "stopped after " + std::to_string(summary_.iterations) +
@@ -859,14 +844,13 @@ class ConsistentFitMinimizer {
   Eigen::VectorXd start_, centre_;   // π: the start, the barriers' centre
   double z_norm_ = 0.0;              // ‖z‖ (reduced), for the exact-fit test
   Point current_, trial_;
-  // The iteration's state: the model at current_ (valid while linearised_), its free
-  // variables, and Nielsen's damping λ and growth ν.
+  // The iteration's state: the model at current_, its free variables, and the damping λ (the
+  // minimiser's, kept across the stages).
   Eigen::VectorXd g_;
   Eigen::MatrixXd curvature_, gp_, h_;
   std::vector<int> free_variables_;
-  bool linearised_ = false;
   double damping_ = 0.0;
-  double growth_ = 2.0;
+  std::string last_message_;  // why the last stage's run stopped
 };
 
 }  // namespace

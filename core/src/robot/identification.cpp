@@ -40,7 +40,8 @@ constexpr double kCancelled = 10.0;
 /// torque sensor (step 1).
 constexpr double kNoTorqueRatio = 1e-4;
 
-std::string join(const std::vector<std::string>& words) {
+// (Not `join`: urdf.cpp has one with a separator, and a unity batch can hold both files.)
+std::string join_words(const std::vector<std::string>& words) {
   std::string text;
   for (std::size_t i = 0; i < words.size(); ++i) text += (i ? ", " : "") + words[i];
   return text;
@@ -163,7 +164,7 @@ std::string far_from_prior(const BaseParameters& base, const Eigen::VectorXd& es
     far.push_back(text.str());
   }
   if (far.empty()) return {};
-  return "estimates far from the URDF's values: " + join(far) + "; check the URDF, the units and the excitation before "
+  return "estimates far from the URDF's values: " + join_words(far) + "; check the URDF, the units and the excitation before "
          "trusting them";
 }
 
@@ -203,7 +204,7 @@ std::vector<int> measured_joints(const Model& model, const Runs& runs, const std
   }
   if (joints.empty()) throw InputError("tau", "every torque column is zero: identification needs measured torques");
   if (!silent.empty()) {
-    warnings.push_back("the torque of " + join(silent) + " is zero throughout (below 1e-4 of the largest joint's): taken as "
+    warnings.push_back("the torque of " + join_words(silent) + " is zero throughout (below 1e-4 of the largest joint's): taken as "
                        "not measured, so its rows are left out of the fit and the judge; give torque_joints "
                        "(--torque-joints) to say which joints have torque sensors");
   }
@@ -608,7 +609,7 @@ IdentificationResult identify_runs(const Model& model, const std::vector<Traject
   }
   result.condition_number = solution.condition_number;
   if (!barely.empty()) {
-    result.warnings.push_back("the data barely see " + join(barely) + " (each base parameter's data share: the part of "
+    result.warnings.push_back("the data barely see " + join_words(barely) + " (each base parameter's data share: the part of "
                               "its estimate the data determine rather than the URDF): these stay near the URDF's values; "
                               "a richer excitation (manipid excitation) or another run would determine them");
   }

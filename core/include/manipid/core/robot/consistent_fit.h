@@ -48,8 +48,9 @@
 //
 // Solver. Levenberg–Marquardt over y (θ for links, the parameter elsewhere) with the exact
 // Jacobian R·∂π/∂y; its model is Newton's in π pulled back through ∂π/∂y (exact for the
-// quadratic terms), with Marquardt's diagonal scaling, Nielsen's damping update and Eigen's
-// Cholesky. The objective depends on π only, so a link's step is taken through π,
+// quadratic terms), with Marquardt's diagonal scaling and Eigen's Cholesky; each stage is a run
+// of core's one Levenberg–Marquardt minimiser (core/src/estimation/gauss_newton.h: Nielsen's
+// damping update and the stop tests). The objective depends on π only, so a link's step is taken through π,
 // θ_new = θ(π + P δθ) — θ + δθ to first order — where the model is exact for the data term;
 // the chart step θ + δθ would bend away from it, most on slender links. As interior-point
 // methods do, a step goes at most 95 % of the way to the margin along its direction, and μ
