@@ -229,6 +229,32 @@ bool warns_of_bias(const IdentificationResult& result) {
   });
 }
 
+TEST(Identification, AFitWhoseOnlyFreeParameterEndsOnItsBoundStops) {
+  // Data no arm made (q quadratic, τ a ramp: the service's concurrency test's dataset) drive m2, the one
+  // free parameter, onto its bound; the polish then has no direction to move in and stops — its
+  // eigensolver on an empty matrix crashed the process (found by tests/service/concurrency_test.py).
+  Trajectory data;
+  data.t = Eigen::VectorXd::LinSpaced(300, 0.0, 0.299);
+  data.q.resize(300, 4);
+  data.tau.resize(300, 4);
+  for (int i = 0; i < 300; ++i) {
+    for (int j = 0; j < 4; ++j) {
+      data.q(i, j) = 0.001 * i * i * (j + 1);
+      data.tau(i, j) = 0.1 * i + j;
+    }
+  }
+  const Preset preset = cedro2009();
+  IdentificationOptions options;
+  options.initial = preset.initial_parameters;
+  options.half_length = 20;
+  options.band = 0.5;
+  options.free = {"m2"};
+  options.max_evaluations = 60;
+  const IdentificationResult result = identify(preset.model, data, options);
+  EXPECT_TRUE(std::isfinite(result.final_cost));
+  EXPECT_LE(result.evaluations, 60);
+}
+
 TEST(Identification, SaysWhenTheResidualIsBiasNotNoise) {
   // Noise-free data: the residual is the method's smooth bias, so the standard errors are no
   // statement about the error: the result says so, for the default (filter chosen from the data)

@@ -433,7 +433,9 @@ class InputErrorPolish final : public detail::GaussNewtonProblem {
     Eigen::MatrixXd block(f, f);
     for (int a = 0; a < f; ++a)
       for (int b = 0; b < f; ++b) block(a, b) = h_(free_[a], free_[b]);
-    eigen_.compute(block);
+    // Eigen 3.4's eigensolver reads out of bounds on an empty matrix: every parameter held on its bound
+    // (a 1-parameter fit at a bound) has nothing to decompose.
+    if (f > 0) eigen_.compute(block);
     largest_ = f > 0 ? eigen_.eigenvalues().maxCoeff() : 0.0;
     return true;
   }
