@@ -24,6 +24,10 @@ using manipid::detail::kNaN;
 constexpr double kDeterminedShare = 0.5;
 /// A mass above this many standard errors is a payload; below, the run cannot tell it from none.
 constexpr double kDetectedMass = 2.0;
+/// A payload that leaves more than this share of the arm's residual explains little of it (a warning): a real
+/// payload on the arm it was identified with leaves its noise (the simulated 3 kg tool: 0.3 %), a run of
+/// another arm much more (links 2 and 3 half again as heavy: 36 %).
+constexpr double kUnexplained = 0.25;
 /// The jackknife's blocks of time (jackknife_inflation).
 constexpr int kJackknifeBlocks = 10;
 
@@ -300,10 +304,26 @@ PayloadResult identify_payload(const Model& model, const ArmParameters& arm, con
   result.mass_std_error = result.std_errors[0];
   const bool mass_given = options.known_mass.has_value();
   result.detected = mass_given || (result.data_share[0] >= kDeterminedShare && result.mass > kDetectedMass * result.mass_std_error);
-  if (!result.detected) {
-    result.warnings.push_back("no payload: the mass, " + manipid::detail::short_number(result.mass) + " ± " +
-                              manipid::detail::short_number(result.mass_std_error) + " kg, is not distinguishable from 0, so the "
+  const std::string mass_text =
+      manipid::detail::short_number(result.mass) + " ± " + manipid::detail::short_number(result.mass_std_error) + " kg";
+  if (!result.detected && result.data_share[0] >= kDeterminedShare && result.mass < -kDetectedMass * result.mass_std_error) {
+    // No body has a negative mass: what the arm leaves is not a payload's torque.
+    result.warnings.push_back("the run's residual is not a payload's: its mass comes out negative, " + mass_text +
+                              ", so the arm's parameters do not describe this run (another arm, a tool that was already "
+                              "mounted when the arm was identified, or a changed set-up); the centre of mass and the inertia "
+                              "are not reported");
+  } else if (!result.detected) {
+    result.warnings.push_back("no payload: the mass, " + mass_text + ", is not distinguishable from 0, so the "
                               "centre of mass and the inertia are not reported");
+  }
+  if (result.detected && result.with_payload_error > kUnexplained * result.arm_only_error) {
+    result.warnings.push_back("the payload explains little of what the arm leaves (the run's torque error " +
+                              manipid::detail::short_number(100.0 * result.arm_only_error) + " % with the arm alone, " +
+                              manipid::detail::short_number(100.0 * result.with_payload_error) + " % with the payload): the "
+                              "arm's parameters may not describe this run (another arm, a changed set-up), and the payload's "
+                              "values absorb the mismatch");
+  }
+  if (!result.detected) {
     result.inertia.fill(kNaN);
     result.inertia_std_errors.fill(kNaN);
     return finish();

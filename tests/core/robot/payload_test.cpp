@@ -105,6 +105,7 @@ TEST(Payload, NoisyRunWithTheTrueArmAndWithTheArmAsIdentified) {
   const PayloadResult identified_arm = identify_payload(scene.model, {arm.layout, arm.point}, {data}, {});
   EXPECT_NEAR(identified_arm.mass, 3.0, 0.03);
   EXPECT_LT(com_error(identified_arm, scene.payload), 2e-3);
+  for (const std::string& warning : identified_arm.warnings) EXPECT_EQ(warning.find("explains little"), std::string::npos) << warning;
 
   // A held-out run with the tool is predicted as well as with the true tool on the identified arm.
   const Trajectory other = run(scene.model, scene.layout, scene.loaded, 15.0, engine, true);
@@ -171,6 +172,24 @@ TEST(Payload, MotionAboutOneVerticalAxisLeavesMostUndeterminedAndSaysSo) {
     for (const std::string& warning : result.warnings) named = named || warning.find("excite " + name + " ") != std::string::npos;
     EXPECT_TRUE(named) << name;
   }
+}
+
+TEST(Payload, ARunOfAnotherArmIsNamedNotPassedOffAsAPayload) {
+  // The run comes from an arm whose upper arm and forearm (links 2 and 3) are half again as heavy: the residual
+  // is no payload's. Whatever the fit makes of it, the answer says so — a negative mass, or a payload that
+  // explains little. (A heavier wrist would be a payload to the tip link: nothing could tell them apart.)
+  std::mt19937_64 engine(19);
+  const Scene scene(engine);
+  Eigen::VectorXd other = scene.arm;
+  other.segment(10, 20) *= 1.5;
+  const Trajectory data = run(scene.model, scene.layout, other, 15.0, engine, true);
+  const PayloadResult result = identify_payload(scene.model, {scene.layout, scene.arm}, {data}, {});
+  bool said = false;
+  for (const std::string& warning : result.warnings) {
+    said = said || warning.find("not a payload's") != std::string::npos || warning.find("explains little") != std::string::npos;
+  }
+  EXPECT_TRUE(said) << result.mass << " ± " << result.mass_std_error << " kg; " << result.arm_only_error << " -> "
+                    << result.with_payload_error;
 }
 
 TEST(Payload, RefusalsNameTheirField) {
