@@ -4,7 +4,9 @@
 #include "manipid/core/errors.h"
 #include "manipid/core/robot/excitation.h"
 #include "manipid/core/robot/identification.h"
+#include "manipid/core/robot/regressor.h"
 #include "manipid/core/robot/urdf.h"
+#include "manipid/core/signal/judge.h"
 #include "rigid_bodies.h"
 #include "robot_test_support.h"
 #include "simulated_runs.h"
@@ -66,6 +68,30 @@ struct Scene {
   }
 };
 
+/// The textbook's payload, for comparison: the run's q and τ through the judge's low-pass (5 Hz zero-phase
+/// Butterworth), q̇ and q̈ by central differences (signal/judge.h's states), the arm's torque taken from τ, and
+/// ordinary least squares on the last body's columns times payload_to_last_body() over the judged span.
+Eigen::Matrix<double, 10, 1> textbook_payload(const Model& model, const ArmParameters& arm, const Trajectory& run) {
+  const JudgeOptions judge;
+  const JudgedStates states = judge_states(run, judge);
+  const Eigen::MatrixXd tau = judge_lowpass(run.tau, run.dt(), judge);
+  const JudgedSpan span = judged_span(run.t, judge);
+  const int n = model.joint_count();
+  Data data(model);
+  Eigen::MatrixXd Y(n, arm.layout.size(n));
+  Eigen::MatrixXd A(span.size() * n, 10);
+  Eigen::VectorXd b(span.size() * n);
+  const Eigen::Matrix<double, 10, 10> T = payload_to_last_body(model);
+  for (Eigen::Index s = span.first; s <= span.last; ++s) {
+    regressor(model, data, arm.layout, states.q.row(s).transpose(), states.qd.row(s).transpose(),
+              states.qdd.row(s).transpose(), Y);
+    const Eigen::Index row = (s - span.first) * n;
+    A.middleRows(row, n) = Y.middleCols(kInertialParametersPerBody * (n - 1), 10) * T;
+    b.segment(row, n) = tau.row(s).transpose() - Y * arm.pi;
+  }
+  return A.colPivHouseholderQr().solve(b);
+}
+
 double com_error(const PayloadResult& result, const InertialParameters& truth) {
   return (result.centre_of_mass - truth.centre_of_mass()).norm();
 }
@@ -109,6 +135,9 @@ TEST(Payload, NoisyRunWithTheTrueArmAndWithTheArmAsIdentified) {
   EXPECT_LT(com_error(identified_arm, scene.payload), 2e-3);
   for (const std::string& warning : identified_arm.warnings) EXPECT_EQ(warning.find("explains little"), std::string::npos) << warning;
 
+  // Beside the textbook on the same run and arm (judge's low-pass, central differences, ordinary least squares).
+  const Eigen::Matrix<double, 10, 1> textbook = textbook_payload(scene.model, {arm.layout, arm.point}, data);
+
   // A held-out run with the tool is predicted as well as with the true tool on the identified arm.
   const Trajectory other = run(scene.model, scene.layout, scene.loaded, 15.0, engine, true);
   PayloadResult true_tool = identified_arm;
@@ -118,6 +147,12 @@ TEST(Payload, NoisyRunWithTheTrueArmAndWithTheArmAsIdentified) {
   const PayloadValidation reference = validate_payload(scene.model, {arm.layout, arm.point}, true_tool, {other}, options);
   EXPECT_LT(estimated.with_payload.overall_relative_error, 1.1 * reference.with_payload.overall_relative_error);
   EXPECT_LT(estimated.with_payload.overall_relative_error, 0.5 * estimated.arm_only.overall_relative_error);
+  // And as well as the textbook's payload (on simulated white noise the two are alike: ten runs, see
+  // DISABLED_BesideTheTextbookOnTenRuns).
+  PayloadResult textbook_tool = identified_arm;
+  textbook_tool.estimate = textbook;
+  const PayloadValidation plain = validate_payload(scene.model, {arm.layout, arm.point}, textbook_tool, {other}, options);
+  EXPECT_LT(estimated.with_payload.overall_relative_error, 1.02 * plain.with_payload.overall_relative_error);
 }
 
 TEST(Payload, ARunWithoutPayloadAnswersZeroWithinItsUncertainty) {
@@ -324,6 +359,35 @@ TEST(Payload, ExcitationRefusesMovingJointsOutsideTheArm) {
   } catch (const InputError& error) {
     EXPECT_EQ(error.field(), "moving_joints");
   }
+}
+
+// The study behind docs/robot-identification.md's comparison with the textbook (ten seeds; prints, asserts
+// nothing): robot_tests --gtest_also_run_disabled_tests --gtest_filter='Payload.DISABLED_BesideTheTextbook*'
+TEST(Payload, DISABLED_BesideTheTextbookOnTenRuns) {
+  double sm = 0, st = 0, cm = 0, ct = 0, hm = 0, ht = 0, hr = 0;
+  for (int seed = 100; seed < 110; ++seed) {
+    std::mt19937_64 engine(seed);
+    const Scene scene(engine);
+    const Trajectory arm_run = run(scene.model, scene.layout, scene.arm, 20.0, engine, true);
+    IdentificationOptions arm_options;
+    arm_options.layout = scene.layout;
+    const IdentificationResult arm = identify(scene.model, arm_run, arm_options);
+    const Trajectory data = run(scene.model, scene.layout, scene.loaded, 15.0, engine, true);
+    const PayloadResult mine = identify_payload(scene.model, {arm.layout, arm.point}, {data}, {});
+    const Eigen::Matrix<double, 10, 1> tb = textbook_payload(scene.model, {arm.layout, arm.point}, data);
+    const Trajectory other = run(scene.model, scene.layout, scene.loaded, 15.0, engine, true);
+    PayloadResult t = mine; t.estimate = tb;
+    PayloadResult r = mine; r.estimate = scene.payload.vector();
+    const PayloadOptions o;
+    const double em = validate_payload(scene.model, {arm.layout, arm.point}, mine, {other}, o).with_payload.overall_relative_error;
+    const double et = validate_payload(scene.model, {arm.layout, arm.point}, t, {other}, o).with_payload.overall_relative_error;
+    const double er = validate_payload(scene.model, {arm.layout, arm.point}, r, {other}, o).with_payload.overall_relative_error;
+    const double mm = std::abs(mine.mass - 3) / 3, mt = std::abs(tb[0] - 3) / 3;
+    const double cmm = com_error(mine, scene.payload), cmt = (tb.segment<3>(1) / tb[0] - scene.payload.centre_of_mass()).norm();
+    std::printf("seed %d mass %.4f%% vs %.4f%%  com %.3f vs %.3f mm  heldout %.4f%% vs %.4f%% (true %.4f%%)\n", seed, 100*mm, 100*mt, 1e3*cmm, 1e3*cmt, 100*em, 100*et, 100*er);
+    sm += mm*mm; st += mt*mt; cm += cmm*cmm; ct += cmt*cmt; hm += em; ht += et; hr += er;
+  }
+  std::printf("RMS mass %.4f%% vs %.4f%%, com %.3f vs %.3f mm, heldout mean %.4f%% vs %.4f%% (true %.4f%%)\n", 100*std::sqrt(sm/10), 100*std::sqrt(st/10), 1e3*std::sqrt(cm/10), 1e3*std::sqrt(ct/10), 10*hm, 10*ht, 10*hr);
 }
 
 TEST(Payload, RefusalsNameTheirField) {
