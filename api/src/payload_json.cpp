@@ -34,6 +34,14 @@ nlohmann::ordered_json payload_to_json(const robot::Model& model, const robot::P
                           {"std_error", number(result.std_errors[k])},
                           {"data_share", number(result.data_share[k])}});
   }
+  Json candidates = Json::array();
+  for (const auto& candidate : result.candidates) {
+    candidates.push_back({{"comparison_cutoff_hz", number(candidate.cutoff_hz)}, {"held_out_error", number(candidate.held_out_error)}});
+  }
+  const Json filters = {{"comparison_cutoff_hz", number(result.comparison_cutoff_hz)},
+                        {"chosen_by_held_out", !result.candidates.empty()},
+                        {"held_out_error", number(result.held_out_error)},
+                        {"candidates", candidates}};
   Json joints = Json::array();
   for (int k : result.torque_joints) joints.push_back(model.joints[static_cast<std::size_t>(k)].name);
   Json json = {
@@ -54,7 +62,7 @@ nlohmann::ordered_json payload_to_json(const robot::Model& model, const robot::P
       {"given",
        {{"mass", options.known_mass ? number(*options.known_mass) : Json(nullptr)},
         {"centre_of_mass", options.known_centre_of_mass ? point_json(*options.known_centre_of_mass) : Json(nullptr)}}},
-      {"filters", {{"comparison_cutoff_hz", number(result.comparison_cutoff_hz)}}},
+      {"filters", filters},
       {"judge", judge_to_json(options.judge)},
       {"torque_joints", joints},
       {"rows", result.rows},

@@ -25,8 +25,12 @@ std::string with_error(double value, double error) {
 void print_table(const robot::Model& model, const robot::PayloadResult& result, const std::string& arm_source,
                  const std::optional<robot::PayloadValidation>& validation) {
   std::printf("robot %s, payload on %s; the arm: %s\n", model.name.c_str(), model.tip_link.c_str(), arm_source.c_str());
-  std::printf("payload from the arm's residual torque, linear least squares: %d rows, comparison low-pass %s Hz%s\n",
+  std::printf("payload from the arm's residual torque, linear least squares: %d rows, comparison low-pass %s Hz%s%s\n",
               result.rows, format(result.comparison_cutoff_hz, 3).c_str(),
+              result.candidates.empty() ? " (given)"
+                                        : (" (chosen by held-out error, " + format(100.0 * result.held_out_error, 3) +
+                                           " % of the arm's residual, among " + std::to_string(result.candidates.size()) +
+                                           ")").c_str(),
               result.variance_inflation > 1.0
                   ? (", standard errors widened x" + format(std::sqrt(result.variance_inflation), 3) +
                      " (the residual is correlated over time)")
@@ -81,7 +85,7 @@ CLI::App* add_payload_command(CLI::App& app, PayloadOptions& options) {
   command->add_option("--trim", options.trim, "Seconds dropped at the start and the end, START,END");
   command->add_option("--dt", options.dt, "Resample onto this period, s (default: the median time step)")->check(positive_number());
   command->add_option("--comparison-cutoff", options.comparison_cutoff,
-                      "The comparison low-pass's cut-off, Hz (default: the judge's)")
+                      "The comparison low-pass's cut-off, Hz (default: chosen by held-out error, as identify chooses it)")
       ->check(positive_number());
   command->add_option("--torque-joints", options.torque_joints, "Joints whose torque is fitted, e.g. 1-6 (default: all)");
   command->add_option("--judge-cutoff", options.judge_cutoff, "The cut-off (Hz) of the fixed low-pass torque figures are judged under")

@@ -45,6 +45,21 @@ int FilterPair::shortest_data() const {
   return 2 * differentiation.half_length + 1 + 2 * trim + 8 * working_step;
 }
 
+std::vector<double> candidate_cutoffs(double given_hz, double judge_cutoff_hz, double dt) {
+  if (given_hz > 0) return {given_hz};
+  std::vector<double> cutoffs;
+  for (double factor : kCutoffFactors) {
+    const double cutoff = factor * judge_cutoff_hz;
+    if (cutoff < 0.1 / dt) cutoffs.push_back(cutoff);  // at most a fifth of the Nyquist frequency
+  }
+  if (cutoffs.empty()) cutoffs.push_back(std::min(judge_cutoff_hz, 0.1 / dt));
+  return cutoffs;
+}
+
+double held_out_guard(double cutoff_hz, double judge_cutoff_hz, const FilterPair& filters) {
+  return 0.5 / cutoff_hz + 0.5 / judge_cutoff_hz + filters.differentiation.half_length * filters.differentiation.dt;
+}
+
 FilterPair differentiation_for(double highest_cutoff_hz, double dt, double trim_seconds) {
   FilterPair filters;
   filters.trim_seconds = trim_seconds;

@@ -25,9 +25,6 @@ namespace {
 
 using Clock = std::chrono::steady_clock;
 
-/// Cross-validation's folds and the time bins each fold is made of (estimation/cross_validation.h).
-constexpr int kFolds = 5;
-constexpr int kBinsPerFold = 4;
 /// A base parameter whose data share is below this is reported as barely seen by the data.
 constexpr double kBarelySeenShare = 0.5;
 /// An estimate this many times its prior is named in a warning; for a prior of zero (below kRoundOff of the
@@ -422,16 +419,7 @@ IdentificationResult identify_runs(const Model& model, const std::vector<Traject
   const std::vector<int>& joints = result.torque_joints;
 
   // Step 2: the candidates' cut-offs, D for the highest of them (and the judge's), the regressor signals.
-  std::vector<double> cutoffs;
-  if (options.comparison_cutoff_hz > 0) {
-    cutoffs.push_back(options.comparison_cutoff_hz);
-  } else {
-    for (double factor : kCutoffFactors) {
-      const double cutoff = factor * options.judge.cutoff_hz;
-      if (cutoff < 0.1 / dt) cutoffs.push_back(cutoff);  // at most a fifth of the Nyquist frequency
-    }
-    if (cutoffs.empty()) cutoffs.push_back(std::min(options.judge.cutoff_hz, 0.1 / dt));
-  }
+  const std::vector<double> cutoffs = candidate_cutoffs(options.comparison_cutoff_hz, options.judge.cutoff_hz, dt);
   const double highest = std::max(*std::max_element(cutoffs.begin(), cutoffs.end()), options.judge.cutoff_hz);
   FilterPair filters = differentiation_for(highest, dt, options.judge.trim_seconds);
   if (options.half_length > 0) {
@@ -497,12 +485,10 @@ IdentificationResult identify_runs(const Model& model, const std::vector<Traject
       }
       spans.emplace_back(from, to);
     }
-    const estimation::TimeBins bins(spans, kFolds, kBinsPerFold);
+    const estimation::TimeBins bins(spans, kHeldOutFolds, kHeldOutBinsPerFold);
     const estimation::BinnedSums target_sums =
         estimation::bin_rows(target.W, target.tau, bins_of_rows(target, bins), bins.count());
-    const auto guard_for = [&](double cutoff) {
-      return 0.5 / cutoff + 0.5 / options.judge.cutoff_hz + filters.differentiation.half_length * dt;
-    };
+    const auto guard_for = [&](double cutoff) { return held_out_guard(cutoff, options.judge.cutoff_hz, filters); };
     // The cut-off with the full friction model, then (with friction_auto) the friction models at that cut-off.
     double best = std::numeric_limits<double>::infinity();
     estimation::BinnedSums chosen_sums;

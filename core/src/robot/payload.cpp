@@ -2,6 +2,7 @@
 #include "manipid/core/robot/payload.h"
 
 #include "manipid/core/errors.h"
+#include "manipid/core/estimation/cross_validation.h"
 #include "manipid/core/estimation/linear_least_squares.h"
 #include "manipid/core/estimation/rules.h"
 #include "manipid/core/robot/consistency.h"
@@ -121,6 +122,55 @@ Unknowns unknowns(const PayloadOptions& options) {
   u.G.resize(10, static_cast<Eigen::Index>(columns.size()));
   for (std::size_t c = 0; c < columns.size(); ++c) u.G.col(static_cast<Eigen::Index>(c)) = columns[c];
   return u;
+}
+
+/// A candidate's rows: body n's columns in the tip link's frame (W_tip) and the arm's residual through L, the
+/// unknowns' rows (A x ≈ y), and where each row lies in time (for the held-out folds).
+struct PayloadRows {
+  Eigen::MatrixXd W_tip, A;
+  Eigen::VectorXd residual, y;
+  std::vector<int> run_of_row;
+  std::vector<double> time_of_row;
+  int row_step = 1;
+  double lowpass_energy = 1.0;
+
+  std::vector<int> bins(const estimation::TimeBins& bins) const {
+    std::vector<int> of_row(run_of_row.size());
+    for (std::size_t r = 0; r < of_row.size(); ++r) of_row[r] = bins.bin(run_of_row[r], time_of_row[r]);
+    return of_row;
+  }
+};
+
+PayloadRows payload_rows(const std::vector<RegressorSignals>& signals, int p, double cutoff, double trim_seconds,
+                         const std::vector<int>& joints, const std::vector<int>& body_columns, const Matrix10d& T,
+                         const Unknowns& u) {
+  std::vector<FilteredRows> per_run;
+  Eigen::Index total = 0;
+  for (const RegressorSignals& run : signals) {
+    per_run.push_back(filtered_rows(run, p, cutoff, trim_seconds, joints, body_columns));
+    total += per_run.back().W.rows();
+  }
+  PayloadRows rows;
+  Eigen::MatrixXd W(total, kInertialParametersPerBody);
+  rows.residual.resize(total);
+  Eigen::Index at = 0;
+  const Eigen::Index J = static_cast<Eigen::Index>(joints.size());
+  for (std::size_t run = 0; run < per_run.size(); ++run) {
+    const FilteredRows& part = per_run[run];
+    W.middleRows(at, part.W.rows()) = part.W;
+    rows.residual.segment(at, part.tau.size()) = part.tau;
+    for (Eigen::Index r = 0; r < part.W.rows(); ++r) {
+      rows.run_of_row.push_back(static_cast<int>(run));
+      rows.time_of_row.push_back(part.t[r / J]);
+    }
+    at += part.W.rows();
+    rows.row_step = part.row_step;
+    rows.lowpass_energy = part.lowpass_energy;
+  }
+  rows.W_tip = W * T;  // columns for π_P
+  rows.A = rows.W_tip * u.G;
+  rows.y = rows.residual - rows.W_tip * u.g0;
+  return rows;
 }
 
 /// How much larger the estimate's variance is than the white-residual formula says: the median, over the
@@ -295,47 +345,91 @@ PayloadResult identify_payload(const Model& model, const ArmParameters& arm, con
   }
 
   // Step 2: per run, the arm's torque taken from τ on the working grid, then L over the residual and body
-  // n's columns (and, for the figures, over τ itself).
-  const double cutoff = options.comparison_cutoff_hz > 0 ? options.comparison_cutoff_hz : options.judge.cutoff_hz;
-  result.comparison_cutoff_hz = cutoff;
-  const FilterPair filters = differentiation_for(std::max(cutoff, options.judge.cutoff_hz), dt, options.judge.trim_seconds);
+  // n's columns (and, for the figures, over τ itself), at each candidate cut-off.
+  const std::vector<double> cutoffs = candidate_cutoffs(options.comparison_cutoff_hz, options.judge.cutoff_hz, dt);
+  const double highest = std::max(*std::max_element(cutoffs.begin(), cutoffs.end()), options.judge.cutoff_hz);
+  const FilterPair filters = differentiation_for(highest, dt, options.judge.trim_seconds);
   std::vector<int> body_columns;
   for (int i = 0; i < kInertialParametersPerBody; ++i) body_columns.push_back(kInertialParametersPerBody * (n - 1) + i);
-  Eigen::MatrixXd W(0, kInertialParametersPerBody);
-  Eigen::VectorXd residual(0), torque(0);
-  int row_step = 1;
-  double lowpass_energy = 1.0;
+  std::vector<RegressorSignals> signals;
+  std::vector<double> torque_energy(cutoffs.size(), 0.0);  // ‖L τ‖² per candidate, for the figures
   for (const Trajectory& run : runs) {
-    RegressorSignals signals = regressor_signals(model, arm.layout, run, filters, options.cancel);
-    if (signals.t.size() == 0) {
+    RegressorSignals run_signals = regressor_signals(model, arm.layout, run, filters, options.cancel);
+    if (run_signals.t.size() == 0) {
       result.cancelled = true;
       return finish();
     }
-    const FilteredRows measured_rows = filtered_rows(signals, p, cutoff, filters.trim_seconds, result.torque_joints, {body_columns[0]});
+    for (std::size_t c = 0; c < cutoffs.size(); ++c) {
+      torque_energy[c] +=
+          filtered_rows(run_signals, p, cutoffs[c], filters.trim_seconds, result.torque_joints, {body_columns[0]}).tau.squaredNorm();
+    }
     for (int k = 0; k < n; ++k) {
-      const std::vector<int>& columns = signals.columns[static_cast<std::size_t>(k)];
+      const std::vector<int>& columns = run_signals.columns[static_cast<std::size_t>(k)];
       Eigen::VectorXd pi_k(static_cast<Eigen::Index>(columns.size()));
       for (std::size_t c = 0; c < columns.size(); ++c) pi_k[static_cast<Eigen::Index>(c)] = arm.pi[columns[c]];
-      signals.tau.col(k) -= signals.Y[static_cast<std::size_t>(k)] * pi_k;
+      run_signals.tau.col(k) -= run_signals.Y[static_cast<std::size_t>(k)] * pi_k;
     }
-    const FilteredRows rows = filtered_rows(signals, p, cutoff, filters.trim_seconds, result.torque_joints, body_columns);
-    const Eigen::Index top = W.rows();
-    W.conservativeResize(top + rows.W.rows(), Eigen::NoChange);
-    W.bottomRows(rows.W.rows()) = rows.W;
-    residual.conservativeResize(top + rows.tau.size());
-    residual.tail(rows.tau.size()) = rows.tau;
-    torque.conservativeResize(top + measured_rows.tau.size());
-    torque.tail(measured_rows.tau.size()) = measured_rows.tau;
-    row_step = rows.row_step;
-    lowpass_energy = rows.lowpass_energy;
+    signals.push_back(std::move(run_signals));
   }
-  result.rows = static_cast<int>(W.rows());
-  const Eigen::MatrixXd W_tip = W * payload_to_last_body(model);  // columns for π_P
-
-  // Step 3: x of the unknowns, A x ≈ L r − W_tip g0.
   const Unknowns u = unknowns(options);
-  const Eigen::MatrixXd A = W_tip * u.G;
-  const Eigen::VectorXd y = residual - W_tip * u.g0;
+  const Matrix10d T = payload_to_last_body(model);
+  const auto rows_at = [&](double cutoff) { return payload_rows(signals, p, cutoff, filters.trim_seconds, result.torque_joints, body_columns, T, u); };
+
+  // Step 3a (L's cut-off chosen by held-out evidence as an arm's identification chooses: robot/identification.h's step 3):
+  // each candidate's fit on four fifths of every run predicts the fifth it did not see, against one target —
+  // the arm's residual through the judge's low-pass.
+  std::size_t chosen = 0;
+  PayloadRows rows;
+  result.held_out_error = kNaN;
+  if (cutoffs.size() == 1) {
+    rows = rows_at(cutoffs.front());
+  } else {
+    const PayloadRows target = rows_at(options.judge.cutoff_hz);
+    std::vector<std::pair<double, double>> spans;
+    for (std::size_t run = 0; run < runs.size(); ++run) {
+      double from = std::numeric_limits<double>::infinity(), to = -from;
+      for (std::size_t r = 0; r < target.run_of_row.size(); ++r) {
+        if (target.run_of_row[r] != static_cast<int>(run)) continue;
+        from = std::min(from, target.time_of_row[r]);
+        to = std::max(to, target.time_of_row[r]);
+      }
+      spans.emplace_back(from, to);
+    }
+    const estimation::TimeBins bins(spans, kHeldOutFolds, kHeldOutBinsPerFold);
+    const estimation::BinnedSums target_sums = estimation::bin_rows(target.A, target.y, target.bins(bins), bins.count());
+    std::vector<int> columns(static_cast<std::size_t>(target.A.cols()));
+    for (std::size_t i = 0; i < columns.size(); ++i) columns[i] = static_cast<int>(i);
+    const Eigen::VectorXd prior = Eigen::VectorXd::Zero(target.A.cols());
+    double best = std::numeric_limits<double>::infinity();
+    for (std::size_t c = 0; c < cutoffs.size(); ++c) {
+      if (options.cancel && options.cancel->load(std::memory_order_relaxed)) {
+        result.cancelled = true;
+        return finish();
+      }
+      PayloadRows candidate = cutoffs[c] == options.judge.cutoff_hz ? target : rows_at(cutoffs[c]);
+      const estimation::CrossValidation cv =
+          estimation::cross_validate(estimation::bin_rows(candidate.A, candidate.y, candidate.bins(bins), bins.count()),
+                                     target_sums, bins, held_out_guard(cutoffs[c], options.judge.cutoff_hz, filters),
+                                     columns, prior, {0.0});
+      result.candidates.push_back({cutoffs[c], cv.best_relative_error()});
+      if (cv.best_relative_error() < best) {
+        best = cv.best_relative_error();
+        chosen = c;
+        rows = std::move(candidate);
+      }
+    }
+    result.held_out_error = best;
+  }
+  result.comparison_cutoff_hz = cutoffs[chosen];
+  result.rows = static_cast<int>(rows.A.rows());
+  const Eigen::MatrixXd& W_tip = rows.W_tip;
+  const Eigen::VectorXd& residual = rows.residual;
+  const Eigen::MatrixXd& A = rows.A;
+  const Eigen::VectorXd& y = rows.y;
+  const int row_step = rows.row_step;
+  const double lowpass_energy = rows.lowpass_energy;
+
+  // Step 3b: the unknowns x, A x ≈ L r − W_tip g0.
   const estimation::LinearSolution solution = estimation::solve_linear(A, y);
   const double dof = std::max(1.0, static_cast<double>(y.size() - solution.determined));
   result.residual_variance =
@@ -362,7 +456,7 @@ PayloadResult identify_payload(const Model& model, const ArmParameters& arm, con
                                 "; " + what_excites(index) + " would determine it");
     }
   }
-  const double torque_norm = torque.norm();
+  const double torque_norm = std::sqrt(torque_energy[chosen]);
   result.arm_only_error = torque_norm > 0 ? residual.norm() / torque_norm : kNaN;
   result.with_payload_error = torque_norm > 0 ? (y - A * solution.estimate).norm() / torque_norm : kNaN;
 

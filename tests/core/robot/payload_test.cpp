@@ -293,7 +293,7 @@ TEST(Payload, AFewSecondsOfDesignedWristMotionDetermineTheTool) {
   // `excitation --payload`: 5 s in which only the wrist (joints 4–6) moves, the rest holding the pose the design
   // chose. Its payload columns are well conditioned (column-scaled condition < 2.5), every joint that holds still
   // has no motion at all, and on the run with the 3 kg tool and the real logs' noise every payload parameter
-  // is determined: mass within 1 %, centre of mass within 3 mm (measured: 2.9994 ± 0.012 kg, 1.8 mm; the
+  // is determined: mass within 1 %, centre of mass within 3 mm (measured: 3.0028 ± 0.006 kg, 0.65 mm; the
   // condition number 1.72 against 6.4 for the random motion). A random wrist motion of the same length and
   // size does worse by the design's own measure.
   std::mt19937_64 engine(37);

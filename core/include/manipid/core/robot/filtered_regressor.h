@@ -62,6 +62,18 @@ FilterPair differentiation_for(double highest_cutoff_hz, double dt, double trim_
 /// The working step k of the file comment for a differentiation filter D.
 int working_step(const FilterSettings& differentiation);
 
+/// The comparison cut-offs a held-out choice tries, as multiples of the judge's cut-off (5 Hz: 1.5 .. 10 Hz).
+inline constexpr double kCutoffFactors[] = {0.3, 0.4, 0.6, 0.8, 1.0, 1.4, 2.0};
+/// The candidates: `given_hz` alone when it is > 0, else kCutoffFactors × the judge's cut-off below a fifth
+/// of the Nyquist frequency (at least one: the judge's, or that fifth).
+std::vector<double> candidate_cutoffs(double given_hz, double judge_cutoff_hz, double dt);
+/// The held-out choice's folds and the time bins each is made of (estimation/cross_validation.h).
+inline constexpr int kHeldOutFolds = 5;
+inline constexpr int kHeldOutBinsPerFold = 4;
+/// The time a fold's training rows keep from its tested segment, s: half a period of each low-pass (the
+/// candidate's and the judge's) and D's half-length — what a row shares with its neighbours.
+double held_out_guard(double cutoff_hz, double judge_cutoff_hz, const FilterPair& filters);
+
 /// One run on the working grid, before L: the regressor's non-zero columns and the torque.
 struct RegressorSignals {
   double dt = 0.0;                          ///< the working period Δ_w, s

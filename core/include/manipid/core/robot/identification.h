@@ -9,7 +9,7 @@
 //   2. filter: the differentiation filter D gives q^f, q̇^f, q̈^f; Y(q^f, q̇^f, q̈^f) and τ both pass the
 //      comparison low-pass L (robot/filtered_regressor.h), each run alone, rows stacked;
 //   3. choose by held-out evidence (estimation/cross_validation.h): each candidate comparison cut-off
-//      (kCutoffFactors × the judge's cut-off, or the one given), each relative ridge toward the prior
+//      (candidate_cutoffs(): kCutoffFactors × the judge's cut-off, or the one given; filtered_regressor.h), each relative ridge toward the prior
 //      (estimation::default_ridges(), or the one given) and, with `friction_auto`, each friction model
 //      (none, viscous, viscous + Coulomb, viscous + Coulomb + offset) is fitted on four fifths of every run
 //      and scored on the fifth it did not see, five times over, against one common target — the judge's
@@ -56,8 +56,6 @@ namespace manipid::robot {
 /// unit or per_joint (estimation/joint_weighting.h); inverse_variance is the paper's and refused here.
 using estimation::JointWeighting;
 
-/// The comparison cut-offs tried, as multiples of the judge's cut-off (5 Hz: 1.5 .. 10 Hz).
-inline constexpr double kCutoffFactors[] = {0.3, 0.4, 0.6, 0.8, 1.0, 1.4, 2.0};
 
 struct IdentificationOptions {
   /// Friction and armature terms estimated beside the 10 inertial parameters per body.

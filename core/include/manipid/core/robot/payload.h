@@ -14,8 +14,12 @@
 //   1. prepare the run as an arm's identification does (trim, uniform grid; signal/resample.h);
 //   2. filter as the arm's identification does (robot/filtered_regressor.h): D gives the states, the
 //      regressor is formed on the working grid, the arm's torque Y π_arm is subtracted from τ there, and L
-//      passes the residual and body n's 10 columns alike (parallel filtering);
-//   3. solve by the one linear least-squares rule (estimation/linear_least_squares.h) with the prior 0 (no
+//      passes the residual and body n's 10 columns alike (parallel filtering), at L's cut-off or at each
+//      candidate (candidate_cutoffs());
+//   3a. choose L's cut-off by held-out evidence, as an arm's identification does (robot/identification.h's
+//      step 3): each candidate's fit on four fifths of every run predicts the fifth it did not see, against
+//      one target for all — the arm's residual through the judge's low-pass;
+//   3b. solve by the one linear least-squares rule (estimation/linear_least_squares.h) with the prior 0 (no
 //      payload): a direction the run does not excite stays at 0 and is named, never filled with noise; a
 //      known mass or centre of mass is moved to the right-hand side (or into a combined column) first;
 //   4. report in the units a tool is mounted with: mass (kg), centre of mass (m, tip-link frame), inertia
@@ -61,7 +65,7 @@ struct PayloadOptions {
   /// The judge: its cut-off is the comparison low-pass L's unless `comparison_cutoff_hz` is given, and its
   /// trim the rows' (robot/filtered_regressor.h).
   JudgeOptions judge;
-  /// L's cut-off, Hz; 0 = the judge's (as the arm's identification was judged).
+  /// L's cut-off, Hz; 0 = chosen by held-out evidence among candidate_cutoffs() (step 3a).
   double comparison_cutoff_hz = 0.0;
   /// Joints (0-based) whose torque is fitted; empty = all.
   std::vector<int> torque_joints;
@@ -106,7 +110,15 @@ struct PayloadResult {
 
   std::vector<int> torque_joints;   ///< the joints fitted (0-based)
   int rows = 0;                     ///< least-squares rows
-  double comparison_cutoff_hz = 0;  ///< L's cut-off as used, Hz
+  double comparison_cutoff_hz = 0;  ///< L's cut-off as used (given or chosen), Hz
+  /// Step 3a's candidates, each with its held-out error: the relative RMS of its held-out predictions of the
+  /// arm's residual (the judge's low-pass of it); empty when the cut-off was given.
+  struct CutoffCandidate {
+    double cutoff_hz = 0.0;
+    double held_out_error = 0.0;
+  };
+  std::vector<CutoffCandidate> candidates;
+  double held_out_error = std::numeric_limits<double>::quiet_NaN();  ///< the chosen candidate's (NaN: given)
   /// The training rows' filtered torque error relative to the filtered torque, ‖L r‖ / ‖L τ‖ with the arm
   /// alone and ‖L r − W π̂_P‖ / ‖L τ‖ with the payload.
   double arm_only_error = 0.0;
