@@ -155,6 +155,27 @@ TEST(Payload, NoisyRunWithTheTrueArmAndWithTheArmAsIdentified) {
   EXPECT_LT(estimated.with_payload.overall_relative_error, 1.02 * plain.with_payload.overall_relative_error);
 }
 
+TEST(Payload, ASevenJointArmWithATurnedFlangeAndALightTool) {
+  // Another arm and frame: the Panda-like arm whose flange (the tip link) is turned −45° about its axis and
+  // set 0.107 m out, as the real Panda's is, with a 0.8 kg gripper off the axis. The answer is in the flange's
+  // frame: a frame handled wrong would put the centre of mass 28 mm off (its 0.05 m off-axis part turned by 45°).
+  std::string urdf = testing::read_file(testing::source_path("examples/robots/panda_like.urdf"));
+  const std::string flange = R"(<origin xyz="0 0 0.107" rpy="0 0 0"/>)";
+  ASSERT_NE(urdf.find(flange), std::string::npos);
+  urdf.replace(urdf.find(flange), flange.size(), R"(<origin xyz="0 0 0.107" rpy="0 0 -0.7853981633974483"/>)");
+  const Model model = parse_urdf(urdf).model;
+  std::mt19937_64 engine(43);
+  const ParameterLayout layout;
+  const Eigen::VectorXd arm = testing::perturbed_truth(model, layout, engine);
+  const InertialParameters gripper = tool(0.8, Eigen::Vector3d(0.04, 0.03, 0.07));
+  Trajectory data = run(model, layout, with_payload(model, {layout, arm}, gripper.vector()), 15.0, engine, true);
+  const PayloadResult result = identify_payload(model, {layout, arm}, {data}, {});
+  EXPECT_NEAR(result.mass, 0.8, 0.008) << result.mass_std_error;
+  EXPECT_LT(com_error(result, gripper), 1e-3);
+  EXPECT_LT(std::abs(result.mass - 0.8), 4.0 * result.mass_std_error);
+  EXPECT_TRUE(result.undetermined.empty());
+}
+
 TEST(Payload, ARunWithoutPayloadAnswersZeroWithinItsUncertainty) {
   std::mt19937_64 engine(7);
   const Scene scene(engine);
