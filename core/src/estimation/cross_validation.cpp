@@ -7,6 +7,7 @@
 
 #include <Eigen/Eigenvalues>
 
+#include <algorithm>
 #include <cmath>
 #include <limits>
 
@@ -15,6 +16,24 @@ namespace manipid::estimation {
 TimeBins::TimeBins(const std::vector<std::pair<double, double>>& spans, int folds, int bins_per_fold)
     : spans_(spans), folds_(folds), per_fold_(bins_per_fold) {
   if (folds < 2 || bins_per_fold < 1) throw InputError("folds", "cross-validation needs at least 2 folds of 1 bin");
+}
+
+std::vector<std::pair<double, double>> run_spans(const std::vector<int>& run_of_row, const std::vector<double>& time_of_row,
+                                                 int runs) {
+  std::vector<std::pair<double, double>> spans(static_cast<std::size_t>(runs), {std::numeric_limits<double>::infinity(),
+                                                                               -std::numeric_limits<double>::infinity()});
+  for (std::size_t r = 0; r < run_of_row.size(); ++r) {
+    auto& [from, to] = spans[static_cast<std::size_t>(run_of_row[r])];
+    from = std::min(from, time_of_row[r]);
+    to = std::max(to, time_of_row[r]);
+  }
+  return spans;
+}
+
+std::vector<int> bins_of_rows(const TimeBins& bins, const std::vector<int>& run_of_row, const std::vector<double>& time_of_row) {
+  std::vector<int> of_row(run_of_row.size());
+  for (std::size_t r = 0; r < of_row.size(); ++r) of_row[r] = bins.bin(run_of_row[r], time_of_row[r]);
+  return of_row;
 }
 
 int TimeBins::bin(int run, double t) const {

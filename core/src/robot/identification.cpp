@@ -128,12 +128,6 @@ StackedRows stack(std::vector<FilteredRows>&& per_run) {
   return stacked;
 }
 
-std::vector<int> bins_of_rows(const StackedRows& rows, const estimation::TimeBins& bins) {
-  std::vector<int> of_row(rows.run_of_row.size());
-  for (std::size_t r = 0; r < of_row.size(); ++r) of_row[r] = bins.bin(rows.run_of_row[r], rows.time_of_row[r]);
-  return of_row;
-}
-
 /// The warning naming every estimate far from its prior (an empty string when none is): an estimate
 /// kFarFromPrior times its prior; or, for a prior of zero (to round-off: below kRoundOff of the largest), an
 /// estimate whose torque alone is kCancelled times the measured torque, which the other parameters must cancel.
@@ -475,19 +469,10 @@ IdentificationResult identify_runs(const Model& model, const std::vector<Traject
     chosen_rows = rows_at(cutoffs.front());
   } else {
     const StackedRows target = rows_at(options.judge.cutoff_hz);
-    std::vector<std::pair<double, double>> spans;
-    for (std::size_t run = 0; run < runs.size(); ++run) {
-      double from = std::numeric_limits<double>::infinity(), to = -from;
-      for (std::size_t r = 0; r < target.run_of_row.size(); ++r) {
-        if (target.run_of_row[r] != static_cast<int>(run)) continue;
-        from = std::min(from, target.time_of_row[r]);
-        to = std::max(to, target.time_of_row[r]);
-      }
-      spans.emplace_back(from, to);
-    }
-    const estimation::TimeBins bins(spans, kHeldOutFolds, kHeldOutBinsPerFold);
+    const estimation::TimeBins bins(estimation::run_spans(target.run_of_row, target.time_of_row, static_cast<int>(runs.size())),
+                                    kHeldOutFolds, kHeldOutBinsPerFold);
     const estimation::BinnedSums target_sums =
-        estimation::bin_rows(target.W, target.tau, bins_of_rows(target, bins), bins.count());
+        estimation::bin_rows(target.W, target.tau, estimation::bins_of_rows(bins, target.run_of_row, target.time_of_row), bins.count());
     const auto guard_for = [&](double cutoff) { return held_out_guard(cutoff, options.judge.cutoff_hz, filters); };
     // The cut-off with the full friction model, then (with friction_auto) the friction models at that cut-off.
     double best = std::numeric_limits<double>::infinity();
@@ -496,7 +481,7 @@ IdentificationResult identify_runs(const Model& model, const std::vector<Traject
       checkpoint(options.cancel, "the filter choice");
       StackedRows rows = cutoffs[c] == options.judge.cutoff_hz ? target : rows_at(cutoffs[c]);
       estimation::BinnedSums sums =
-          estimation::bin_rows(rows.W, rows.tau, bins_of_rows(rows, bins), bins.count());
+          estimation::bin_rows(rows.W, rows.tau, estimation::bins_of_rows(bins, rows.run_of_row, rows.time_of_row), bins.count());
       const estimation::CrossValidation cv = score(sums, target_sums, bins, guard_for(cutoffs[c]), full, full, ridges);
       result.candidates.push_back({cutoffs[c], friction_text(full.layout), cv.ridges[static_cast<std::size_t>(cv.best)],
                                    cv.best_relative_error()});

@@ -134,11 +134,7 @@ struct PayloadRows {
   int row_step = 1;
   double lowpass_energy = 1.0;
 
-  std::vector<int> bins(const estimation::TimeBins& bins) const {
-    std::vector<int> of_row(run_of_row.size());
-    for (std::size_t r = 0; r < of_row.size(); ++r) of_row[r] = bins.bin(run_of_row[r], time_of_row[r]);
-    return of_row;
-  }
+  std::vector<int> bins(const estimation::TimeBins& bins) const { return estimation::bins_of_rows(bins, run_of_row, time_of_row); }
 };
 
 PayloadRows payload_rows(const std::vector<RegressorSignals>& signals, int p, double cutoff, double trim_seconds,
@@ -385,17 +381,8 @@ PayloadResult identify_payload(const Model& model, const ArmParameters& arm, con
     rows = rows_at(cutoffs.front());
   } else {
     const PayloadRows target = rows_at(options.judge.cutoff_hz);
-    std::vector<std::pair<double, double>> spans;
-    for (std::size_t run = 0; run < runs.size(); ++run) {
-      double from = std::numeric_limits<double>::infinity(), to = -from;
-      for (std::size_t r = 0; r < target.run_of_row.size(); ++r) {
-        if (target.run_of_row[r] != static_cast<int>(run)) continue;
-        from = std::min(from, target.time_of_row[r]);
-        to = std::max(to, target.time_of_row[r]);
-      }
-      spans.emplace_back(from, to);
-    }
-    const estimation::TimeBins bins(spans, kHeldOutFolds, kHeldOutBinsPerFold);
+    const estimation::TimeBins bins(estimation::run_spans(target.run_of_row, target.time_of_row, static_cast<int>(runs.size())),
+                                    kHeldOutFolds, kHeldOutBinsPerFold);
     const estimation::BinnedSums target_sums = estimation::bin_rows(target.A, target.y, target.bins(bins), bins.count());
     std::vector<int> columns(static_cast<std::size_t>(target.A.cols()));
     for (std::size_t i = 0; i < columns.size(); ++i) columns[i] = static_cast<int>(i);

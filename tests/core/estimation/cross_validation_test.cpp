@@ -30,6 +30,17 @@ TEST(CrossValidation, BinsCutEachRunIntoFoldsAndGuardsTheirNeighbours) {
   for (int included : {0, 5, 9, 10, 15, 19}) EXPECT_EQ(std::count(train.begin(), train.end(), included), 1) << included;
 }
 
+TEST(CrossValidation, RowsGiveTheirRunsSpansAndTheirBins) {
+  // Rows of two runs, out of order: each run's span is its first and last row time; each row's bin is the
+  // bin its run and time fall in.
+  const std::vector<int> run_of_row = {1, 0, 0, 1, 0};
+  const std::vector<double> time_of_row = {2.0, 0.5, 10.5, 7.0, 3.0};
+  const std::vector<std::pair<double, double>> spans = run_spans(run_of_row, time_of_row, 2);
+  EXPECT_EQ(spans, (std::vector<std::pair<double, double>>{{0.5, 10.5}, {2.0, 7.0}}));
+  const TimeBins bins(spans, 5, 2);  // run 0: 1 s bins from 0.5 s; run 1: 0.5 s bins from 2 s
+  EXPECT_EQ(bins_of_rows(bins, run_of_row, time_of_row), (std::vector<int>{10, 0, 9, 19, 2}));
+}
+
 TEST(CrossValidation, HeldOutErrorsAreThoseOfFittingEachFoldByHand) {
   std::mt19937_64 engine(7);
   std::normal_distribution<double> normal;

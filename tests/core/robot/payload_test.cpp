@@ -92,6 +92,14 @@ Eigen::Matrix<double, 10, 1> textbook_payload(const Model& model, const ArmParam
   return A.colPivHouseholderQr().solve(b);
 }
 
+/// The arm as manipid identifies it from a 20 s noisy run without the tool (the usual case).
+IdentificationResult identify_arm(const Scene& scene, std::mt19937_64& engine) {
+  const Trajectory arm_run = run(scene.model, scene.layout, scene.arm, 20.0, engine, true);
+  IdentificationOptions options;
+  options.layout = scene.layout;
+  return identify(scene.model, arm_run, options);
+}
+
 double com_error(const PayloadResult& result, const InertialParameters& truth) {
   return (result.centre_of_mass - truth.centre_of_mass()).norm();
 }
@@ -116,10 +124,7 @@ TEST(Payload, NoisyRunWithTheTrueArmAndWithTheArmAsIdentified) {
   // 0.1 %, centre of mass within 0.5 mm; with the arm identified from a 20 s run without the tool: 1 %, 2 mm.
   std::mt19937_64 engine(5);
   const Scene scene(engine);
-  const Trajectory arm_run = run(scene.model, scene.layout, scene.arm, 20.0, engine, true);
-  IdentificationOptions arm_options;
-  arm_options.layout = scene.layout;
-  const IdentificationResult arm = identify(scene.model, arm_run, arm_options);
+  const IdentificationResult arm = identify_arm(scene, engine);
   const Trajectory data = run(scene.model, scene.layout, scene.loaded, 15.0, engine, true);
 
   const PayloadResult exact_arm = identify_payload(scene.model, {scene.layout, scene.arm}, {data}, {});
@@ -389,10 +394,7 @@ TEST(Payload, DISABLED_BesideTheTextbookOnTenRuns) {
   for (int seed = 100; seed < 110; ++seed) {
     std::mt19937_64 engine(seed);
     const Scene scene(engine);
-    const Trajectory arm_run = run(scene.model, scene.layout, scene.arm, 20.0, engine, true);
-    IdentificationOptions arm_options;
-    arm_options.layout = scene.layout;
-    const IdentificationResult arm = identify(scene.model, arm_run, arm_options);
+    const IdentificationResult arm = identify_arm(scene, engine);
     const Trajectory data = run(scene.model, scene.layout, scene.loaded, 15.0, engine, true);
     const PayloadResult mine = identify_payload(scene.model, {arm.layout, arm.point}, {data}, {});
     const Eigen::Matrix<double, 10, 1> tb = textbook_payload(scene.model, {arm.layout, arm.point}, data);

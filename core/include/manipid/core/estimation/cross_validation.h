@@ -36,6 +36,13 @@ class TimeBins {
   int folds_, per_fold_;
 };
 
+/// Each of `runs` runs' first and last row time (TimeBins' spans), from where each row lies: row r is of run
+/// run_of_row[r] at time time_of_row[r], s.
+std::vector<std::pair<double, double>> run_spans(const std::vector<int>& run_of_row, const std::vector<double>& time_of_row,
+                                                 int runs);
+/// Each row's bin (−1 outside every run's span): what bin_rows() takes.
+std::vector<int> bins_of_rows(const TimeBins& bins, const std::vector<int>& run_of_row, const std::vector<double>& time_of_row);
+
 /// The sums of one set of rows by bin.
 struct BinnedSums {
   std::vector<Eigen::MatrixXd> gram;    ///< AᵀA per bin
