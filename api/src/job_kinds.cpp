@@ -100,7 +100,7 @@ nlohmann::ordered_json payload_fit(const FitInputs& inputs) {
 }
 
 /// A robot identification's URDF: each link's <inertial> and each joint's <dynamics> from the result's point.
-UrdfDocument robot_urdf(const UrdfInputs& inputs) {
+UrdfDocument identified_urdf(const UrdfInputs& inputs) {
   // The result's point names its layout (fv…, fc…, fo…, Ia…).
   const nlohmann::json result = nlohmann::json::parse(inputs.job.result);
   const ParameterValues point = parameters_from_json(inputs.robot, result, "result");
@@ -117,7 +117,7 @@ UrdfDocument robot_urdf(const UrdfInputs& inputs) {
 }
 
 /// A payload identification's URDF: the robot's document with the payload mounted on the tip link as a fixed link.
-UrdfDocument payload_urdf(const UrdfInputs& inputs) {
+UrdfDocument payload_mounted_urdf(const UrdfInputs& inputs) {
   const StoredPayload stored = decode_payload_result(inputs.robot, nlohmann::json::parse(inputs.job.result));
   if (!stored.detected) {
     throw ApiError(ProblemKind::conflict,
@@ -146,9 +146,9 @@ constexpr std::array<JobKindHandler, std::size(kJobKinds)> kHandlers = {{
     {JobKind::excitation, "designing the excitation", true, false, false, false, false, excitation_submission,
      shapes::excitation, nullptr, nullptr},
     {JobKind::robot_identification, "identifying the robot", true, false, true, true, true,
-     robot_identification_submission, shapes::robot_identification, robot_fit, robot_urdf},
+     robot_identification_submission, shapes::robot_identification, robot_fit, identified_urdf},
     {JobKind::payload_identification, "identifying the payload", true, false, true, true, true,
-     payload_identification_submission, shapes::payload_identification, payload_fit, payload_urdf},
+     payload_identification_submission, shapes::payload_identification, payload_fit, payload_mounted_urdf},
 }};
 
 constexpr bool in_kind_order() {

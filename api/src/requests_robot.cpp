@@ -275,6 +275,19 @@ RobotIdentificationSpec robot_identification_from_json(const nlohmann::json& bod
   return spec;
 }
 
+namespace {
+
+/// fields::read_positive, its refusal saying what the field is for.
+double with_hint(const fields::Json& value, const char* field, double largest, const char* unit, const char* hint) {
+  try {
+    return fields::read_positive(value, field, largest, unit);
+  } catch (const InputError& error) {
+    throw InputError(error.field(), std::string(error.what()) + ": " + hint);
+  }
+}
+
+}  // namespace
+
 bool asks_for_payload(const nlohmann::json& body) { return body.is_object() && body.contains("payload"); }
 
 PayloadIdentificationSpec payload_identification_from_json(const nlohmann::json& body) {
@@ -302,7 +315,7 @@ PayloadIdentificationSpec payload_identification_from_json(const nlohmann::json&
   if (const fields::Json* arm = object.find("arm_job_id")) spec.arm_job_id = read_id(*arm, "arm_job_id");
   robot::PayloadOptions& options = spec.options;
   if (const fields::Json* mass = object.find("known_mass")) {
-    options.known_mass = fields::read_positive(*mass, "known_mass", 1e6, " kg");
+    options.known_mass = with_hint(*mass, "known_mass", 1e6, " kg", "the payload's mass when known; leave it out to estimate it");
   }
   if (const fields::Json* centre = object.find("known_centre_of_mass")) {
     if (!centre->is_array() || centre->size() != 3) {
@@ -317,7 +330,8 @@ PayloadIdentificationSpec payload_identification_from_json(const nlohmann::json&
   }
   read_preparation(object, options.preparation);
   if (const fields::Json* value = object.find("comparison_cutoff")) {
-    options.comparison_cutoff_hz = fields::read_positive(*value, "comparison_cutoff", kHighestCutoff, " Hz");
+    options.comparison_cutoff_hz = with_hint(*value, "comparison_cutoff", kHighestCutoff, " Hz",
+                                             "leave it out for the judge's cut-off, as the arm was judged");
   }
   read_judge(object, options.judge);
   read_torque_joints(object, options.torque_joints);
