@@ -26,10 +26,7 @@ constexpr double kInputError = 224.0;          // measured 152–174 (a simulati
 constexpr double kClosedLoop = 576.0;          // output-error and two-stage: measured 434–438
 constexpr double kRobotIdentification = 288.0; // measured 198–209 (7 joints, 91 parameters, the held-out choice)
 constexpr double kExcitation = 160.0;          // the dataset it writes, as a simulation's
-// A payload on the tip: the runs, their states and the arm's torque on the working grid, body n's 10 columns and
-// the residual filtered (robot/payload.h), the rows kept for the jackknife. Not measured apart: the robot
-// identification's figure, which holds more per sample (every column, the held-out choice), bounds it.
-constexpr double kPayloadIdentification = kRobotIdentification;
+constexpr double kPayloadIdentification = 112.0;  // measured 70–81 (7 joints, the URDF's arm; body n's 10 columns)
 // What a job holds whatever its size (model, optimiser, result, a history batch): measured 1–2 MiB.
 constexpr double kFixedBytes = 16.0 * (1 << 20);
 
