@@ -3,8 +3,9 @@ port 0: a 6-joint arm that is not quite its URDF and a tool of known mass, centr
 link on its flange), runs with measurement noise made by the real `manipid excitation` and `manipid torque`; the
 arm identified from a run without the tool, then the payload from a run with it (arm_job_id); its views (fit,
 validation, the URDF with the payload mounted); the URDF's values as the arm when none is named (another arm:
-said); known values kept; a run without the payload (≈ 0 kg within its uncertainty, not an error); and every
-bad request refused with problem+json naming the field.
+said); known values kept; a run without the payload (≈ 0 kg within its uncertainty, not an error); every bad
+request refused with problem+json naming the field; an arm that has not finished refused; an arm deleted while
+the payload job waited: the job fails naming arm_job_id, never lost.
 
 Run: MANIPID_BIN=build/debug/server/manipid python3 tests/service/payload_test.py -v
 """
@@ -267,6 +268,34 @@ class PayloadThroughTheService(unittest.TestCase):
                 self.assertEqual(status, 202, job)
                 self.assertEqual(job["kind"], "payload_identification")
                 self.assertEqual(server.request("POST", f"/v1/jobs/{job['id']}/cancel")[0], 200)
+        finally:
+            directory.cleanup()
+
+    def test_an_arm_deleted_before_the_job_ran_fails_it_naming_arm_job_id(self):
+        # One database, three processes: the arm identified; the payload queued (no workers) and its arm deleted;
+        # then a worker runs it: failed, saying what was deleted, never lost.
+        directory = temporary_directory()
+        try:
+            db = os.path.join(directory.name, "jobs.db")
+            with Server(db) as server:
+                robot = server.request("POST", "/v1/robots", self.document, {"Content-Type": "application/xml"})[2]
+                ids = {}
+                for run in ("arm", "tool"):
+                    with open(os.path.join(self.dir, f"{run}.csv")) as stream:
+                        ids[run] = server.request("POST", "/v1/datasets", stream.read(), {"Content-Type": "text/csv"})[2]["id"]
+                arm = server.wait_job(server.request("POST", "/v1/identifications", {
+                    "robot_id": robot["id"], "dataset_id": ids["arm"], "friction": ["viscous", "coulomb"]})[2]["id"])
+                self.assertEqual(arm["state"], "succeeded", arm)
+            with Server(db, workers=0) as server:
+                status, _, job = server.request("POST", "/v1/identifications", {
+                    "payload": True, "robot_id": robot["id"], "dataset_id": ids["tool"], "arm_job_id": arm["id"]})
+                self.assertEqual(status, 202, job)
+                self.assertEqual(server.request("DELETE", f"/v1/jobs/{arm['id']}")[0], 204)
+            with Server(db) as server:
+                job = server.wait_job(job["id"])
+                self.assertEqual(job["state"], "failed", job)
+                self.assertEqual(job["error"]["field"], "arm_job_id", job["error"])
+                self.assertIn(f"job {arm['id']} was deleted before the job ran", job["error"]["detail"])
         finally:
             directory.cleanup()
 
