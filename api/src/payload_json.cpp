@@ -37,7 +37,8 @@ nlohmann::ordered_json payload_to_json(const robot::Model& model, const robot::P
   Json joints = Json::array();
   for (int k : result.torque_joints) joints.push_back(model.joints[static_cast<std::size_t>(k)].name);
   Json json = {
-      {"method", "payload from the arm's residual torque (linear least squares)"},
+      {"method", options.physical ? "payload from the arm's residual torque (least squares over real rigid bodies)"
+                                  : "payload from the arm's residual torque (linear least squares)"},
       {"robot", {{"name", model.name}, {"tip_link", model.tip_link}}},
       {"arm", arm_source},
       {"detected", result.detected},
@@ -58,7 +59,17 @@ nlohmann::ordered_json payload_to_json(const robot::Model& model, const robot::P
       {"torque_joints", joints},
       {"rows", result.rows},
       {"fit", {{"arm_only_error", number(result.arm_only_error)}, {"with_payload_error", number(result.with_payload_error)}}},
+      {"consistent", result.consistent},
+      {"consistency_findings", result.consistency_findings},
   };
+  if (result.physical) {
+    json["physical"] = {{"least_squares_consistent", result.physical->least_squares_consistent},
+                        {"least_squares_findings", result.physical->least_squares_findings},
+                        {"relative_cost_increase", number(result.physical->relative_cost_increase)},
+                        {"report", result.physical->report}};
+  } else {
+    json["physical"] = nullptr;
+  }
   if (validation) {
     json["validation"] = {{"arm_only", prediction_to_json(validation->arm_only)},
                           {"with_payload", prediction_to_json(validation->with_payload)}};

@@ -51,6 +51,13 @@ void print_table(const robot::Model& model, const robot::PayloadResult& result, 
                 format(100.0 * validation->arm_only.overall_relative_error, 3).c_str(),
                 format(100.0 * validation->with_payload.overall_relative_error, 3).c_str());
   }
+  if (result.physical) {
+    std::printf("physical fit: %s\n", result.physical->least_squares_consistent
+                                          ? "the least-squares payload is a real rigid body already; unchanged"
+                                          : ("the least-squares payload was not a real rigid body; the fit over real bodies "
+                                             "costs " + format(100.0 * result.physical->relative_cost_increase, 3) +
+                                             " % more squared residual (" + result.physical->report + ")").c_str());
+  }
   for (const std::string& warning : result.warnings) std::printf("\nwarning: %s\n", warning.c_str());
 }
 
@@ -83,6 +90,9 @@ CLI::App* add_payload_command(CLI::App& app, PayloadOptions& options) {
   command->add_option("--judge-trim", options.judge_trim, "Seconds the judge drops at each end of a run")
       ->check(non_negative_number())
       ->capture_default_str();
+  command->add_flag("--physical", options.physical,
+                    "Make the payload a real rigid body (mass > 0, inertia about the centre of mass positive definite, "
+                    "triangle inequalities): the least squares over such bodies only");
   command->add_flag("--json", options.json, "Print the result as JSON");
   command->add_option("--write-urdf", options.write_urdf,
                       "Write the URDF (--robot's document) with the payload mounted as a fixed link on the tip link");
@@ -118,6 +128,7 @@ int run_payload(const PayloadOptions& options) {
   payload.preparation = parse_trim(options.trim);
   payload.preparation.uniform.dt = options.dt;
   payload.comparison_cutoff_hz = options.comparison_cutoff;
+  payload.physical = options.physical;
   payload.judge.cutoff_hz = options.judge_cutoff;
   payload.judge.trim_seconds = options.judge_trim;
   if (!options.torque_joints.empty()) payload.torque_joints = joint_list(options.torque_joints, model.joint_count(), "--torque-joints");
@@ -167,6 +178,10 @@ int run_payload(const PayloadOptions& options) {
       rethrow_with_source(error, "--write-urdf");
     }
     write_text(options.write_urdf, document);
+    if (!result.consistent) {
+      std::fprintf(stderr, "warning: --write-urdf: the payload written is not a real rigid body (simulators refuse or "
+                           "misbehave on such a link); --physical makes it one\n");
+    }
   }
   print_urdf_warnings(options.urdf, parsed_urdf);
   if (options.json) {

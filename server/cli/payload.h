@@ -26,6 +26,7 @@ struct PayloadOptions {
   std::string torque_joints;          ///< "1-6"; empty = all
   double judge_cutoff = 5.0;
   double judge_trim = 0.3;
+  bool physical = false;
   bool json = false;
   std::string write_urdf;             ///< the URDF with the payload as a fixed link on the tip, empty = none
 };

@@ -484,6 +484,11 @@ assert d['fit']['with_payload_error'] < 1e-3 * d['fit']['arm_only_error'] and d[
 "$manipid" payload payload_run.csv --robot "$robots/ur5_like.urdf" --mass 3 --validate payload_run.csv >payload.txt 2>/dev/null
 check "payload --mass 3: the table gives the given mass and the held-out figures" \
   bash -c "grep -q '^mass kg  *3 ± 0' payload.txt && grep -q '^held-out runs (judged at 5 Hz): arm alone' payload.txt"
+"$manipid" payload payload_run.csv --robot "$robots/ur5_like.urdf" --physical --json >payload_physical.json 2>/dev/null
+check "payload --physical: a real body already, unchanged and said so" /usr/bin/python3 -c "
+import json; d = json.load(open('payload_physical.json')); e = json.load(open('payload.json'))
+assert d['consistent'] and d['physical']['least_squares_consistent'] and d['mass'] == e['mass'], d['physical']
+assert e['physical'] is None and 'real rigid bodies' in d['method']"
 "$manipid" payload payload_none.csv --robot "$robots/ur5_like.urdf" --json >payload_none.json 2>/dev/null
 check "payload: a run without the tool answers no payload, said in a warning" /usr/bin/python3 -c "
 import json; d = json.load(open('payload_none.json'))

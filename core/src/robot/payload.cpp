@@ -4,8 +4,12 @@
 #include "manipid/core/errors.h"
 #include "manipid/core/estimation/linear_least_squares.h"
 #include "manipid/core/estimation/rules.h"
+#include "manipid/core/robot/consistency.h"
+#include "manipid/core/robot/consistent_fit.h"
 #include "manipid/core/robot/filtered_regressor.h"
 #include "numbers.h"
+
+#include <Eigen/Eigenvalues>
 
 #include <algorithm>
 #include <chrono>
@@ -28,6 +32,10 @@ constexpr double kDetectedMass = 2.0;
 /// payload on the arm it was identified with leaves its noise (the simulated 3 kg tool: 0.3 %), a run of
 /// another arm much more (links 2 and 3 half again as heavy: 36 %).
 constexpr double kUnexplained = 0.25;
+/// A negative mass says the arm's parameters do not describe the run only when what the arm leaves is material:
+/// more than this share of the filtered torque. Below it (a noise-free run without payload leaves the filters'
+/// rounding, 1e-6 of the torque, and a mass of −3.5 ± 1.2 mg), the answer is "no payload".
+constexpr double kMaterialResidual = 1e-3;
 /// The jackknife's blocks of time (jackknife_inflation).
 constexpr int kJackknifeBlocks = 10;
 
@@ -156,6 +164,64 @@ double jackknife_inflation(const Eigen::MatrixXd& A, const Eigen::VectorXd& y, c
   if (ratios.empty()) return 1.0;
   std::nth_element(ratios.begin(), ratios.begin() + static_cast<std::ptrdiff_t>(ratios.size() / 2), ratios.end());
   return std::max(1.0, ratios[ratios.size() / 2]);
+}
+
+/// The rows that hold a given value in the physical fit outweigh the data's strongest direction (in the fit's
+/// scaled coordinates) by this factor: the value holds to about 1/kHoldWeight² of the data's pull (1e-6), and
+/// the normal equations stay well within double precision (their condition grows by kHoldWeight²).
+constexpr double kHoldWeight = 1e3;
+
+/// Step 5: the least-squares fit of L r ≈ W_tip π_P over real rigid bodies (robot/consistent_fit.h, one link).
+/// The prior — what the directions the run does not excite keep — is the least-squares payload made a real
+/// body (project_link: unchanged when it is one). A known mass or centre of mass (h = m c) enters as rows that
+/// outweigh the data kHoldWeight-fold; the prior term's weight is scaled down by the same factor² so that it
+/// weighs against the data as in an arm's fit (consistent_fit.h: ε relative to σ_max², here the data's).
+ConsistentFitSummary physical_fit(const Eigen::MatrixXd& W_tip, const Eigen::VectorXd& residual, const Vector10d& least_squares,
+                                  const PayloadOptions& options) {
+  const Vector10d prior = project_link(least_squares, {}, "payload").link;
+  const double m = prior[0];
+  const double length = std::sqrt((prior[4] + prior[7] + prior[9]) / (2.0 * m));  // radius of gyration about O
+  Vector10d scale;
+  scale << m, Eigen::Vector3d::Constant(m * length), Eigen::Matrix<double, 6, 1>::Constant(m * length * length);
+  const Matrix10d scaled_gram = scale.asDiagonal() * (W_tip.transpose() * W_tip) * scale.asDiagonal();
+  const double sigma_data = std::sqrt(Eigen::SelfAdjointEigenSolver<Matrix10d>(scaled_gram, Eigen::EigenvaluesOnly).eigenvalues().maxCoeff());
+
+  std::vector<Vector10d> rows;
+  std::vector<double> targets;
+  if (options.known_mass) {  // m = m₀
+    rows.push_back(Vector10d::Unit(0) * (kHoldWeight * sigma_data / scale[0]));
+    targets.push_back(rows.back()[0] * *options.known_mass);
+  }
+  if (options.known_centre_of_mass) {  // h_i − c_i m = 0
+    for (int i = 0; i < 3; ++i) {
+      Vector10d row = Vector10d::Unit(1 + i);
+      row[0] = -(*options.known_centre_of_mass)[i];
+      rows.push_back(row * (kHoldWeight * sigma_data / scale[1 + i]));
+      targets.push_back(0.0);
+    }
+  }
+  ConsistentFitProblem problem;
+  problem.R.resize(W_tip.rows() + static_cast<Eigen::Index>(rows.size()), 10);
+  problem.z.resize(problem.R.rows());
+  problem.R.topRows(W_tip.rows()) = W_tip;
+  problem.z.head(W_tip.rows()) = residual;
+  for (std::size_t i = 0; i < rows.size(); ++i) {
+    problem.R.row(W_tip.rows() + static_cast<Eigen::Index>(i)) = rows[i].transpose();
+    problem.z[W_tip.rows() + static_cast<Eigen::Index>(i)] = targets[i];
+  }
+  problem.unconstrained = least_squares;
+  problem.prior = prior;
+
+  ParameterStructure structure;
+  structure.parameter_count = 10;
+  structure.link_offsets = {0};
+  structure.link_names = {"payload"};
+  for (const char* name : PayloadResult::names()) structure.parameter_names.emplace_back(name);
+  ConsistentFitOptions fit;
+  fit.parameter_scale = scale;
+  if (!rows.empty()) fit.regularization /= kHoldWeight * kHoldWeight;
+  fit.cancel = options.cancel;
+  return fit_consistent(structure, problem, fit);
 }
 
 void check_input(const Model& model, const ArmParameters& arm, const std::vector<Trajectory>& runs,
@@ -292,7 +358,9 @@ PayloadResult identify_payload(const Model& model, const ArmParameters& arm, con
       result.undetermined.push_back(PayloadResult::names()[static_cast<std::size_t>(index)]);
       result.warnings.push_back("the run does not excite " + std::string(PayloadResult::names()[static_cast<std::size_t>(index)]) +
                                 " (its data share " + manipid::detail::short_number(100.0 * share) + " %): it is not determined and "
-                                "stays at 0; " + what_excites(index) + " would determine it");
+                                "stays at 0" + (options.physical ? " (the physical fit: at the nearest value that keeps the "
+                                                                   "payload a real body)" : "") +
+                                "; " + what_excites(index) + " would determine it");
     }
   }
   const double torque_norm = torque.norm();
@@ -306,7 +374,8 @@ PayloadResult identify_payload(const Model& model, const ArmParameters& arm, con
   result.detected = mass_given || (result.data_share[0] >= kDeterminedShare && result.mass > kDetectedMass * result.mass_std_error);
   const std::string mass_text =
       manipid::detail::short_number(result.mass) + " ± " + manipid::detail::short_number(result.mass_std_error) + " kg";
-  if (!result.detected && result.data_share[0] >= kDeterminedShare && result.mass < -kDetectedMass * result.mass_std_error) {
+  if (!result.detected && result.data_share[0] >= kDeterminedShare && result.mass < -kDetectedMass * result.mass_std_error &&
+      result.arm_only_error > kMaterialResidual) {
     // No body has a negative mass: what the arm leaves is not a payload's torque.
     result.warnings.push_back("the run's residual is not a payload's: its mass comes out negative, " + mass_text +
                               ", so the arm's parameters do not describe this run (another arm, a tool that was already "
@@ -324,9 +393,38 @@ PayloadResult identify_payload(const Model& model, const ArmParameters& arm, con
                               "values absorb the mismatch");
   }
   if (!result.detected) {
+    if (options.physical) result.warnings.push_back("no physical fit: there is no payload to make a real body of");
     result.inertia.fill(kNaN);
     result.inertia_std_errors.fill(kNaN);
     return finish();
+  }
+
+  // Step 5.
+  if (options.physical) {
+    PayloadResult::PhysicalFit physical;
+    physical.least_squares_consistent = check_link(result.estimate, "the payload", &physical.least_squares_findings).consistent();
+    if (!physical.least_squares_consistent) {
+      const ConsistentFitSummary fit = physical_fit(W_tip, residual, result.estimate, options);
+      if (fit.termination == FitTermination::cancelled) {
+        result.cancelled = true;
+        return finish();
+      }
+      const double before = (residual - W_tip * result.estimate).squaredNorm();
+      const double after = (residual - W_tip * fit.estimate).squaredNorm();
+      physical.relative_cost_increase = before > 0 ? std::max(0.0, after / before - 1.0) : 0.0;
+      physical.report = fit.brief_report();
+      result.estimate = fit.estimate;
+      result.mass = result.estimate[0];
+      result.with_payload_error = torque_norm > 0 ? std::sqrt(after) / torque_norm : kNaN;
+    }
+    result.physical = physical;
+  }
+  result.consistent = check_link(result.estimate, "the payload", &result.consistency_findings).consistent();
+  if (!result.consistent && !options.physical) {
+    std::string findings;
+    for (const std::string& finding : result.consistency_findings) findings += (findings.empty() ? "" : "; ") + finding;
+    result.warnings.push_back("the payload's least-squares values are not a real rigid body (" + findings +
+                              "): the physical fit makes them one (--physical; \"physical\": true in a request)");
   }
   const Vector10d values = mounted(result.estimate);
   const Matrix10d J = mounted_jacobian(result.estimate);

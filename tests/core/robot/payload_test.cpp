@@ -192,6 +192,66 @@ TEST(Payload, ARunOfAnotherArmIsNamedNotPassedOffAsAPayload) {
                     << result.with_payload_error;
 }
 
+TEST(Payload, PhysicalLeavesARealBodyAloneAndMakesTheRestOne) {
+  // A 3 kg tool on a noisy run: its least-squares values are a real body already, and the physical fit
+  // changes nothing. A small heavy sphere (a 2 kg point, 1 cm in radius): the noise puts its least-squares
+  // inertia about the centre of mass where no body has one, and the physical fit makes it one at almost no
+  // cost to the fit, keeping mass and centre of mass.
+  std::mt19937_64 engine(29);
+  Scene scene(engine);
+  PayloadOptions physical;
+  physical.physical = true;
+  const Trajectory tool_run = run(scene.model, scene.layout, scene.loaded, 15.0, engine, true);
+  const PayloadResult plain = identify_payload(scene.model, {scene.layout, scene.arm}, {tool_run}, {});
+  const PayloadResult kept = identify_payload(scene.model, {scene.layout, scene.arm}, {tool_run}, physical);
+  ASSERT_TRUE(plain.consistent);
+  ASSERT_TRUE(kept.physical.has_value());
+  EXPECT_TRUE(kept.physical->least_squares_consistent);
+  EXPECT_EQ(kept.estimate, plain.estimate);
+
+  const Eigen::Vector3d centre(0.02, 0.05, 0.07);
+  scene.payload = InertialParameters::from_centre_of_mass(2.0, centre, Eigen::Matrix3d::Identity() * 0.4 * 2.0 * 1e-4);
+  scene.loaded = with_payload(scene.model, {scene.layout, scene.arm}, scene.payload.vector());
+  const Trajectory sphere_run = run(scene.model, scene.layout, scene.loaded, 15.0, engine, true);
+  const PayloadResult least_squares = identify_payload(scene.model, {scene.layout, scene.arm}, {sphere_run}, {});
+  ASSERT_FALSE(least_squares.consistent) << "the case must exercise the fit";
+  bool said = false;
+  for (const std::string& warning : least_squares.warnings) said = said || warning.find("not a real rigid body") != std::string::npos;
+  EXPECT_TRUE(said);
+  const PayloadResult real = identify_payload(scene.model, {scene.layout, scene.arm}, {sphere_run}, physical);
+  ASSERT_TRUE(real.physical.has_value());
+  EXPECT_FALSE(real.physical->least_squares_consistent);
+  EXPECT_FALSE(real.physical->least_squares_findings.empty());
+  EXPECT_TRUE(real.consistent);
+  EXPECT_TRUE(check_link(real.estimate, "payload").consistent());
+  EXPECT_NEAR(real.mass, 2.0, 0.02);
+  EXPECT_LT(com_error(real, scene.payload), 2e-3);
+  EXPECT_LT(real.physical->relative_cost_increase, 1e-2);
+  EXPECT_GE(real.with_payload_error, least_squares.with_payload_error);
+
+  // A known mass and centre of mass hold through the physical fit.
+  physical.known_mass = 2.0;
+  physical.known_centre_of_mass = centre;
+  const PayloadResult held = identify_payload(scene.model, {scene.layout, scene.arm}, {sphere_run}, physical);
+  EXPECT_TRUE(held.consistent);
+  EXPECT_NEAR(held.estimate[0], 2.0, 2e-5);
+  EXPECT_LT((held.estimate.segment<3>(1) / held.estimate[0] - centre).norm(), 1e-5);
+}
+
+TEST(Payload, PhysicalOnARunWithoutPayloadKeepsTheAnswerAndSaysWhy) {
+  std::mt19937_64 engine(31);
+  const Scene scene(engine);
+  const Trajectory data = run(scene.model, scene.layout, scene.arm, 15.0, engine, true);
+  PayloadOptions options;
+  options.physical = true;
+  const PayloadResult result = identify_payload(scene.model, {scene.layout, scene.arm}, {data}, options);
+  EXPECT_FALSE(result.detected);
+  EXPECT_FALSE(result.physical.has_value());
+  bool said = false;
+  for (const std::string& warning : result.warnings) said = said || warning.find("no physical fit") != std::string::npos;
+  EXPECT_TRUE(said);
+}
+
 TEST(Payload, RefusalsNameTheirField) {
   std::mt19937_64 engine(17);
   const Scene scene(engine);

@@ -16,6 +16,9 @@
 //     "filters": {"comparison_cutoff_hz"}, "judge": {"lowpass", "cutoff_hz", "trim_seconds"},
 //     "torque_joints": [joint names], "rows",
 //     "fit": {"arm_only_error", "with_payload_error"}   ‖L r‖/‖L τ‖ on the training rows,
+//     "consistent": the estimate is a real rigid body, "consistency_findings": [why not],
+//     "physical": null (not asked, or no payload) | {"least_squares_consistent", "least_squares_findings",
+//                 "relative_cost_increase", "report"}  the physical fit (PayloadOptions::physical),
 //     "validation": {"arm_only": {"relative_error", "rms_error", "overall_relative_error"},
 //                    "with_payload": {...}}  (if any),
 //     "warnings": [...], "wall_seconds" }

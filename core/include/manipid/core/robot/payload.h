@@ -23,7 +23,10 @@
 //      (σ² of the filtered residual corrected as estimation::filtered_residual_factor says, inflated when a
 //      jackknife over blocks of time finds the residual correlated — a real arm's model error is; the delta
 //      method through c = h/m and I_c = I_O − (‖h‖² E − h hᵀ)/m), and the training rows' error without and
-//      with it.
+//      with it;
+//   5. with `physical`, the same least squares over real rigid bodies only (mass > 0, inertia about the centre
+//      of mass positive definite, triangle inequalities): robot/consistent_fit.h's fit of one link, a known
+//      mass or centre of mass held by rows that outweigh the data's strongest direction a thousandfold.
 // The arm may be any standard vector whose torque is right: a URDF's values, or manipid's own identification
 // (IdentificationResult::point), whose base parameters need not be physically consistent.
 #pragma once
@@ -66,6 +69,10 @@ struct PayloadOptions {
   std::optional<double> known_mass;
   /// Known centre of mass in the tip link's frame, m: only the rest is estimated.
   std::optional<Eigen::Vector3d> known_centre_of_mass;
+  /// Make the payload a real rigid body (step 5): when the least-squares values are one already, nothing
+  /// changes; otherwise the nearest fit that is one. Only for a payload the run detects (a run without one
+  /// keeps the least-squares answer, ≈ 0 kg, and says so).
+  bool physical = false;
   /// Checked per run while the rows are built; identify_payload() returns with `cancelled` set.
   const std::atomic<bool>* cancel = nullptr;
 };
@@ -108,6 +115,20 @@ struct PayloadResult {
   /// The factor the standard errors' variances were multiplied by because the residual is not white: a
   /// delete-one-block jackknife over 10 spans of time against the formula (≥ 1; ≈ 1 on white noise).
   double variance_inflation = 1.0;
+  /// The estimate is a real rigid body (check_link: m > 0, I_c positive definite, triangle inequalities).
+  bool consistent = false;
+  /// What makes it not one, in words (empty when consistent).
+  std::vector<std::string> consistency_findings;
+  /// Step 5, when it ran (options.physical and a payload detected).
+  struct PhysicalFit {
+    bool least_squares_consistent = false;  ///< the least-squares values were a real body already: unchanged
+    std::vector<std::string> least_squares_findings;  ///< what made them not one
+    /// ‖L r − W π̂‖² at the physical estimate over that at the least-squares one, minus 1 (≥ 0): what being a
+    /// real body costs the fit.
+    double relative_cost_increase = 0.0;
+    std::string report;  ///< the fit's one line (ConsistentFitSummary::brief_report)
+  };
+  std::optional<PhysicalFit> physical;
   std::vector<std::string> warnings;
   double wall_seconds = 0.0;
   bool cancelled = false;
