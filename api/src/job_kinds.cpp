@@ -133,7 +133,10 @@ UrdfDocument payload_mounted_urdf(const UrdfInputs& inputs) {
     return {robot::write_payload_urdf(inputs.urdf, inputs.robot, robot::InertialParameters::from_vector(stored.estimate), note),
             "payload"};
   } catch (const InputError& error) {  // a payload a URDF cannot hold (an inertia that is not a real body's)
-    throw ApiError(ProblemKind::conflict, std::string(error.what()) + "; a URDF holds only a real rigid body", "id");
+    throw ApiError(ProblemKind::conflict,
+                   std::string(error.what()) + "; for a URDF, identify the payload again with \"physical\": true (a real "
+                   "rigid body)",
+                   "physical");
   }
 }
 

@@ -165,6 +165,14 @@ void read_preparation(const fields::ObjectFields& object, DataPreparation& prepa
   }
 }
 
+/// "physical": true or false (default false): an estimate over real rigid bodies only.
+bool read_physical(const fields::ObjectFields& object) {
+  const fields::Json* physical = object.find("physical");
+  if (!physical) return false;
+  if (!physical->is_boolean()) throw InputError("physical", "physical must be true or false, got " + fields::describe(*physical));
+  return physical->get<bool>();
+}
+
 /// The highest cut-off a request may name, Hz (the comparison low-pass's, the judge's).
 constexpr double kHighestCutoff = 1e6;
 
@@ -244,11 +252,8 @@ RobotIdentificationSpec robot_identification_from_json(const nlohmann::json& bod
   } else {
     read_layout(object, options.layout);
   }
-  if (const fields::Json* physical = object.find("physical")) {
-    if (!physical->is_boolean()) throw InputError("physical", "physical must be true or false, got " + fields::describe(*physical));
-    spec.physical = physical->get<bool>();
-    options.physical = spec.physical;
-  }
+  spec.physical = read_physical(object);
+  options.physical = spec.physical;
   read_preparation(object, options.preparation);
   if (const fields::Json* value = object.find("half_length")) options.half_length = half_length_field(*value, "half_length");
   if (const fields::Json* value = object.find("band")) options.band = band_field(*value, "band");
@@ -293,7 +298,7 @@ bool asks_for_payload(const nlohmann::json& body) { return body.is_object() && b
 PayloadIdentificationSpec payload_identification_from_json(const nlohmann::json& body) {
   refuse_fields(body, preset_only_fields(),
                 " belongs to the paper's preset model; a payload is identified on a stored robot (robot_id) by linear "
-                "least squares: its options are arm_job_id, known_mass, known_centre_of_mass, trim, dt, "
+                "least squares: its options are arm_job_id, known_mass, known_centre_of_mass, physical, trim, dt, "
                 "comparison_cutoff, judge_cutoff, judge_trim and torque_joints");
   refuse_fields(body, {"friction", "armature", "half_length", "band", "ridge", "weights"},
                 " belongs to the arm's identification: a payload identification takes the arm as identified from "
@@ -302,8 +307,8 @@ PayloadIdentificationSpec payload_identification_from_json(const nlohmann::json&
   const fields::ObjectFields object(body, "",
                                     {"payload", "robot_id", "arm_job_id", "dataset_id", "dataset_ids",
                                      "validation_dataset_id", "validation_dataset_ids", "known_mass",
-                                     "known_centre_of_mass", "trim", "dt", "comparison_cutoff", "judge_cutoff",
-                                     "judge_trim", "torque_joints"});
+                                     "known_centre_of_mass", "physical", "trim", "dt", "comparison_cutoff",
+                                     "judge_cutoff", "judge_trim", "torque_joints"});
   const fields::Json* payload = object.find("payload");
   if (!payload || !payload->is_boolean() || !payload->get<bool>()) {
     throw InputError("payload", "payload must be true (a payload on the robot's tip link), got " +
@@ -328,6 +333,7 @@ PayloadIdentificationSpec payload_identification_from_json(const nlohmann::json&
     }
     options.known_centre_of_mass = point;
   }
+  options.physical = read_physical(object);
   read_preparation(object, options.preparation);
   if (const fields::Json* value = object.find("comparison_cutoff")) {
     options.comparison_cutoff_hz = with_hint(*value, "comparison_cutoff", kHighestCutoff, " Hz",

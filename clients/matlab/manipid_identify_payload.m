@@ -13,6 +13,9 @@ function job = manipid_identify_payload(url, dataset, robot, varargin)
 %                          and without it (R.validation)
 %     'Mass', KG           the payload's mass, when known: only the rest is estimated
 %     'CentreOfMass', C    its centre of mass [x y z], m, in the tip link's frame, when known
+%     'Physical', TF       a real rigid body (mass > 0, inertia about the centre of mass
+%                          positive definite), which a URDF and a simulator take; R.consistent
+%                          says whether the payload is one either way
 %     'Trim', [A B]        seconds dropped at the start and at the end
 %     'Dt', S              the resampling period, s (default: the median time step)
 %     'ComparisonCutoff', HZ  the residual's low-pass (default: the judge's cut-off)
@@ -42,7 +45,7 @@ function job = manipid_identify_payload(url, dataset, robot, varargin)
 if nargin < 3
   error('manipid:usage', 'usage: job = manipid_identify_payload(url, dataset, robot, ''Arm'', arm_job, ...)');
 end
-defaults = struct('IdempotencyKey', '', 'Arm', [], 'Validate', [], 'Mass', [], 'CentreOfMass', [], 'Trim', [], ...
+defaults = struct('IdempotencyKey', '', 'Arm', [], 'Validate', [], 'Mass', [], 'CentreOfMass', [], 'Physical', [], 'Trim', [], ...
                   'Dt', [], 'ComparisonCutoff', [], 'JudgeCutoff', [], 'JudgeTrim', [], 'TorqueJoints', []);
 settings = manipid_options(varargin, defaults, 'manipid_identify_payload');
 request = struct('payload', true, 'robot_id', manipid_id(robot, 'robot'));
@@ -53,7 +56,7 @@ else
 end
 % The options by their request names.
 fields = {'Arm', 'arm_job_id'; 'Validate', 'validation_dataset_id'; 'Mass', 'known_mass'; ...
-          'CentreOfMass', 'known_centre_of_mass'; 'Trim', 'trim'; 'Dt', 'dt'; 'ComparisonCutoff', 'comparison_cutoff'; ...
+          'CentreOfMass', 'known_centre_of_mass'; 'Physical', 'physical'; 'Trim', 'trim'; 'Dt', 'dt'; 'ComparisonCutoff', 'comparison_cutoff'; ...
           'JudgeCutoff', 'judge_cutoff'; 'JudgeTrim', 'judge_trim'; 'TorqueJoints', 'torque_joints'};
 for k = 1:size(fields, 1)
   value = settings.(fields{k, 1});
@@ -73,6 +76,8 @@ for k = 1:size(fields, 1)
       end
     case {'known_centre_of_mass', 'trim', 'torque_joints'}
       value = reshape(double(value), 1, []);
+    case 'physical'
+      value = logical(value);
   end
   request.(field) = value;
 end

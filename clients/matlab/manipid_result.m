@@ -48,6 +48,8 @@ function result = manipid_result(url, job_id)
 %                        (R.inertia_about_com: the URDF entries ixx ... izz)
 %     R.parameter_names, R.parameter_values, R.parameter_std, R.parameter_share
 %                        the 10 parameters about the tip link's origin (m, mx, ..., Izz)
+%     R.consistent       the payload is a real rigid body (R.consistency_findings: why not);
+%                        R.physical with 'Physical', true
 %     R.undetermined, R.warnings (cells), R.fit (arm_only_error, with_payload_error),
 %     R.validation (arm_only, with_payload), R.arm, R.arm_job_id, R.robot_id, R.dataset_id
 %   For a simulation job, R is its result (dataset_id, joints, samples, dt, ...); for
@@ -189,7 +191,7 @@ r.parameter_names = {r.parameters.name};
 r.parameter_values = [r.parameters.estimate];
 r.parameter_std = [r.parameters.std_error];
 r.parameter_share = [r.parameters.data_share];
-for name = {'warnings', 'undetermined', 'torque_joints'}
+for name = {'warnings', 'undetermined', 'torque_joints', 'consistency_findings'}
   if isfield(r, name{1}), r.(name{1}) = manipid_cellstr(r.(name{1})); end
 end
 end

@@ -1820,7 +1820,7 @@ TEST_F(Routes, APayloadIdentificationIsCheckedAgainstTheRobotItsRunsAndItsArm) {
 
   const Json request = {{"payload", true}, {"robot_id", "rb_1"}, {"dataset_ids", {"ds_tool"}},
                         {"validation_dataset_id", "ds_check"}, {"arm_job_id", "job_arm"}, {"known_mass", 1.5},
-                        {"known_centre_of_mass", {0.0, 0.01, 0.05}}, {"trim", {0.2, 0.3}}, {"dt", 0.002},
+                        {"known_centre_of_mass", {0.0, 0.01, 0.05}}, {"physical", true}, {"trim", {0.2, 0.3}}, {"dt", 0.002},
                         {"comparison_cutoff", 4}, {"judge_cutoff", 3}, {"judge_trim", 0.2}, {"torque_joints", {2}}};
   const auto queued = post("/v1/identifications", request.dump());
   ASSERT_TRUE(queued);
@@ -1844,6 +1844,9 @@ TEST_F(Routes, APayloadIdentificationIsCheckedAgainstTheRobotItsRunsAndItsArm) {
   EXPECT_EQ(spec.dataset_ids, std::vector<std::string>{"ds_tool"});
   EXPECT_EQ(spec.options.known_mass, 1.5);
   EXPECT_EQ(*spec.options.known_centre_of_mass, Eigen::Vector3d(0.0, 0.01, 0.05));
+  EXPECT_TRUE(spec.options.physical);
+  EXPECT_FALSE(payload_identification_from_json(Json{{"payload", true}, {"robot_id", "rb_1"}, {"dataset_id", "ds_tool"}})
+                   .options.physical);
   EXPECT_EQ(spec.options.preparation.trim_start, 0.2);
   EXPECT_EQ(spec.options.preparation.trim_end, 0.3);
   EXPECT_EQ(spec.options.preparation.uniform.dt, 0.002);
@@ -1877,6 +1880,7 @@ TEST_F(Routes, APayloadIdentificationIsCheckedAgainstTheRobotItsRunsAndItsArm) {
   refused(with("known_mass", -1), "known_mass", "known_mass");
   refused(with("known_centre_of_mass", {1, 2}), "known_centre_of_mass", "[x, y, z]");
   refused(with("torque_joints", {3}), "torque_joints", "has 2");
+  refused(with("physical", "yes"), "physical", "true or false");
   refused(with("comparison_cutoff", "auto"), "comparison_cutoff", "comparison_cutoff");
   refused(with("friction", {"viscous"}), "friction", "arm_job_id");
   refused(with("ridge", 0), "ridge", "arm's identification");

@@ -27,20 +27,24 @@ const URDF = path.join(root, "examples/robots/ur5_like.urdf");
 const JOINTS = 6;
 const TOOL = { mass: 1.8, centre_of_mass: [0.03, -0.02, 0.07],
                inertia: { ixx: 0.005, ixy: 0.0003, ixz: -0.0002, iyy: 0.006, iyz: 0.0001, izz: 0.004 } };
+// A compact tool (a 2 kg sphere 1 cm in radius): least squares gives it an inertia no body has.
+const SPHERE = { mass: 2, centre_of_mass: [0, 0, 0.05], inertia: { ixx: 8e-5, ixy: 0, ixz: 0, iyy: 8e-5, iyz: 0, izz: 8e-5 } };
 const shot = (name) => path.join(artifacts, name);
 const close = (a, b, relative) => Math.abs(a - b) <= relative * Math.abs(b);
 
 const workdir = mkdtempSync(path.join(tmpdir(), "manipid-payload-dashboard-"));
 mkdirSync(artifacts, { recursive: true });
 
-// The tool mounted as the clients' tests mount theirs (a fixed link on the tip link, tool0).
-writeFileSync(path.join(workdir, "tool.json"), JSON.stringify(TOOL));
-execFileSync("python3", ["-c", [
-  "import json, sys",
-  "sys.path.insert(0, sys.argv[1])",
-  "from robot_data import with_tool",
-  "open(sys.argv[4], 'w').write(with_tool(open(sys.argv[2]).read(), 'tool0', json.load(open(sys.argv[3]))))",
-].join("\n"), path.join(root, "clients/python/tests"), URDF, path.join(workdir, "tool.json"), path.join(workdir, "tool.urdf")]);
+// The tools mounted as the clients' tests mount theirs (a fixed link on the tip link, tool0).
+for (const [name, tool] of [["tool", TOOL], ["sphere", SPHERE]]) {
+  writeFileSync(path.join(workdir, `${name}.json`), JSON.stringify(tool));
+  execFileSync("python3", ["-c", [
+    "import json, sys",
+    "sys.path.insert(0, sys.argv[1])",
+    "from robot_data import with_tool",
+    "open(sys.argv[4], 'w').write(with_tool(open(sys.argv[2]).read(), 'tool0', json.load(open(sys.argv[3]))))",
+  ].join("\n"), path.join(root, "clients/python/tests"), URDF, path.join(workdir, `${name}.json`), path.join(workdir, `${name}.urdf`)]);
+}
 const run = (...args) => execFileSync(binary, args, { cwd: workdir, stdio: ["ignore", "ignore", "pipe"] });
 // Budgets of evaluations, not seconds: the same excitations on every machine.
 run("excitation", "--robot", URDF, "--period", "10", "--harmonics", "5", "--duration", "20", "--seed", "1",
@@ -49,7 +53,8 @@ run("excitation", "--robot", URDF, "--period", "8", "--harmonics", "5", "--durat
     "--max-evaluations", "200", "--max-seconds", "600", "--out", "exc_b.csv");
 const noise = ["--noise-tau-relative", "0.01", "--noise-q", "2e-5", "--quantize-q", "18"];
 for (const [name, urdf, excitation, seed] of [["arm", URDF, "exc_a.csv", 1], ["tool", "tool.urdf", "exc_b.csv", 2],
-                                                ["check", "tool.urdf", "exc_a.csv", 3], ["bare", URDF, "exc_b.csv", 4]]) {
+                                                ["check", "tool.urdf", "exc_a.csv", 3], ["bare", URDF, "exc_b.csv", 4],
+                                                ["sphere", "sphere.urdf", "exc_b.csv", 5]]) {
   run("torque", "--robot", urdf, "--in", excitation, "--with-states", ...noise, "--seed", String(seed), "--out", `${name}.csv`);
 }
 
@@ -67,7 +72,7 @@ try {
   };
   const robot = await post("/v1/robots?name=arm", readFileSync(URDF), "application/xml");
   const datasets = {};
-  for (const name of ["arm", "tool", "check", "bare"]) {
+  for (const name of ["arm", "tool", "check", "bare", "sphere"]) {
     datasets[name] = (await post(`/v1/datasets?name=${name}`, readFileSync(path.join(workdir, `${name}.csv`)), "text/csv")).id;
   }
   const arm = await finished(await post("/v1/identifications", { robot_id: robot.id, dataset_id: datasets.arm, friction: ["viscous", "coulomb"] }));
@@ -109,6 +114,8 @@ try {
   check((await page.textContent("#payload-undetermined")).includes("none") === (result.undetermined.length === 0),
         "what the runs leave undetermined, as the API's");
   check(await page.getAttribute("#payload-urdf", "href") === `/v1/jobs/${payload.id}/urdf`, "a download of the URDF with the payload");
+  check(await page.getAttribute("#payload-consistent", "data-consistent") === "true" && result.consistent,
+        "it says the payload is a real body, as the API does");
   const urdf = await fetch(`${url}/v1/jobs/${payload.id}/urdf`).then((response) => response.text());
   check(urdf.includes('<link name="manipid_payload"'), "... which the server writes with the payload mounted");
 
@@ -166,15 +173,41 @@ try {
   check((await page.textContent("#payload-warnings")).includes("no payload"), "... the warning says so");
   await page.locator("#payload").screenshot({ path: shot("payload-none.png") });
 
+  // ---- a compact tool: not a real body; the same identification asked for one, from the page -------
+  const sphere = await finished(await post("/v1/identifications", { payload: true, robot_id: robot.id, dataset_id: datasets.sphere,
+                                                                    arm_job_id: arm.id }));
+  check(sphere.state === "succeeded" && sphere.result.detected && !sphere.result.consistent,
+        "the sphere's least-squares payload is no real body (the API)");
+  await page.goto(`${url}/jobs/${sphere.id}`);
+  await page.waitForSelector("body[data-ready=true]", { timeout: 120000 });
+  check(await page.getAttribute("#payload-consistent", "data-consistent") === "false" &&
+        (await page.textContent("#payload-consistent")).includes("positive definite"), "the card says why it is no real body");
+  check(await page.locator("#payload-not-real").count() === 1 && await page.locator("#payload-urdf").count() === 0,
+        "... and offers the identification over real bodies instead of a URDF");
+  await page.locator("#payload").screenshot({ path: shot("payload-not-real.png") });
+  await page.focus("#payload-physical");
+  await page.keyboard.press("Enter");
+  await page.waitForURL((address) => /\/jobs\/job_[0-9a-f]+$/.test(address.pathname) && !address.pathname.endsWith(sphere.id),
+                        { timeout: 60000 });
+  await page.waitForSelector("body[data-ready=true]", { timeout: 120000 });
+  const again = await json(`${url}/v1/jobs/${page.url().split("/").pop()}`);
+  check(again.request.physical === true && again.request.dataset_id === datasets.sphere && again.request.arm_job_id === arm.id,
+        "the button submitted the same request with physical: true");
+  check(again.result.consistent && await page.getAttribute("#payload-consistent", "data-consistent") === "true" &&
+        (await page.textContent("#payload-consistent")).includes("more squared residual"),
+        "its page: a real body, and what that cost the fit");
+  check(await page.locator("#payload-urdf").count() === 1, "... with its URDF to download");
+
   // ---- the job list ----------------------------------------------------------------------------
   await page.goto(`${url}/`);
   await page.waitForSelector(`#jobs tr[data-job-id="${payload.id}"]`);
   await page.selectOption("#filter-kind", "payload_identification");
   await page.waitForFunction((ids) => {
     const rows = [...document.querySelectorAll("#jobs tbody tr")];
-    return rows.length === ids.length && rows.every((row) => ids.includes(row.dataset.jobId));
-  }, [payload.id, none.id], { timeout: 10000 });
-  check(true, "the job list's kind filter finds the two payload identifications");
+    return rows.length === 4 && ids.every((id) => rows.some((row) => row.dataset.jobId === id)) &&
+           rows.every((row) => row.querySelector("td:nth-child(2)")?.textContent === "payload_identification");
+  }, [payload.id, none.id, sphere.id], { timeout: 10000 });
+  check(true, "the job list's kind filter finds the four payload identifications");
 
   check(consoleErrors.length === 0, `no console errors${consoleErrors.length ? ": " + consoleErrors.join(" | ") : ""}`);
 } catch (error) {

@@ -30,6 +30,9 @@ UR5 = os.path.join(SOURCE, "examples", "robots", "ur5_like.urdf")
 TOOL = {"mass": 2.0, "centre_of_mass": [0.03, -0.02, 0.08],
         "inertia": {"ixx": 0.006, "ixy": 0.0004, "ixz": -0.0003, "iyy": 0.007, "iyz": 0.0002, "izz": 0.004}}
 MASS, COM, INERTIA = TOOL["mass"], TOOL["centre_of_mass"], TOOL["inertia"]
+# A compact tool: a 2 kg sphere 1 cm in radius. Least squares on a noisy run gives it an inertia no body has.
+SPHERE = {"mass": 2.0, "centre_of_mass": [0.0, 0.0, 0.05],
+          "inertia": {"ixx": 8e-5, "ixy": 0.0, "ixz": 0.0, "iyy": 8e-5, "iyz": 0.0, "izz": 8e-5}}
 # The arm as it is: off its URDF's values (link 3: 2.3 kg there), so only the arm as identified carries the tool right.
 ARM_TRUTH = {"m3": 2.8, "fv2": 0.8, "fc2": 2.5}
 NOISE = ["--noise-tau-relative", "0.01", "--noise-q", "2e-5", "--quantize-q", "18"]
@@ -49,8 +52,9 @@ class PayloadThroughTheService(unittest.TestCase):
         path = lambda name: os.path.join(cls.dir, name)  # noqa: E731
         with open(UR5) as stream:
             cls.document = stream.read()
-        with open(path("tool.urdf"), "w") as stream:
-            stream.write(with_tool(cls.document, "tool0", TOOL))
+        for name, tool in (("tool", TOOL), ("sphere", SPHERE)):
+            with open(path(f"{name}.urdf"), "w") as stream:
+                stream.write(with_tool(cls.document, "tool0", tool))
         # Two excitations of the bare arm; each run through the arm with or without the tool, noisy as a real log.
         for name, seed, period in (("a", 1, 10.0), ("b", 2, 8.0)):
             manipid("excitation", "--robot", UR5, "--period", repr(period), "--harmonics", "5", "--duration", repr(2 * period),
@@ -59,13 +63,14 @@ class PayloadThroughTheService(unittest.TestCase):
         with open(path("truth.json"), "w") as stream:
             json.dump(ARM_TRUTH, stream)
         for run, urdf, excitation, seed in (("arm", UR5, "a", 11), ("tool", path("tool.urdf"), "b", 12),
-                                            ("tool_check", path("tool.urdf"), "a", 13), ("bare", UR5, "b", 14)):
+                                            ("tool_check", path("tool.urdf"), "a", 13), ("bare", UR5, "b", 14),
+                                            ("sphere", path("sphere.urdf"), "b", 15)):
             manipid("torque", "--robot", urdf, "--in", path(f"excitation_{excitation}.csv"), "--with-states", *NOISE,
                     "--params", path("truth.json"), "--seed", str(seed), "--out", path(f"{run}.csv"))
         cls.server = Server(path("jobs.db")).start()
         cls.robot = cls.post_ok("/v1/robots?name=ur5", cls.document, {"Content-Type": "application/xml"})
         cls.datasets = {}
-        for run in ("arm", "tool", "tool_check", "bare"):
+        for run in ("arm", "tool", "tool_check", "bare", "sphere"):
             with open(path(f"{run}.csv")) as stream:
                 cls.datasets[run] = cls.post_ok(f"/v1/datasets?name={run}", stream.read(), {"Content-Type": "text/csv"})["id"]
         cls.arm_job = cls.server.wait_job(cls.post_ok("/v1/identifications", {
@@ -182,6 +187,36 @@ class PayloadThroughTheService(unittest.TestCase):
         self.assertGreater(abs(result["mass"] - MASS), 0.05 * MASS, result["mass"])
         other = self.payload(dataset_id=self.datasets["bare"])["result"]
         self.assertTrue(any("explains little" in warning for warning in other["warnings"]), other["warnings"])
+
+    def test_physical_keeps_a_real_body_as_it_is(self):
+        # The tool is a real body and the run determines it: the least-squares payload is one already, unchanged.
+        plain = self.payload(arm_job_id=self.arm_job["id"])["result"]
+        physical = self.payload(arm_job_id=self.arm_job["id"], physical=True)["result"]
+        self.assertTrue(plain["consistent"], plain["consistency_findings"])
+        self.assertIsNone(plain["physical"])
+        self.assertIn("real rigid bodies", physical["method"])
+        self.assertTrue(physical["consistent"])
+        self.assertTrue(physical["physical"]["least_squares_consistent"], physical["physical"])
+        self.assertEqual(physical["mass"], plain["mass"])
+        self.refused({"payload": True, "robot_id": self.robot["id"], "dataset_id": self.datasets["tool"], "physical": 1},
+                     "physical", "true or false")
+
+    def test_physical_makes_a_compact_tool_a_real_body(self):
+        # The sphere on the arm identified: least squares gives an inertia no body has, said; its URDF is refused
+        # naming physical; asked for a real body, the answer is one, its mass and centre of mass kept.
+        plain = self.payload(dataset_id=self.datasets["sphere"], arm_job_id=self.arm_job["id"])
+        self.assertTrue(plain["result"]["detected"])
+        self.assertFalse(plain["result"]["consistent"], plain["result"]["inertia_about_com"])
+        self.assertTrue(any("positive definite" in finding for finding in plain["result"]["consistency_findings"]))
+        status, _, problem = self.server.request("GET", f"/v1/jobs/{plain['id']}/urdf")
+        self.assertEqual((status, problem["field"]), (409, "physical"), problem)
+        self.assertIn('"physical": true', problem["detail"])
+        physical = self.payload(dataset_id=self.datasets["sphere"], arm_job_id=self.arm_job["id"], physical=True)["result"]
+        self.assertTrue(physical["consistent"], physical["consistency_findings"])
+        self.assertFalse(physical["physical"]["least_squares_consistent"])
+        self.assertGreater(physical["physical"]["relative_cost_increase"], 0)
+        self.assertLess(abs(physical["mass"] - SPHERE["mass"]), 0.01 * SPHERE["mass"])
+        self.assertLess(math.dist(physical["centre_of_mass"], SPHERE["centre_of_mass"]), 2e-3)
 
     def test_known_values_are_kept_and_the_options_passed_on(self):
         known = self.payload(arm_job_id=self.arm_job["id"], known_mass=MASS, known_centre_of_mass=COM,

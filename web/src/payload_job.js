@@ -7,7 +7,7 @@
 import { api, downloadLink } from "./api.js";
 import { facts, h, number, percent, plural, section } from "./dom.js";
 import { jobPath, robotPath } from "./paths.js";
-import { JOINT_POINTS, judgeInWords, jointTorqueCharts, measuredDataSection } from "./robot_job.js";
+import { JOINT_POINTS, againWithPhysical, judgeInWords, jointTorqueCharts, measuredDataSection } from "./robot_job.js";
 
 const ENTRIES = ["ixx", "ixy", "ixz", "iyy", "iyz", "izz"];
 const AXES = ["x", "y", "z"];
@@ -62,6 +62,40 @@ function torqueErrors(result) {
   ];
 }
 
+/** Whether the payload is a real rigid body, and what the physical fit (physical: true) did. */
+function realBody(result) {
+  if (!result.detected) return null;
+  const physical = result.physical;
+  const fit = physical
+    ? physical.least_squares_consistent
+      ? " (asked for: the least-squares payload was one already, unchanged)"
+      : ` (asked for: the fit over real bodies costs ${percent(physical.relative_cost_increase)} more squared residual)`
+    : "";
+  if (result.consistent) return h("span", { id: "payload-consistent", dataset: { consistent: "true" } }, `yes${fit}`);
+  const findings = result.consistency_findings || [];
+  return h("span", { id: "payload-consistent", dataset: { consistent: "false" } },
+    `no: ${findings[0]?.replace(/^the payload: /, "") || "not a possible rigid body"}` +
+    (findings.length > 1 ? ` (and ${plural(findings.length - 1, "more finding")}: see the warnings)` : ""));
+}
+
+/**
+ * The URDF with the payload mounted: a download when it is a real body; when it is not (a URDF holds no such
+ * link, a simulator refuses it), the same identification asked for a real body instead.
+ */
+function urdfActions(job, result) {
+  if (!result.detected) return null;
+  if (result.consistent !== false || job.request?.physical) {
+    return h("p", { class: "actions" },
+      downloadLink(`/v1/jobs/${job.id}/urdf`, "Download the URDF with the payload", { id: "payload-urdf", class: "button" }),
+      h("span", { class: "muted" }, "The robot's document with the payload as a fixed link on the tip link."));
+  }
+  return h("div", { id: "payload-not-real", class: "actions" },
+    h("p", {}, h("strong", {}, "Not a real rigid body: "), "least squares does not know that a payload is a body, and " +
+      "this one's inertia is none a distribution of mass could have; simulators refuse or misbehave on such a link. The same " +
+      "identification over real bodies only fits the runs as closely as that allows."),
+    h("p", {}, againWithPhysical(job, "payload-physical", "Identify again as a real body")));
+}
+
 function payloadCard(job, result) {
   const arm = result.arm_job_id
     ? ["identified by ", h("a", { href: jobPath(result.arm_job_id), id: "arm-job-link" }, result.arm_job_id), " (its point)"]
@@ -77,6 +111,7 @@ function payloadCard(job, result) {
                      `, payload on ${result.robot?.tip_link ?? "its tip link"}`]],
           ["The arm", arm],
           ...torqueErrors(result),
+          ["A real body", realBody(result)],
           ["Undetermined", undetermined.length
             ? h("ul", { id: "payload-undetermined", class: "names" }, undetermined.map((name) => h("li", {}, h("code", {}, name))))
             : h("span", { id: "payload-undetermined" }, "none: the runs determine all ten parameters")],
@@ -86,11 +121,7 @@ function payloadCard(job, result) {
           ["Fitted", `${plural(result.torque_joints?.length ?? 0, "joint")}, ${result.rows} rows; comparison low-pass ` +
                      `${number(result.filters?.comparison_cutoff_hz, 3)} Hz`],
         ]),
-        result.detected
-          ? h("p", { class: "actions" },
-              downloadLink(`/v1/jobs/${job.id}/urdf`, "Download the URDF with the payload", { id: "payload-urdf", class: "button" }),
-              h("span", { class: "muted" }, "The robot's document with the payload as a fixed link on the tip link."))
-          : null),
+        urdfActions(job, result)),
       h("figure", { id: "payload-figure" }, comPicture(result),
         h("figcaption", { class: "muted small" },
           "The centre of mass on the flange: from above (the tip link's x–y plane) and from the side (x–z). The circle is a " +

@@ -78,8 +78,21 @@ function urdfActions(job, result) {
         "opened by a comment saying where it came from."));
   }
   const bad = (result.consistency.links || []).filter((link) => !link.consistent).map((link) => link.link);
+  return h("div", { id: "urdf-unavailable", class: "actions" },
+    h("p", {}, h("strong", {}, "No identified URDF: "),
+      `a URDF holds only real rigid bodies, and ${bad.length ? bad.join(", ") : "some links"} of this estimate ` +
+      `${bad.length === 1 ? "is" : "are"} not (see `, h("a", { href: "#consistency" }, "Physical consistency"), "). " +
+      "The same identification with physical consistency keeps every link a real body, fitting the data as closely as that allows."),
+    h("p", {}, againWithPhysical(job, "identify-physical", "Identify again, physically consistent")));
+}
+
+/**
+ * A button that submits the job's request again with physical: true and opens the new job's page, and the
+ * status beside it (what was refused, if it was).
+ */
+export function againWithPhysical(job, id, label) {
   const status = h("span", { class: "form-status", role: "status", "aria-live": "polite" });
-  const again = h("button", { type: "button", id: "identify-physical" }, "Identify again, physically consistent");
+  const again = h("button", { type: "button", id }, label);
   again.addEventListener("click", async () => {
     again.disabled = true;
     status.textContent = "Submitting…";
@@ -91,12 +104,7 @@ function urdfActions(job, result) {
       again.disabled = false;
     }
   });
-  return h("div", { id: "urdf-unavailable", class: "actions" },
-    h("p", {}, h("strong", {}, "No identified URDF: "),
-      `a URDF holds only real rigid bodies, and ${bad.length ? bad.join(", ") : "some links"} of this estimate ` +
-      `${bad.length === 1 ? "is" : "are"} not (see `, h("a", { href: "#consistency" }, "Physical consistency"), "). " +
-      "The same identification with physical consistency keeps every link a real body, fitting the data as closely as that allows."),
-    h("p", {}, again, " ", status));
+  return [again, " ", status];
 }
 
 // ---- the links as the URDF holds them ---------------------------------------------------------

@@ -231,9 +231,9 @@ passed = passed + 1;
 T = dlmread(fullfile(robot_dir, 'tool.csv'), ',', 1, 0);
 tool = jsondecode(fileread(fullfile(robot_dir, 'tool.json')));
 tds = manipid_upload(url, T(:, 1), T(:, 2:8), T(:, 23:29), [], 'tool run');
-pj = manipid_identify_payload(url, tds, rb, 'Arm', job, 'Validate', tds, 'JudgeTrim', 0.25);
+pj = manipid_identify_payload(url, tds, rb, 'Arm', job, 'Validate', tds, 'JudgeTrim', 0.25, 'Physical', true);
 check(strcmp(pj.kind, 'payload_identification') && strcmp(pj.robot_id, rb.id) && pj.request.payload ...
-      && strcmp(pj.request.arm_job_id, job.id) && pj.request.judge_trim == 0.25, ...
+      && strcmp(pj.request.arm_job_id, job.id) && pj.request.judge_trim == 0.25 && pj.request.physical, ...
       'manipid_identify_payload sends a payload identification with the arm and the options by their names');
 p = manipid_result(url, manipid_wait(url, pj, 300, 'Quiet', true));
 com = reshape(tool.centre_of_mass, 1, 3);
@@ -243,6 +243,7 @@ check(p.detected && abs(p.mass - tool.mass) < 0.03 * tool.mass && norm(p.centre_
 check(isequal(size(p.inertia), [3 3]) && isequal(p.inertia, p.inertia') && isequal(size(p.centre_of_mass_std_errors), [1 3]) ...
       && numel(p.parameter_names) == 10 && strcmp(p.parameter_names{1}, 'm') && p.parameter_values(1) == p.mass, ...
       'the inertia as a symmetric 3-by-3, the ten parameters by name');
+check(p.consistent && isstruct(p.physical) && iscell(p.consistency_findings), 'a real rigid body, as asked (Physical)');
 check(p.validation.with_payload.overall_relative_error < p.validation.arm_only.overall_relative_error / 2, ...
       'the run is predicted better with the payload than without it');
 payload_urdf = manipid_identified_urdf(url, pj);

@@ -631,7 +631,7 @@ class Client:
                          idempotency_key: Optional[str] = None, *,
                          validate: Union[str, Dataset, Mapping[str, Any], Sequence[Any], None] = None,
                          known_mass: Optional[float] = None, known_centre_of_mass: Optional[Sequence[float]] = None,
-                         trim: Optional[Sequence[float]] = None, dt: Optional[float] = None,
+                         physical: Optional[bool] = None, trim: Optional[Sequence[float]] = None, dt: Optional[float] = None,
                          comparison_cutoff: Optional[float] = None, judge_cutoff: Optional[float] = None,
                          judge_trim: Optional[float] = None, torque_joints: Optional[Sequence[int]] = None,
                          **options: Any) -> Job:
@@ -648,6 +648,9 @@ class Client:
         - validate: runs with the payload the arm then predicts with and without it;
         - known_mass (kg) / known_centre_of_mass ((x, y, z) m, the tip link's frame): values you
           know; only the rest is estimated;
+        - physical=True: a real rigid body (mass > 0, inertia about the centre of mass positive
+          definite, triangle inequalities), which a URDF and a simulator take; the result's
+          "consistent" says whether the payload is one either way;
         - trim, dt, judge_cutoff, judge_trim, torque_joints: as identify(robot=...) takes them;
           comparison_cutoff: the residual's low-pass, Hz (default the judge's cut-off).
         The result (job.wait()) is what `manipid payload --json` prints: "mass",
@@ -662,7 +665,7 @@ class Client:
                            "arm_job_id": _job_id(arm) if arm is not None else None,
                            "known_mass": known_mass,
                            "known_centre_of_mass": list(known_centre_of_mass) if known_centre_of_mass is not None else None,
-                           "trim": list(trim) if trim is not None else None, "dt": dt,
+                           "physical": physical, "trim": list(trim) if trim is not None else None, "dt": dt,
                            "comparison_cutoff": comparison_cutoff, "judge_cutoff": judge_cutoff,
                            "judge_trim": judge_trim,
                            "torque_joints": list(torque_joints) if torque_joints is not None else None,

@@ -448,7 +448,7 @@ class RobotsAgainstServer(unittest.TestCase):
     def test_a_tool_on_the_identified_arm(self) -> None:
         tool = self.client.upload_dataset(self.runs["tool"], name="with the tool")
         truth = self.runs["tool_truth"]
-        job = self.client.identify_payload(tool, self.arm, arm=self.job, validate=tool, judge_trim=0.25)
+        job = self.client.identify_payload(tool, self.arm, arm=self.job, validate=tool, judge_trim=0.25, physical=True)
         self.assertEqual(job.kind, "payload_identification")
         self.assertEqual(job.robot_id, self.arm.id)
         result = job.wait(timeout=300)
@@ -459,6 +459,8 @@ class RobotsAgainstServer(unittest.TestCase):
         self.assertLess(math.dist(result["centre_of_mass"], truth["centre_of_mass"]), 5e-3, result["centre_of_mass"])
         self.assertGreater(result["mass_std_error"], 0.0)
         self.assertEqual(result["judge"]["trim_seconds"], 0.25)
+        self.assertTrue(result["consistent"] and result["physical"] is not None, result["physical"])
+        self.assertEqual(job.refresh().data["request"]["physical"], True)
         # The torque with and without the tool, and the URDF with the tool mounted on the tip link.
         fit = job.fit(max_points=200)
         self.assertEqual(len(fit["joints"]), 7)

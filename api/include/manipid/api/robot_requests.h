@@ -92,7 +92,7 @@ bool asks_for_payload(const nlohmann::json& body);
 
 /// {"payload": true, "robot_id": "rb_…", "dataset_id": "ds_…" | "dataset_ids": [...] (runs carrying the payload),
 ///  "arm_job_id"?: "job_…", "validation_dataset_id"? | "validation_dataset_ids"?, "known_mass"?: kg (> 0),
-///  "known_centre_of_mass"?: [x, y, z] m (tip-link frame), "trim"?, "dt"?, "comparison_cutoff"?: Hz (default the
+///  "known_centre_of_mass"?: [x, y, z] m (tip-link frame), "physical"?: false (a real rigid body), "trim"?, "dt"?, "comparison_cutoff"?: Hz (default the
 ///  judge's), "judge_cutoff"?, "judge_trim"?, "torque_joints"?: [1-based]} — the fields a robot identification
 ///  shares read by the same rules. The arm's own options (friction, armature, filters, ridge, weights) are
 ///  refused with the reason, as are the preset's.
