@@ -115,8 +115,8 @@ class History(NamedTuple):
 
 
 class Job:
-    """A simulation, identification (the paper's preset), robot_identification (a URDF robot's) or
-    excitation job. `data` is the JSON last seen from the server; `refresh()` fetches it again,
+    """A simulation, identification (the paper's preset), robot_identification (a URDF robot's),
+    payload_identification (a payload on one's tip link) or excitation job. `data` is the JSON last seen from the server; `refresh()` fetches it again,
     `wait()` long-polls until the job ends."""
 
     def __init__(self, client: "Client", data: Mapping[str, Any]) -> None:
@@ -136,7 +136,8 @@ class Job:
     @property
     def kind(self) -> Optional[str]:
         """simulation, identification (the paper's preset), robot_identification (submitted with a
-        robot: a URDF robot's base parameters) or excitation."""
+        robot: a URDF robot's base parameters), payload_identification (identify_payload) or
+        excitation."""
         return self.data.get("kind")
 
     @property
