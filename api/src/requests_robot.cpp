@@ -10,6 +10,19 @@
 namespace manipid::api {
 namespace {
 
+/// A non-empty array of joint numbers (1-based, as users count them) → 0-based indices; whether each is one of
+/// the robot's is checked against the robot.
+std::vector<int> read_joint_numbers(const fields::Json& value, const std::string& field) {
+  if (!value.is_array() || value.empty()) {
+    throw InputError(field, field + " must be an array of joint numbers (1-based), got " + fields::describe(value));
+  }
+  std::vector<int> joints;
+  for (std::size_t i = 0; i < value.size(); ++i) {
+    joints.push_back(static_cast<int>(fields::read_integer(value[i], fields::element_path(field, i), 1, 1000)) - 1);
+  }
+  return joints;
+}
+
 constexpr std::size_t max_id_length = 64;
 /// The largest URDF a robot may have: real arms' files are tens of kilobytes (with meshes referenced,
 /// not inlined); 4 MiB leaves room for generated documents without letting one request fill the store.
@@ -186,16 +199,7 @@ void read_judge(const fields::ObjectFields& object, JudgeOptions& judge) {
 
 /// "torque_joints": 1-based joint numbers, as 0-based indices.
 void read_torque_joints(const fields::ObjectFields& object, std::vector<int>& torque_joints) {
-  const fields::Json* joints = object.find("torque_joints");
-  if (!joints) return;
-  if (!joints->is_array() || joints->empty()) {
-    throw InputError("torque_joints", "torque_joints must be an array of joint numbers (1-based), got " +
-                                          fields::describe(*joints));
-  }
-  for (std::size_t i = 0; i < joints->size(); ++i) {
-    torque_joints.push_back(
-        static_cast<int>(fields::read_integer((*joints)[i], fields::element_path("torque_joints", i), 1, 1000)) - 1);
-  }
+  if (const fields::Json* joints = object.find("torque_joints")) torque_joints = read_joint_numbers(*joints, "torque_joints");
 }
 
 /// The paper preset's options: a request on a stored robot refuses each by name, saying why, rather than
@@ -364,7 +368,7 @@ Eigen::VectorXd read_joint_limits(const fields::Json& value, const std::string& 
 
 ExcitationSpec excitation_from_json(const nlohmann::json& body) {
   const fields::ObjectFields object(body, "",
-                                    {"robot_id", "name", "period", "harmonics", "criterion", "max_acceleration",
+                                    {"robot_id", "name", "period", "harmonics", "criterion", "target", "moving_joints", "max_acceleration",
                                      "max_velocity", "max_jerk", "max_torque", "torque_parameters", "start_pose",
                                      "position_margin", "duration", "dt", "friction", "armature", "seed", "max_seconds",
                                      "max_evaluations"});
@@ -382,6 +386,10 @@ ExcitationSpec excitation_from_json(const nlohmann::json& body) {
     options.criterion = robot::parse_excitation_criterion(
         fields::read_choice(*criterion, "criterion", {"condition", "logdet"}), "criterion");
   }
+  if (const fields::Json* target = object.find("target")) {
+    options.target = robot::parse_excitation_target(fields::read_choice(*target, "target", {"arm", "payload"}), "target");
+  }
+  if (const fields::Json* joints = object.find("moving_joints")) options.moving_joints = read_joint_numbers(*joints, "moving_joints");
   if (const fields::Json* value = object.find("max_acceleration")) {
     options.max_acceleration = read_joint_limits(*value, "max_acceleration", "rad/s^2");
   }

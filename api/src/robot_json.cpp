@@ -42,6 +42,17 @@ Json rows_json(const Eigen::MatrixXd& m) {
   return array;
 }
 
+/// The joints a design moved, by name (all of them when moving_joints is empty).
+nlohmann::ordered_json moving_joints_json(const robot::Model& model, const robot::ExcitationOptions& options) {
+  nlohmann::ordered_json names = nlohmann::ordered_json::array();
+  if (options.moving_joints.empty()) {
+    for (const robot::Joint& joint : model.joints) names.push_back(joint.name);
+  } else {
+    for (int k : options.moving_joints) names.push_back(model.joints[static_cast<std::size_t>(k)].name);
+  }
+  return names;
+}
+
 }  // namespace
 
 nlohmann::ordered_json prediction_to_json(const robot::TorquePrediction& prediction) {
@@ -397,6 +408,8 @@ nlohmann::ordered_json excitation_to_json(const robot::Model& model, const robot
       {"b", rows_json(trajectory.b)},
       {"start", vector_json(trajectory.start())},
       {"criterion", robot::to_string(summary.criterion)},
+      {"target", robot::to_string(design_options.target)},
+      {"moving_joints", moving_joints_json(model, design_options)},
       {"criterion_value", summary.final_value},
       {"initial_criterion_value", summary.initial_value},
       {"condition_number", summary.condition_number},

@@ -232,7 +232,9 @@ std::vector<int> joint_list(const std::string& text, int n, const std::string& o
   for (const std::string& part : split_list(text)) {
     const auto dash = part.find('-');
     const long first = parse_integer_option(part.substr(0, dash), option, 1, n);
-    const long last = dash == std::string::npos ? first : parse_integer_option(part.substr(dash + 1), option, first, n);
+    const long last = dash == std::string::npos ? first : parse_integer_option(part.substr(dash + 1), option, 1, n);
+    if (last < first) throw InputError(option, option + ": the range " + part + " runs backwards (write " +
+                                                   std::to_string(last) + "-" + std::to_string(first) + ")");
     for (long k = first; k <= last; ++k) joints.push_back(static_cast<int>(k - 1));
   }
   if (joints.empty()) throw InputError(option, option + " needs joint numbers, e.g. 1-6 or 1,2,4");

@@ -33,6 +33,7 @@ std::string excitation_option(const std::string& field, const std::string& urdf)
   if (field == "start_pose") return "--start-pose";
   if (field == "position_margin") return "--position-margin";
   if (field == "criterion") return "--criterion";
+  if (field == "moving_joints") return "--moving-joints";
   if (field == "max_seconds") return "--max-seconds";
   if (field == "max_evaluations") return "--max-evaluations";
   if (field == "dt") return "--dt";
@@ -125,6 +126,11 @@ CLI::App* add_excitation_command(CLI::App& app, ExcitationOptions& options) {
   command->add_option("--start-pose", options.start_pose,
                       "Where the arm stands before and after, q1,...,qn in rad (m): the output then ramps from it to "
                       "the trajectory and back (default: none; the output starts at the trajectory's own start)");
+  command->add_flag("--payload", options.payload,
+                    "Excite a payload's ten parameters on the tip link (for `manipid payload`) instead of the arm's base "
+                    "parameters: often a few seconds of wrist motion (--moving-joints)");
+  command->add_option("--moving-joints", options.moving_joints,
+                      "Joints that move, e.g. 4-6 (default: all); the others hold the mean pose the design chooses");
   command->add_flag("--progress", options.progress,
                     "Report the design's progress on stderr once a second (on by default when stderr is a terminal)");
   command
@@ -172,6 +178,10 @@ int run_excitation(const ExcitationOptions& options) {
   design_options.max_seconds = options.max_seconds;
   design_options.max_evaluations = options.max_evaluations;
   design_options.criterion = robot::parse_excitation_criterion(options.criterion, "criterion");
+  design_options.target = options.payload ? robot::ExcitationTarget::payload : robot::ExcitationTarget::arm;
+  if (!options.moving_joints.empty()) {
+    design_options.moving_joints = joint_list(options.moving_joints, model.joint_count(), "--moving-joints");
+  }
   design_options.layout = parameter_layout(options.friction, options.armature);
   design_options.max_acceleration = parse_values(options.max_acceleration, "--max-acceleration");
   if (design_options.max_acceleration.size() == 0) {

@@ -20,6 +20,8 @@ struct ExcitationOptions {
   double period = 0.0;
   int harmonics = 0;
   std::string criterion;
+  bool payload = false;             ///< --payload: excite a payload's ten parameters on the tip link
+  std::string moving_joints;        ///< --moving-joints "4-6" or "4,5,6" (1-based), "" = all
   std::string max_acceleration;     ///< "A" or "A1,...,An" (rad/s^2)
   std::string max_velocity;         ///< "" (the URDF's), "V" or "V1,...,Vn" (rad/s)
   std::string max_jerk;             ///< "" (none), "J" or "J1,...,Jn" (rad/s^3)

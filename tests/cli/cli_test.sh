@@ -500,6 +500,16 @@ check "payload --write-urdf: the written arm explains the run, no payload left" 
 import json; d = json.load(open('payload_again.json'))
 assert not d['detected'] and abs(d['mass']) < 1e-3, d['mass']"
 check "payload --write-urdf: a fixed link on tool0" grep -q '<parent link="tool0" />' ur5_with_payload.urdf
+"$manipid" excitation --robot "$robots/ur5_like.urdf" --payload --moving-joints 4-6 --period 4 --harmonics 3 --dt 0.01 \
+  --max-evaluations 30 --coefficients payload_excitation.json --out payload_excitation.csv 2>payload_excitation.txt
+check "excitation --payload --moving-joints 4-6: the payload's 10 columns, joints 1-3 hold still" /usr/bin/python3 -c "
+import csv, json; d = json.load(open('payload_excitation.json'))
+assert d['target'] == 'payload' and d['base_parameters'] == 10 and len(d['moving_joints']) == 3, d['moving_joints']
+rows = list(csv.reader(open('payload_excitation.csv')))[1:]
+assert len({r[1] for r in rows}) == 1 and len({r[6] for r in rows}) > 100"
+check "excitation --payload: the summary names the payload's parameters" grep -q "10 payload parameters" payload_excitation.txt
+expect_error "excitation: --moving-joints beyond the arm" 2 "--moving-joints: '7' is not a whole number in 1..6" \
+  "$manipid" excitation --robot "$robots/ur5_like.urdf" --payload --moving-joints 4-7
 expect_error "payload: --mass not positive" 2 "--mass: a known payload mass must be a positive number of kg, got -2" \
   "$manipid" payload payload_run.csv --robot "$robots/ur5_like.urdf" --mass -2
 expect_error "payload: --com needs three numbers" 2 "--com needs X,Y,Z" \

@@ -230,7 +230,10 @@ class RobotThroughTheService(unittest.TestCase):
                 ({"start_pose": [0, 0, 9, 0, 0, 0]}, "start_pose", "outside its URDF limits"),
                 ({"max_torque": [1, 2]}, "max_torque", "1 value or one per joint (6), got 2"),
                 ({"max_jerk": -1}, "max_jerk", "positive"),
-                ({"torque_parameters": {"m99": 1}}, "torque_parameters", "m99")]:
+                ({"torque_parameters": {"m99": 1}}, "torque_parameters", "m99"),
+                ({"moving_joints": [4, 7]}, "moving_joints", "joint 7 is not one of the robot's 6"),
+                ({"moving_joints": []}, "moving_joints", "array of joint numbers"),
+                ({"target": "tool"}, "target", "payload")]:
             status, _, problem = self.server.request("POST", "/v1/excitations", {"robot_id": ur5["id"], **body})
             self.assertEqual(status, 422, (body, problem))
             self.assertEqual(problem["field"], field, problem)
@@ -255,6 +258,21 @@ class RobotThroughTheService(unittest.TestCase):
         self.assertEqual(len(result["torque"]["tau"]), 6)
         for tau, limit in zip(result["torque"]["tau"], limits["torque"]):
             self.assertLessEqual(max(abs(value) for value in tau), limit)
+
+        # A payload's excitation: the wrist alone, a few seconds; the other joints hold still.
+        job = self.server.wait_job(self.post("/v1/excitations", {
+            "robot_id": ur5["id"], "target": "payload", "moving_joints": [4, 5, 6], "period": 4, "harmonics": 3,
+            "dt": 0.01, "max_evaluations": 60, "max_seconds": 600})["id"])
+        self.assertEqual(job["state"], "succeeded", job)
+        coefficients = job["result"]["coefficients"]
+        self.assertEqual(coefficients["target"], "payload")
+        self.assertEqual(coefficients["base_parameters"], 10)
+        self.assertEqual(len(coefficients["moving_joints"]), 3)
+        for k in range(3):
+            self.assertEqual(max(abs(v) for v in coefficients["a"][k] + coefficients["b"][k]), 0.0)
+        data = self.server.request("GET", f"/v1/datasets/{job['result']['dataset_id']}/data")[2]
+        self.assertEqual(len(set(data["q"][0])), 1)
+        self.assertGreater(len(set(data["q"][5])), 100)
 
         # A robot in use is not deleted; once its job ended it is.
         job = self.post("/v1/excitations", {"robot_id": ur5["id"], "max_seconds": 30})

@@ -3,6 +3,7 @@
 #include "robot/excitation_internal.h"
 
 #include "manipid/core/errors.h"
+#include "manipid/core/robot/payload.h"
 #include "manipid/core/robot/regressor.h"
 #include "numbers.h"
 
@@ -29,12 +30,27 @@ constexpr double kUnseenLogDet = -1e6;
 
 }  // namespace
 
+CriterionColumns criterion_columns(const Model& model, const ExcitationOptions& options) {
+  CriterionColumns columns;
+  if (options.target == ExcitationTarget::payload) {
+    const int first = kInertialParametersPerBody * (model.joint_count() - 1);
+    for (int i = 0; i < kInertialParametersPerBody; ++i) columns.selected.push_back(first + i);
+    columns.transform = payload_to_last_body(model);
+    return columns;
+  }
+  BaseParameterOptions base_options;
+  base_options.cancel = options.cancel;
+  columns.selected = base_parameters(model, options.layout, base_options).independent;
+  if (columns.selected.empty()) throw InputError("model", "the model's torques determine no parameter to identify");
+  return columns;
+}
+
 CriterionWorkspace::CriterionWorkspace(const Model& model, const ParameterLayout& layout,
-                                       const BaseParameters& base, double period, int harmonics, int samples,
+                                       const CriterionColumns& columns, double period, int harmonics, int samples,
                                        const std::atomic<bool>* cancel)
     : model_(model),
       layout_(layout),
-      base_(base),
+      columns_(columns),
       n_(model.joint_count()),
       samples_(samples),
       table_(period, harmonics, samples, Instants::midpoints),
@@ -43,11 +59,13 @@ CriterionWorkspace::CriterionWorkspace(const Model& model, const ParameterLayout
       qd_(n_, samples),
       qdd_(n_, samples),
       Y_(static_cast<Eigen::Index>(samples) * n_, layout.size(n_)),
-      Yb_(static_cast<Eigen::Index>(samples) * n_, base.size()),
-      gram_(base.size(), base.size()),
-      scaled_gram_(base.size(), base.size()),
-      norms_(base.size()),
-      eigen_(base.size()),
+      selected_(columns.transform.size() ? static_cast<Eigen::Index>(samples) * n_ : 0,
+                columns.transform.size() ? static_cast<Eigen::Index>(columns.selected.size()) : 0),
+      Yb_(static_cast<Eigen::Index>(samples) * n_, columns.size()),
+      gram_(columns.size(), columns.size()),
+      scaled_gram_(columns.size(), columns.size()),
+      norms_(columns.size()),
+      eigen_(columns.size()),
       cancel_(cancel) {}
 
 Eigen::Index CriterionWorkspace::rows_between_checkpoints(Eigen::Index columns) const {
@@ -62,7 +80,11 @@ void CriterionWorkspace::stack(const Eigen::VectorXd& q0, const Eigen::MatrixXd&
   qd_.noalias() = K * table_.velocity;
   qdd_.noalias() = K * table_.acceleration;
   stacked_regressor(model_, data_, layout_, q_, qd_, qdd_, Y_);
-  for (int i = 0; i < base_.size(); ++i) Yb_.col(i) = Y_.col(base_.independent[static_cast<std::size_t>(i)]);
+  Eigen::MatrixXd& selected = columns_.transform.size() ? selected_ : Yb_;
+  for (std::size_t i = 0; i < columns_.selected.size(); ++i) {
+    selected.col(static_cast<Eigen::Index>(i)) = Y_.col(columns_.selected[i]);
+  }
+  if (columns_.transform.size()) Yb_.noalias() = selected_ * columns_.transform;
 }
 
 void CriterionWorkspace::fast_criteria(double& log_condition, double& log_det) {
@@ -98,7 +120,7 @@ void CriterionWorkspace::fast_criteria(double& log_condition, double& log_det) {
 
 ExcitationQuality CriterionWorkspace::exact_quality() const {
   ExcitationQuality quality;
-  quality.base_parameters = base_.size();
+  quality.base_parameters = columns_.size();
   quality.samples = samples_;
   const Eigen::Index b = Yb_.cols();
   if (b == 0) {
@@ -156,6 +178,20 @@ const char* to_string(ExcitationCriterion criterion) {
   return "unknown";
 }
 
+const char* to_string(ExcitationTarget target) {
+  switch (target) {
+    case ExcitationTarget::arm: return "arm";
+    case ExcitationTarget::payload: return "payload";
+  }
+  return "unknown";
+}
+
+ExcitationTarget parse_excitation_target(const std::string& text, const std::string& field) {
+  if (text == "arm") return ExcitationTarget::arm;
+  if (text == "payload") return ExcitationTarget::payload;
+  throw InputError(field, "unknown target '" + text + "' (known: arm, payload)");
+}
+
 ExcitationCriterion parse_excitation_criterion(const std::string& text, const std::string& field) {
   if (text == "condition") return ExcitationCriterion::condition;
   if (text == "logdet") return ExcitationCriterion::logdet;
@@ -175,8 +211,8 @@ ExcitationQuality excitation_quality(const Model& model, const FourierTrajectory
     throw InputError("samples", "samples must be 0 (automatic) or lie in " + std::to_string(8 * L) + ".." +
                                     std::to_string(detail::kMaxSamples) + " for " + std::to_string(L) + " harmonics");
   }
-  const BaseParameters base = base_parameters(model, options.layout);
-  detail::CriterionWorkspace workspace(model, options.layout, base, trajectory.period, L, samples);
+  const detail::CriterionColumns columns = detail::criterion_columns(model, options);
+  detail::CriterionWorkspace workspace(model, options.layout, columns, trajectory.period, L, samples);
   workspace.stack(trajectory.q0, detail::stacked_coefficients(trajectory));
   return workspace.exact_quality();
 }

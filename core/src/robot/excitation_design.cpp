@@ -32,7 +32,7 @@
 // u_k q0's share of its range, at most 0.025 % of the criterion (the cost is its log).
 //
 // The optimiser: random starts (the best of `random_starts` candidates, seeded), then NLopt's LN_SBPLX on
-// n (2L − 1) coordinates, restarted from its best point while budget remains. See design_excitation().
+// n + 2m(L − 1) coordinates (m joints moving: n (2L − 1) when all do), restarted from its best point while budget remains. See design_excitation().
 #include "robot/excitation_internal.h"
 
 #include "estimation/optimizer.h"
@@ -77,23 +77,24 @@ Eigen::MatrixXd orthogonal_complement(const Eigen::VectorXd& c) {
   return Q.rightCols(c.size() - 1);
 }
 
-/// The design's search space and objective. The optimiser's vector x holds, for the n joints:
+/// The design's search space and objective. The optimiser's vector x holds, for the n joints and the m of them
+/// that move (ExcitationOptions::moving_joints; j-th moving joint k_j):
 ///   x[k]                              u_k ∈ [¼, ¾]: q0_k = lower_k + u_k (upper_k − lower_k)
-///   x[n + k(L−1) .. ]                 α_k (L − 1): a_k = N_a α_k, N_a ⟂ (1, …, 1)
-///   x[n + n(L−1) + k(L−1) .. ]        β_k (L − 1): b_k = N_b β_k, N_b ⟂ (1, 2, …, L)
-/// then every joint scaled to its largest feasible amplitude. (Each joint's (α_k, β_k) is a direction: its
-/// length does not matter.)
+///   x[n + j(L−1) .. ]                 α_j (L − 1): a_{k_j} = N_a α_j, N_a ⟂ (1, …, 1)
+///   x[n + m(L−1) + j(L−1) .. ]        β_j (L − 1): b_{k_j} = N_b β_j, N_b ⟂ (1, 2, …, L)
+/// then every moving joint scaled to its largest feasible amplitude; a joint that does not move has a = b = 0.
+/// (Each joint's (α, β) is a direction: its length does not matter.)
 class DesignProblem {
  public:
   DesignProblem(const Model& model, const ExcitationOptions& options, const ExcitationLimits& limits,
-                const BaseParameters& base)
+                const detail::CriterionColumns& columns)
       : options_(options),
         limits_(limits),
         n_(model.joint_count()),
         L_(options.harmonics),
         period_(options.period),
         grid_(options.period, options.harmonics),
-        criterion_(model, options.layout, base, options.period, options.harmonics, detail::resolved_samples(options),
+        criterion_(model, options.layout, columns, options.period, options.harmonics, detail::resolved_samples(options),
                    options.cancel),
         torque_(model, limits, options.period, options.harmonics, detail::resolved_samples(options)),
         q0_(n_),
@@ -103,6 +104,12 @@ class DesignProblem {
     for (int l = 1; l <= L_; ++l) ramp[l - 1] = l;
     Na_ = orthogonal_complement(ones);
     Nb_ = orthogonal_complement(ramp);
+    if (options.moving_joints.empty()) {
+      for (int k = 0; k < n_; ++k) moving_.push_back(k);
+    } else {
+      moving_ = options.moving_joints;
+    }
+    m_ = static_cast<int>(moving_.size());
     // q0's range: the position limits with margin; a 2π window for rotations without limits, ±1 m for
     // slides without (the criterion is periodic in a rotation's angle; a slide's offset is a guess).
     q0_lower_.resize(n_);
@@ -114,19 +121,21 @@ class DesignProblem {
     }
   }
 
-  int dimension() const { return n_ * (2 * L_ - 1); }
+  int dimension() const { return n_ + 2 * m_ * (L_ - 1); }
 
   /// q0 and K for x, every joint scaled into its limits.
   void map(const double* x) {
-    for (int k = 0; k < n_; ++k) {
-      q0_[k] = q0_lower_[k] + x[k] * (q0_upper_[k] - q0_lower_[k]);
-      const Eigen::Map<const Eigen::VectorXd> alpha(x + n_ + k * (L_ - 1), L_ - 1);
-      const Eigen::Map<const Eigen::VectorXd> beta(x + n_ + (n_ + k) * (L_ - 1), L_ - 1);
+    for (int k = 0; k < n_; ++k) q0_[k] = q0_lower_[k] + x[k] * (q0_upper_[k] - q0_lower_[k]);
+    K_.setZero();
+    for (int j = 0; j < m_; ++j) {
+      const int k = moving_[static_cast<std::size_t>(j)];
+      const Eigen::Map<const Eigen::VectorXd> alpha(x + n_ + j * (L_ - 1), L_ - 1);
+      const Eigen::Map<const Eigen::VectorXd> beta(x + n_ + (m_ + j) * (L_ - 1), L_ - 1);
       K_.row(k).head(L_).noalias() = (Na_ * alpha).transpose();
       K_.row(k).tail(L_).noalias() = (Nb_ * beta).transpose();
     }
     grid_.peaks(K_, work_, peaks_);
-    for (int k = 0; k < n_; ++k) K_.row(k) *= detail::largest_scale(peaks_[static_cast<std::size_t>(k)], q0_[k], limits_, k);
+    for (int k : moving_) K_.row(k) *= detail::largest_scale(peaks_[static_cast<std::size_t>(k)], q0_[k], limits_, k);
     torque_scale_ = 1.0;
     if (limits_.any_torque()) {
       torque_scale_ = torque_.largest_factor(q0_, K_);
@@ -194,12 +203,12 @@ class DesignProblem {
   /// Each joint's (α_k, β_k) to unit length (the length is free: the scaling undoes it), so the optimiser's
   /// steps mean the same turn of direction for every joint.
   void normalise_directions(Eigen::VectorXd& x) const {
-    for (int k = 0; k < n_; ++k) {
+    for (int j = 0; j < m_; ++j) {
       double squares = 0.0;
-      for_each_direction(k, [&](Eigen::Index i) { squares += x[i] * x[i]; });
+      for_each_direction(j, [&](Eigen::Index i) { squares += x[i] * x[i]; });
       if (!(squares > 0.0)) continue;
       const double inverse = 1.0 / std::sqrt(squares);
-      for_each_direction(k, [&](Eigen::Index i) { x[i] *= inverse; });
+      for_each_direction(j, [&](Eigen::Index i) { x[i] *= inverse; });
     }
   }
 
@@ -226,17 +235,20 @@ class DesignProblem {
   static constexpr double kPositionStep = 0.1;
   static constexpr double kDirectionStep = 0.25;
 
+  /// The coordinates of the j-th moving joint's direction (α_j, β_j).
   template <typename F>
-  void for_each_direction(int k, F&& f) const {
+  void for_each_direction(int j, F&& f) const {
     for (int l = 0; l < L_ - 1; ++l) {
-      f(static_cast<Eigen::Index>(n_ + k * (L_ - 1) + l));
-      f(static_cast<Eigen::Index>(n_ + (n_ + k) * (L_ - 1) + l));
+      f(static_cast<Eigen::Index>(n_ + j * (L_ - 1) + l));
+      f(static_cast<Eigen::Index>(n_ + (m_ + j) * (L_ - 1) + l));
     }
   }
 
   const ExcitationOptions& options_;
   const ExcitationLimits& limits_;
   int n_, L_;
+  std::vector<int> moving_;  // the joints that move, in order
+  int m_ = 0;
   double period_;
   Eigen::MatrixXd Na_, Nb_;
   Eigen::VectorXd q0_lower_, q0_upper_;
@@ -384,7 +396,8 @@ std::string ExcitationSummary::brief_report() const {
   std::string text = std::string(to_string(criterion)) + " " + format_number(initial_value) + " -> " +
                      format_number(final_value);
   if (criterion == ExcitationCriterion::logdet) text += " (condition number " + format_number(condition_number) + ")";
-  text += ", " + std::to_string(base_parameters) + " base parameters, " + std::to_string(evaluations) +
+  text += ", " + std::to_string(base_parameters) + (target == ExcitationTarget::payload ? " payload" : " base") +
+          " parameters, " + std::to_string(evaluations) +
           " evaluations in " + format_number(wall_seconds) + " s, stopped: " + to_string(termination);
   return text;
 }
@@ -394,12 +407,8 @@ namespace {
 ExcitationDesign design(const Model& model, const ExcitationOptions& options) {
   const Clock::time_point started = Clock::now();
   const ExcitationLimits limits = excitation_limits(model, options);
-  BaseParameterOptions base_options;
-  base_options.cancel = options.cancel;
-  const BaseParameters base = base_parameters(model, options.layout, base_options);
-  if (base.size() == 0) throw InputError("model", "the model's torques determine no parameter to identify");
-
-  DesignProblem problem(model, options, limits, base);
+  const detail::CriterionColumns columns = detail::criterion_columns(model, options);
+  DesignProblem problem(model, options, limits, columns);
   Search search;
   search.problem = &problem;
   search.options = &options;
@@ -465,9 +474,10 @@ ExcitationDesign design(const Model& model, const ExcitationOptions& options) {
   ExcitationDesign design;
   ExcitationSummary& summary = design.summary;
   summary.criterion = options.criterion;
+  summary.target = options.target;
   summary.initial_value = initial_value;
   summary.final_value = search.best_value;
-  summary.base_parameters = base.size();
+  summary.base_parameters = columns.size();
   summary.samples = problem.criterion().samples();
   summary.free_coefficients = problem.dimension();
   summary.evaluations = search.evaluations;
@@ -557,6 +567,7 @@ ExcitationDesign design_excitation(const Model& model, const ExcitationOptions& 
     // the evaluation under way is not finished, so there is no figure to report beside a trajectory.
     ExcitationDesign cancelled;
     cancelled.summary.criterion = options.criterion;
+    cancelled.summary.target = options.target;
     cancelled.summary.termination = ExcitationTermination::cancelled;
     cancelled.summary.message = std::string("cancelled: ") + interrupted.what() + "; no trajectory is returned";
     cancelled.summary.wall_seconds = std::chrono::duration<double>(Clock::now() - started).count();

@@ -135,6 +135,18 @@ inline int resolved_samples(const ExcitationOptions& options) {
   return options.samples > 0 ? options.samples : std::max(200, 40 * options.harmonics);
 }
 
+/// The columns the criterion judges: Y_b = Y(:, selected) · transform (transform empty: the selected columns
+/// as they are). The arm's: its base parameters' independent columns; a payload's: the last body's ten times
+/// payload_to_last_body().
+struct CriterionColumns {
+  std::vector<int> selected;
+  Eigen::MatrixXd transform;  ///< selected.size() × b, or empty
+  int size() const { return transform.size() ? static_cast<int>(transform.cols()) : static_cast<int>(selected.size()); }
+};
+/// The columns options.target asks for on `model` (the base parameters computed with options.cancel). Throws
+/// InputError("model") when the arm's torques determine no parameter.
+CriterionColumns criterion_columns(const Model& model, const ExcitationOptions& options);
+
 /// The base regressor stacked over N instants of one period, and the criteria from it. One per design
 /// (or per quality evaluation): the Data and every matrix are sized once, nothing is allocated per call.
 ///
@@ -149,7 +161,7 @@ inline int resolved_samples(const ExcitationOptions& options) {
 /// run whole, as before.
 class CriterionWorkspace {
  public:
-  CriterionWorkspace(const Model& model, const ParameterLayout& layout, const BaseParameters& base, double period,
+  CriterionWorkspace(const Model& model, const ParameterLayout& layout, const CriterionColumns& columns, double period,
                      int harmonics, int samples, const std::atomic<bool>* cancel = nullptr);
 
   int samples() const { return samples_; }
@@ -171,13 +183,13 @@ class CriterionWorkspace {
 
   const Model& model_;
   const ParameterLayout& layout_;
-  const BaseParameters& base_;
+  const CriterionColumns& columns_;
   int n_;
   int samples_;
   HarmonicTable table_;
   Data data_;
   Eigen::MatrixXd q_, qd_, qdd_;
-  Eigen::MatrixXd Y_, Yb_;
+  Eigen::MatrixXd Y_, selected_, Yb_;
   Eigen::MatrixXd gram_, scaled_gram_;
   Eigen::VectorXd norms_;
   Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd> eigen_;

@@ -276,6 +276,17 @@ ExcitationLimits excitation_limits(const Model& model, const ExcitationOptions& 
                                     " harmonics (8 per harmonic resolve the regressor's products of harmonics), got " +
                                     std::to_string(options.samples));
   }
+  std::vector<bool> moving(static_cast<std::size_t>(n), false);
+  for (int k : options.moving_joints) {
+    if (k < 0 || k >= n) {
+      throw InputError("moving_joints", "joint " + std::to_string(k + 1) + " is not one of the robot's " + std::to_string(n));
+    }
+    if (moving[static_cast<std::size_t>(k)]) {
+      throw InputError("moving_joints", "joint " + std::to_string(k + 1) + " (" + model.joints[static_cast<std::size_t>(k)].name +
+                                            ") is named twice");
+    }
+    moving[static_cast<std::size_t>(k)] = true;
+  }
   if (options.random_starts < 1) {
     throw InputError("random_starts", "random_starts must be at least 1, got " + std::to_string(options.random_starts));
   }

@@ -39,15 +39,6 @@ constexpr double kMaterialResidual = 1e-3;
 /// The jackknife's blocks of time (jackknife_inflation).
 constexpr int kJackknifeBlocks = 10;
 
-/// T: body n's parameters from the tip link's, π_B = T π_P (expressed_in is linear in the 10 entries).
-Matrix10d tip_to_body(const Model& model) {
-  Matrix10d T;
-  for (int i = 0; i < 10; ++i) {
-    T.col(i) = InertialParameters::from_vector(Vector10d::Unit(i)).expressed_in(model.tip_placement).vector();
-  }
-  return T;
-}
-
 /// What a parameter needs to be seen, for the warning naming it.
 std::string what_excites(int index) {
   if (index == 0) return "vertical accelerations, or the arm held in several poses (gravity)";
@@ -260,6 +251,14 @@ void check_input(const Model& model, const ArmParameters& arm, const std::vector
 
 }  // namespace
 
+Matrix10d payload_to_last_body(const Model& model) {
+  Matrix10d T;
+  for (int i = 0; i < 10; ++i) {
+    T.col(i) = InertialParameters::from_vector(Vector10d::Unit(i)).expressed_in(model.tip_placement).vector();
+  }
+  return T;
+}
+
 const std::array<const char*, 10>& PayloadResult::names() {
   static const std::array<const char*, 10> kNames = {"m", "mx", "my", "mz", "Ixx", "Ixy", "Ixz", "Iyy", "Iyz", "Izz"};
   return kNames;
@@ -268,7 +267,7 @@ const std::array<const char*, 10>& PayloadResult::names() {
 Eigen::VectorXd with_payload(const Model& model, const ArmParameters& arm, const Eigen::Matrix<double, 10, 1>& payload) {
   const int n = model.joint_count();
   Eigen::VectorXd pi = arm.pi;
-  pi.segment<10>(static_cast<Eigen::Index>(kInertialParametersPerBody) * (n - 1)) += tip_to_body(model) * payload;
+  pi.segment<10>(static_cast<Eigen::Index>(kInertialParametersPerBody) * (n - 1)) += payload_to_last_body(model) * payload;
   return pi;
 }
 
@@ -331,7 +330,7 @@ PayloadResult identify_payload(const Model& model, const ArmParameters& arm, con
     lowpass_energy = rows.lowpass_energy;
   }
   result.rows = static_cast<int>(W.rows());
-  const Eigen::MatrixXd W_tip = W * tip_to_body(model);  // columns for π_P
+  const Eigen::MatrixXd W_tip = W * payload_to_last_body(model);  // columns for π_P
 
   // Step 3: x of the unknowns, A x ≈ L r − W_tip g0.
   const Unknowns u = unknowns(options);

@@ -29,6 +29,7 @@ using testing::Fourier;
 using testing::measure;
 using testing::perturbed_truth;
 using testing::uniform_times;
+using testing::measure_excitation;
 
 Model example(const std::string& name) { return parse_urdf(read_file(source_path("examples/robots/" + name))).model; }
 
@@ -170,21 +171,6 @@ TEST(RobotIdentification, NoiseFreeRoundTripPredictsRandomStatesTo1e5) {
   // The estimate is the truth's base parameters.
   const Eigen::VectorXd true_base = result.base.combination * truth;
   EXPECT_LT((result.estimate - true_base).cwiseAbs().maxCoeff() / true_base.cwiseAbs().maxCoeff(), 1e-5);
-}
-
-/// τ = RNEA(π) along a designed excitation, sampled at dt.
-Trajectory measure_excitation(const Model& model, const ParameterLayout& layout, const Eigen::VectorXd& pi,
-                              const FourierTrajectory& trajectory, double dt, int periods) {
-  const SampledExcitation sampled = sample_excitation(trajectory, dt, periods);
-  Trajectory data = to_trajectory(sampled);
-  data.tau.resize(data.samples(), model.joint_count());
-  Data workspace(model);
-  Eigen::VectorXd tau(model.joint_count());
-  for (Eigen::Index s = 0; s < data.t.size(); ++s) {
-    inverse_dynamics(model, workspace, layout, pi, sampled.q.col(s), sampled.qd.col(s), sampled.qdd.col(s), tau);
-    data.tau.row(s) = tau.transpose();
-  }
-  return data;
 }
 
 TEST(RobotIdentification, RoundTripOnTheProjectsOwnExcitation) {

@@ -2,6 +2,7 @@
 #include "manipid/core/robot/payload.h"
 
 #include "manipid/core/errors.h"
+#include "manipid/core/robot/excitation.h"
 #include "manipid/core/robot/identification.h"
 #include "manipid/core/robot/urdf.h"
 #include "rigid_bodies.h"
@@ -19,6 +20,7 @@ namespace {
 
 using testing::Fourier;
 using testing::measure;
+using testing::measure_excitation;
 using testing::uniform_times;
 
 Model ur5_like() { return parse_urdf(testing::read_file(testing::source_path("examples/robots/ur5_like.urdf"))).model; }
@@ -250,6 +252,78 @@ TEST(Payload, PhysicalOnARunWithoutPayloadKeepsTheAnswerAndSaysWhy) {
   bool said = false;
   for (const std::string& warning : result.warnings) said = said || warning.find("no physical fit") != std::string::npos;
   EXPECT_TRUE(said);
+}
+
+TEST(Payload, AFewSecondsOfDesignedWristMotionDetermineTheTool) {
+  // `excitation --payload`: 5 s in which only the wrist (joints 4–6) moves, the rest holding the pose the design
+  // chose. Its payload columns are well conditioned (column-scaled condition < 2.5), every joint that holds still
+  // has no motion at all, and on the run with the 3 kg tool and the real logs' noise every payload parameter
+  // is determined: mass within 1 %, centre of mass within 3 mm (measured: 2.9994 ± 0.012 kg, 1.8 mm; the
+  // condition number 1.72 against 6.4 for the random motion). A random wrist motion of the same length and
+  // size does worse by the design's own measure.
+  std::mt19937_64 engine(37);
+  const Scene scene(engine);
+  ExcitationOptions options;
+  options.target = ExcitationTarget::payload;
+  options.moving_joints = {3, 4, 5};
+  options.period = 5.0;
+  options.harmonics = 3;
+  options.max_evaluations = 1500;
+  const ExcitationDesign design = design_excitation(scene.model, options);
+  EXPECT_EQ(design.summary.target, ExcitationTarget::payload);
+  EXPECT_EQ(design.summary.base_parameters, 10);
+  EXPECT_LT(design.summary.condition_number, 2.5);
+  EXPECT_NE(design.summary.brief_report().find("10 payload parameters"), std::string::npos);
+  for (int k = 0; k < 3; ++k) {
+    EXPECT_EQ(design.trajectory.a.row(k).cwiseAbs().maxCoeff(), 0.0) << k;
+    EXPECT_EQ(design.trajectory.b.row(k).cwiseAbs().maxCoeff(), 0.0) << k;
+  }
+  FourierTrajectory random = design.trajectory;
+  std::normal_distribution<double> normal;
+  for (int k = 3; k < 6; ++k) {
+    for (int l = 1; l < random.harmonics(); ++l) {
+      random.a(k, l) = normal(engine);
+      random.b(k, l) = normal(engine);
+    }
+    random.a(k, 0) = -random.a.row(k).tail(random.harmonics() - 1).sum();
+    double weighted = 0.0;
+    for (int l = 2; l <= random.harmonics(); ++l) weighted += l * random.b(k, l - 1);
+    random.b(k, 0) = -weighted;
+    const double size = std::sqrt(design.trajectory.a.row(k).squaredNorm() + design.trajectory.b.row(k).squaredNorm()) /
+                        std::sqrt(random.a.row(k).squaredNorm() + random.b.row(k).squaredNorm());
+    random.a.row(k) *= size;
+    random.b.row(k) *= size;
+  }
+  EXPECT_LT(design.summary.condition_number, excitation_quality(scene.model, random, options).condition_number);
+
+  Trajectory data = measure_excitation(scene.model, scene.layout, scene.loaded, design.trajectory, 1e-3, 1);
+  add_noise(data, engine);
+  const PayloadResult result = identify_payload(scene.model, {scene.layout, scene.arm}, {data}, {});
+  EXPECT_TRUE(result.undetermined.empty());
+  EXPECT_NEAR(result.mass, 3.0, 0.03) << result.mass_std_error;
+  EXPECT_LT(com_error(result, scene.payload), 3e-3);
+}
+
+TEST(Payload, ExcitationRefusesMovingJointsOutsideTheArm) {
+  std::mt19937_64 engine(41);
+  const Scene scene(engine);
+  ExcitationOptions options;
+  options.target = ExcitationTarget::payload;
+  options.moving_joints = {3, 6};
+  try {
+    (void)design_excitation(scene.model, options);
+    ADD_FAILURE() << "joint 7 of a 6-joint arm was accepted";
+  } catch (const InputError& error) {
+    EXPECT_EQ(error.field(), "moving_joints");
+    EXPECT_NE(std::string(error.what()).find("joint 7 is not one of the robot's 6"), std::string::npos) << error.what();
+  }
+  options.moving_joints = {4, 4};
+  try {
+    (void)design_excitation(scene.model, options);
+    ADD_FAILURE() << "a joint named twice was accepted";
+  } catch (const InputError& error) {
+    EXPECT_EQ(error.field(), "moving_joints");
+  }
 }
 
 TEST(Payload, RefusalsNameTheirField) {

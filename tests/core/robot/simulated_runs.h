@@ -1,7 +1,8 @@
-// simulated_runs.h — robot test runs made by inverse dynamics: a random Fourier motion, τ = RNEA(π) along it, a perturbed truth.
+// simulated_runs.h — robot test runs made by inverse dynamics: a random Fourier motion or a designed excitation, τ = RNEA(π) along it, a perturbed truth.
 #pragma once
 
 #include "manipid/core/robot/data.h"
+#include "manipid/core/robot/excitation.h"
 #include "manipid/core/robot/model.h"
 #include "manipid/core/robot/parameters.h"
 #include "manipid/core/robot/rnea.h"
@@ -61,6 +62,21 @@ inline Trajectory measure(const Model& model, const ParameterLayout& layout, con
     motion.state(times[s], q, qd, qdd);
     inverse_dynamics(model, workspace, layout, pi, q, qd, qdd, tau);
     data.q.row(s) = q.transpose();
+    data.tau.row(s) = tau.transpose();
+  }
+  return data;
+}
+
+/// τ = RNEA(π) along a designed excitation, sampled at dt.
+inline Trajectory measure_excitation(const Model& model, const ParameterLayout& layout, const Eigen::VectorXd& pi,
+                              const FourierTrajectory& trajectory, double dt, int periods) {
+  const SampledExcitation sampled = sample_excitation(trajectory, dt, periods);
+  Trajectory data = to_trajectory(sampled);
+  data.tau.resize(data.samples(), model.joint_count());
+  Data workspace(model);
+  Eigen::VectorXd tau(model.joint_count());
+  for (Eigen::Index s = 0; s < data.t.size(); ++s) {
+    inverse_dynamics(model, workspace, layout, pi, sampled.q.col(s), sampled.qd.col(s), sampled.qdd.col(s), tau);
     data.tau.row(s) = tau.transpose();
   }
   return data;

@@ -50,7 +50,7 @@ namespace manipid::api {
 nlohmann::ordered_json robot_description(const robot::Model& model, const std::vector<std::string>& warnings);
 
 /// An excitation design as JSON: the series' formula, period, harmonics, q0, a, b per joint, the start,
-/// the criterion's value and the condition number, the layout, the limits (position, velocity,
+/// the criterion's value and the condition number, the target ("arm" or "payload") and the joints that moved, the layout, the limits (position, velocity,
 /// acceleration, jerk, torque; null where none), per joint the peaks reached and the share of each limit
 /// used ("peaks", "usage"), the torque's amplitude factor, the binding limits, the ramp from the start pose
 /// (null without one), the seed, evaluations, time and why it stopped (what `manipid excitation --coefficients` writes and an excitation

@@ -110,6 +110,8 @@ struct ExcitationSpec {
 };
 
 /// {"robot_id", "name"?, "period"?: 10, "harmonics"?: 5, "criterion"?: "condition"|"logdet",
+///  "target"?: "arm"|"payload" (the base parameters, or a payload's ten on the tip link), "moving_joints"?: [joint
+///  numbers, 1-based] (default all; the others hold the mean pose),
 ///  "max_acceleration"?: rad/s² (one number, or one per joint), "max_velocity"?: rad/s (default the URDF's),
 ///  "max_jerk"?: rad/s³ (default none), "max_torque"?: N m (default the URDF's efforts), "torque_parameters"?:
 ///  {an identification's result, or {"name": value} overrides} (default the URDF's), "start_pose"?: [rad …],

@@ -49,6 +49,12 @@
 //     weigh alike; the unscaled number mostly measures units);
 //   - logdet:    maximise log det(Y_bᵀ Y_b / N), the D-optimal design (its optimum does not depend on the
 //     parameters' units: rescaling a column adds a constant to log det).
+//
+// Payload (`target` payload). A payload on the tip link is identified from the torque an identified arm leaves
+// (robot/payload.h): its regressor is the last body's ten columns times payload_to_last_body(), and the design's
+// criterion is that 10-column matrix's instead of Y_b. Often the wrist alone can excite it: `moving_joints`
+// names the joints that move; the others hold their mean pose (which the design still chooses: where the
+// wrist stands relative to gravity matters), so a payload run can be a few seconds of wrist motion.
 #pragma once
 
 #include "manipid/core/robot/model.h"
@@ -90,6 +96,15 @@ enum class ExcitationCriterion {
   logdet,     ///< maximise log det of the information matrix Y_bᵀ Y_b / N
 };
 const char* to_string(ExcitationCriterion criterion);
+
+/// What a design excites (see the file comment).
+enum class ExcitationTarget {
+  arm,      ///< the arm's base parameters (the layout's friction, offset and armature columns included)
+  payload,  ///< a payload's ten parameters on the tip link (robot/payload.h)
+};
+const char* to_string(ExcitationTarget target);
+/// "arm" or "payload"; InputError(field) otherwise.
+ExcitationTarget parse_excitation_target(const std::string& text, const std::string& field = "target");
 /// "condition" or "logdet"; InputError(field) otherwise.
 ExcitationCriterion parse_excitation_criterion(const std::string& text, const std::string& field = "criterion");
 
@@ -111,6 +126,11 @@ struct ExcitationOptions {
   /// motion closer to the acceleration limit's frequencies, rarely a better condition.
   int harmonics = 5;
   ExcitationCriterion criterion = ExcitationCriterion::condition;
+  /// The arm's base parameters, or a payload's ten on the tip link.
+  ExcitationTarget target = ExcitationTarget::arm;
+  /// Joints that move (0-based, each once); empty = all. The others hold their mean pose, which the design
+  /// chooses within the middle half of their range as it does every joint's.
+  std::vector<int> moving_joints;
   /// Which friction, offset and armature columns the regressor has: design for the model you will identify.
   ParameterLayout layout;
   /// Largest |q̈|, rad/s² (m/s² prismatic): one value for every joint, or one per joint. URDF has no
@@ -173,7 +193,7 @@ struct ExcitationOptions {
   /// Called after each evaluation, in the calling thread.
   std::function<void(const ExcitationProgress&)> progress;
 
-  /// Throws InputError naming the field ("period", "harmonics", "max_acceleration", "max_velocity",
+  /// Throws InputError naming the field ("period", "harmonics", "moving_joints", "max_acceleration", "max_velocity",
   /// "max_jerk", "max_torque", "torque_parameters", "position_margin", "start_pose", "samples",
   /// "random_starts", "local_starts", "max_seconds", "max_evaluations", or "joint NAME" for a joint whose
   /// limits leave it no room to move) unless a design can run on `model`.
@@ -235,6 +255,7 @@ const char* to_string(ExcitationTermination termination);
 /// How a design went (Ceres's Solver::Summary in spirit).
 struct ExcitationSummary {
   ExcitationCriterion criterion = ExcitationCriterion::condition;
+  ExcitationTarget target = ExcitationTarget::arm;
   /// The criterion (condition number or log det) of the local optimisation's start — the best random
   /// start — and of the result.
   double initial_value = 0.0;
@@ -244,15 +265,15 @@ struct ExcitationSummary {
   double condition_number = 0.0;
   /// log det(Y_bᵀ Y_b / N) of the result.
   double log_det = 0.0;
-  int base_parameters = 0;  ///< columns of Y_b
+  int base_parameters = 0;  ///< columns of the criterion's matrix: the base parameters (arm), or 10 (payload)
   int samples = 0;          ///< N; Y_b has N·n rows
-  int free_coefficients = 0;  ///< what the optimiser moved: n (2L − 1)
+  int free_coefficients = 0;  ///< what the optimiser moved: n + 2m(L − 1) for m moving joints (n (2L − 1) when all move)
   long evaluations = 0;
   double wall_seconds = 0.0;
   ExcitationTermination termination = ExcitationTermination::failure;
   std::string message;  ///< why it stopped, in words
-  /// The limits the result reaches, by joint. The optimiser fills each joint's room, so every joint has at
-  /// least one.
+  /// The limits the result reaches, by joint. The optimiser fills each moving joint's room, so every moving
+  /// joint has at least one.
   std::vector<ActiveLimit> active_limits;
   /// How much of each limit the result uses, n × 6 (lower, upper, velocity, acceleration, jerk, torque —
   /// LimitKind's order): 1 = reaches it; positions as the share of the room between q0 and the limit; NaN
@@ -265,7 +286,8 @@ struct ExcitationSummary {
   double torque_scale = 1.0;
 
   /// One line: "condition 8.75 -> 5.42, 57 base parameters, 8000 evaluations in 6.1 s, stopped:
-  /// max_evaluations" (logdet: "logdet 127.4 -> 175.4 (condition number 9.28), ...").
+  /// max_evaluations" (logdet: "logdet 127.4 -> 175.4 (condition number 9.28), ..."; a payload's: "10 payload
+  /// parameters").
   std::string brief_report() const;
 };
 
@@ -336,11 +358,11 @@ std::string describe(const LimitViolation& violation);
 struct ExcitationQuality {
   double condition_number = 0.0;  ///< cond(Y_b S), by SVD; +∞ when a base column is zero (rank lost)
   double log_det = 0.0;           ///< log det(Y_bᵀ Y_b / N); −∞ when singular
-  int base_parameters = 0;
+  int base_parameters = 0;        ///< columns of Y_b (10 for a payload)
   int samples = 0;
 };
-/// The criteria of `trajectory` on `model` with options.layout and options.samples (the other options are
-/// not used). For comparing designs, or a hand-made trajectory with a designed one.
+/// The criteria of `trajectory` on `model` with options.layout, options.target and options.samples (the other
+/// options are not used). For comparing designs, or a hand-made trajectory with a designed one.
 ExcitationQuality excitation_quality(const Model& model, const FourierTrajectory& trajectory,
                                      const ExcitationOptions& options = {});
 

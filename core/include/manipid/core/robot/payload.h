@@ -140,6 +140,11 @@ struct PayloadResult {
 PayloadResult identify_payload(const Model& model, const ArmParameters& arm, const std::vector<Trajectory>& runs,
                                const PayloadOptions& options);
 
+/// T: the last body's ten parameters (its frame) from a payload's on the tip link (the tip link's frame, about
+/// its origin), π_B = T π_P — linear (InertialParameters::expressed_in with Model::tip_placement). The payload's
+/// regressor columns are the last body's times T.
+Eigen::Matrix<double, 10, 10> payload_to_last_body(const Model& model);
+
 /// The arm's standard vector with the payload added to body n (its tip-link parameters moved into body n's
 /// frame): what predicts the arm carrying it.
 Eigen::VectorXd with_payload(const Model& model, const ArmParameters& arm, const Eigen::Matrix<double, 10, 1>& payload);
