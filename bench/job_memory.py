@@ -6,7 +6,8 @@ For each job, a fresh server (one worker): VmHWM (/proc/PID/status) before the j
 the rise divided by samples × joints, and the rise against the server's own estimate. Jobs: the
 paper's preset simulated for D seconds (a simulation job; an input-error and a two-stage
 identification that simulate first) and a 7-joint URDF robot's run of D seconds (uploaded as CSV,
-identified with viscous, Coulomb and offset friction). Two lengths each, so the per-sample slope
+identified with viscous, Coulomb and offset friction; and a payload identified on it, the URDF's values as the
+arm). Two lengths each, so the per-sample slope
 shows apart from the fixed part.
 
 Usage: python3 bench/job_memory.py [--binary build/release/server/manipid] [--seconds 60,240]
@@ -98,6 +99,11 @@ def main():
                 return "/v1/identifications", {"robot_id": robot["id"], "dataset_id": dataset["id"],
                                                "friction": ["viscous", "coulomb", "offset"]}
             run_job(binary, directory, f"7-joint robot, {seconds} s run", submit, seconds * 1000, 7)
+
+            def submit_payload(server, submit=submit):
+                path, body = submit(server)
+                return path, {"payload": True, "robot_id": body["robot_id"], "dataset_id": body["dataset_id"]}
+            run_job(binary, directory, f"payload on a 7-joint robot, {seconds} s run", submit_payload, seconds * 1000, 7)
 
 
 if __name__ == "__main__":

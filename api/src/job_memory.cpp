@@ -26,6 +26,7 @@ constexpr double kInputError = 224.0;          // measured 152–174 (a simulati
 constexpr double kClosedLoop = 576.0;          // output-error and two-stage: measured 434–438
 constexpr double kRobotIdentification = 288.0; // measured 198–209 (7 joints, 91 parameters, the held-out choice)
 constexpr double kExcitation = 160.0;          // the dataset it writes, as a simulation's
+constexpr double kPayloadIdentification = 112.0;  // measured 70–81 (7 joints, the URDF's arm; body n's 10 columns)
 // What a job holds whatever its size (model, optimiser, result, a history batch): measured 1–2 MiB.
 constexpr double kFixedBytes = 16.0 * (1 << 20);
 
@@ -61,13 +62,16 @@ JobShape preset_identification(const nlohmann::json& request, const DatasetLooku
   return shape;
 }
 
-JobShape robot_identification(const nlohmann::json& request, const DatasetLookup& datasets, const RobotJointsLookup&) {
-  const RobotIdentificationSpec spec = robot_identification_from_json(request);
+namespace {
+
+/// A job that reads a stored robot's runs (RobotRuns), resampled onto `dt` when one is asked for: every training
+/// and validation run's samples together.
+JobShape robot_runs_shape(const RobotRuns& runs, double dt, const DatasetLookup& datasets, double bytes_per_sample_joint,
+                          const char* work) {
   JobShape shape;
   shape.field = "dataset_id";
-  const double dt = spec.options.preparation.uniform.dt;
-  std::vector<std::string> ids = spec.dataset_ids;
-  ids.insert(ids.end(), spec.validation_dataset_ids.begin(), spec.validation_dataset_ids.end());
+  std::vector<std::string> ids = runs.dataset_ids;
+  ids.insert(ids.end(), runs.validation_dataset_ids.begin(), runs.validation_dataset_ids.end());
   for (const std::string& id : ids) {
     const auto dataset = datasets(id);
     if (!dataset) continue;
@@ -76,9 +80,22 @@ JobShape robot_identification(const nlohmann::json& request, const DatasetLookup
     if (samples > dataset->samples) shape.field = "dt";
     shape.samples += samples;
   }
-  shape.bytes_per_sample_joint = kRobotIdentification;
-  shape.work = "robot identification";
+  shape.bytes_per_sample_joint = bytes_per_sample_joint;
+  shape.work = work;
   return shape;
+}
+
+}  // namespace
+
+JobShape robot_identification(const nlohmann::json& request, const DatasetLookup& datasets, const RobotJointsLookup&) {
+  const RobotIdentificationSpec spec = robot_identification_from_json(request);
+  return robot_runs_shape(spec, spec.options.preparation.uniform.dt, datasets, kRobotIdentification, "robot identification");
+}
+
+JobShape payload_identification(const nlohmann::json& request, const DatasetLookup& datasets, const RobotJointsLookup&) {
+  const PayloadIdentificationSpec spec = payload_identification_from_json(request);
+  return robot_runs_shape(spec, spec.options.preparation.uniform.dt, datasets, kPayloadIdentification,
+                          "payload identification");
 }
 
 JobShape excitation(const nlohmann::json& request, const DatasetLookup&, const RobotJointsLookup& robots) {

@@ -13,6 +13,8 @@ JobShape preset_identification(const nlohmann::json& request, const DatasetLooku
                                const RobotJointsLookup& robots);
 JobShape robot_identification(const nlohmann::json& request, const DatasetLookup& datasets,
                               const RobotJointsLookup& robots);
+JobShape payload_identification(const nlohmann::json& request, const DatasetLookup& datasets,
+                                const RobotJointsLookup& robots);
 JobShape excitation(const nlohmann::json& request, const DatasetLookup& datasets, const RobotJointsLookup& robots);
 
 }  // namespace manipid::api::shapes

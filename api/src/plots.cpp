@@ -200,18 +200,12 @@ Json friction_to_json(const robot::Model& model, const RobotResult& result, cons
 
 }  // namespace
 
-nlohmann::ordered_json robot_fit_to_json(const robot::Model& model, const std::string& request_json,
-                                         const std::string& result_json, const Trajectory& stored, long max_points,
-                                         bool prior) {
-  const RobotIdentificationSpec spec = robot_identification_from_json(nlohmann::json::parse(request_json));
-  const RobotResult result = decode_robot_result(model, nlohmann::json::parse(result_json));
-  // The samples the identification saw: trimmed, and on its grid.
-  DataPreparation preparation = spec.options.preparation;
-  preparation.uniform.dt = result.dt;
-  std::optional<Trajectory> prepared;
-  const Trajectory& data = prepare_data(stored, preparation, prepared);
-  const robot::TorquePrediction fit = robot::predict_torque(model, result.layout, result.point, data, result.judge, result.torque_joints);
-  const std::vector<long> indices = plot_indices(fit.t.size(), max_points);
+namespace {
+
+/// A judged prediction as the robot views draw it: {"judge", "samples", "t", "joints": [{"joint", "name",
+/// "measured", "model", "residual", "rms_measured", "rms_residual", "relative_error"}], "overall_relative_error"},
+/// the series at `indices`.
+Json judged_fit_json(const robot::Model& model, const robot::TorquePrediction& fit, const std::vector<long>& indices) {
   Json joints = Json::array();
   for (Eigen::Index j = 0; j < fit.model.cols(); ++j) {
     const int k = fit.joints[static_cast<std::size_t>(j)];
@@ -225,14 +219,28 @@ nlohmann::ordered_json robot_fit_to_json(const robot::Model& model, const std::s
                       {"rms_residual", number(rms(residual))},
                       {"relative_error", number(fit.relative_error[j])}});
   }
-  Json json = {{"judge",
-                {{"lowpass", "zero-phase Butterworth, order 4"},
-                 {"cutoff_hz", number(result.judge.cutoff_hz)},
-                 {"trim_seconds", number(result.judge.trim_seconds)}}},
-               {"samples", fit.t.size()},
-               {"t", pick(fit.t, indices)},
-               {"joints", joints},
-               {"overall_relative_error", number(fit.overall_relative_error)}};
+  return {{"judge", judge_to_json(fit.judge)},
+          {"samples", fit.t.size()},
+          {"t", pick(fit.t, indices)},
+          {"joints", joints},
+          {"overall_relative_error", number(fit.overall_relative_error)}};
+}
+
+}  // namespace
+
+nlohmann::ordered_json robot_fit_to_json(const robot::Model& model, const std::string& request_json,
+                                         const std::string& result_json, const Trajectory& stored, long max_points,
+                                         bool prior) {
+  const RobotIdentificationSpec spec = robot_identification_from_json(nlohmann::json::parse(request_json));
+  const RobotResult result = decode_robot_result(model, nlohmann::json::parse(result_json));
+  // The samples the identification saw: trimmed, and on its grid.
+  DataPreparation preparation = spec.options.preparation;
+  preparation.uniform.dt = result.dt;
+  std::optional<Trajectory> prepared;
+  const Trajectory& data = prepare_data(stored, preparation, prepared);
+  const robot::TorquePrediction fit = robot::predict_torque(model, result.layout, result.point, data, result.judge, result.torque_joints);
+  const std::vector<long> indices = plot_indices(fit.t.size(), max_points);
+  Json json = judged_fit_json(model, fit, indices);
   if (Json friction = friction_to_json(model, result, data, indices); !friction.is_null()) json["friction"] = std::move(friction);
   if (prior) {
     const robot::TorquePrediction by_urdf =
@@ -241,6 +249,28 @@ nlohmann::ordered_json robot_fit_to_json(const robot::Model& model, const std::s
     for (Eigen::Index j = 0; j < by_urdf.relative_error.size(); ++j) errors.push_back(number(by_urdf.relative_error[j]));
     json["prior"] = {{"relative_error", errors}, {"overall_relative_error", number(by_urdf.overall_relative_error)}};
   }
+  return json;
+}
+
+nlohmann::ordered_json payload_fit_to_json(const robot::Model& model, const std::string& request_json,
+                                           const std::string& result_json, const Trajectory& data, long max_points) {
+  const PayloadIdentificationSpec spec = payload_identification_from_json(nlohmann::json::parse(request_json));
+  const StoredPayload stored = decode_payload_result(model, nlohmann::json::parse(result_json));
+  robot::PayloadResult payload;
+  payload.estimate = stored.estimate;
+  payload.torque_joints = stored.torque_joints;
+  // Prepared and judged as the identification's own figures (validate_payload: the request's trim, grid and judge).
+  const robot::PayloadValidation prediction = robot::validate_payload(model, stored.arm, payload, {data}, spec.options);
+  const robot::TorquePrediction& with = prediction.with_payload;
+  const robot::TorquePrediction& without = prediction.arm_only;
+  const std::vector<long> indices = plot_indices(with.t.size(), max_points);
+  Json json = judged_fit_json(model, with, indices);
+  for (Eigen::Index j = 0; j < without.model.cols(); ++j) {
+    Json& joint = json["joints"][static_cast<std::size_t>(j)];
+    joint["arm_only"] = pick(without.model.col(j), indices);
+    joint["arm_only_relative_error"] = number(without.relative_error[j]);
+  }
+  json["arm_only"] = prediction_to_json(without);
   return json;
 }
 

@@ -30,6 +30,7 @@ const char* to_string(JobKind kind) {
     case JobKind::identification: return "identification";
     case JobKind::excitation: return "excitation";
     case JobKind::robot_identification: return "robot_identification";
+    case JobKind::payload_identification: return "payload_identification";
   }
   return "identification";  // unreachable for valid enumerators
 }

@@ -145,22 +145,89 @@ std::vector<std::string> read_ids(const fields::ObjectFields& object, const std:
   return ids;
 }
 
-}  // namespace
+/// The robot and runs (RobotRuns): robot_id, then the training runs (required) and the validation runs.
+RobotRuns read_robot_runs(const fields::ObjectFields& object, const char* missing_robot) {
+  RobotRuns runs;
+  const fields::Json* robot_id = object.find("robot_id");
+  if (!robot_id) throw InputError("robot_id", std::string("missing robot_id: ") + missing_robot);
+  runs.robot_id = read_id(*robot_id, "robot_id");
+  runs.dataset_ids = read_ids(object, "dataset_id", "dataset_ids", kMostRuns);
+  if (runs.dataset_ids.empty()) {
+    throw InputError("dataset_id", "missing dataset_id (or dataset_ids): the measured run(s) to identify from");
+  }
+  runs.dataset_id = runs.dataset_ids.front();
+  runs.validation_dataset_ids = read_ids(object, "validation_dataset_id", "validation_dataset_ids", kMostRuns);
+  if (!runs.validation_dataset_ids.empty()) runs.validation_dataset_id = runs.validation_dataset_ids.front();
+  return runs;
+}
 
-RobotIdentificationSpec robot_identification_from_json(const nlohmann::json& body) {
-  // The preset's options, named so the refusal can say why rather than "unknown key".
-  static const std::vector<std::string> preset_only = {
+/// "trim": [start, end] s and "dt": s, the runs' preparation (resample.h).
+void read_preparation(const fields::ObjectFields& object, DataPreparation& preparation) {
+  if (const fields::Json* trim = object.find("trim")) {
+    if (!trim->is_array() || trim->size() != 2) {
+      throw InputError("trim", "trim must be [start, end]: the seconds dropped at each end, got " + fields::describe(*trim));
+    }
+    preparation.trim_start = fields::read_non_negative((*trim)[0], "trim[0]");
+    preparation.trim_end = fields::read_non_negative((*trim)[1], "trim[1]");
+  }
+  if (const fields::Json* dt = object.find("dt")) {
+    preparation.uniform.dt = fields::read_positive(*dt, "dt", kLongestSamplePeriod, " s");
+    if (preparation.uniform.dt < kShortestSamplePeriod) {
+      throw InputError("dt", "dt must be at least " + fields::format_number(kShortestSamplePeriod) + " s");
+    }
+  }
+}
+
+/// "physical": true or false (default false): an estimate over real rigid bodies only.
+bool read_physical(const fields::ObjectFields& object) {
+  const fields::Json* physical = object.find("physical");
+  if (!physical) return false;
+  if (!physical->is_boolean()) throw InputError("physical", "physical must be true or false, got " + fields::describe(*physical));
+  return physical->get<bool>();
+}
+
+/// The highest cut-off a request may name, Hz (the comparison low-pass's, the judge's).
+constexpr double kHighestCutoff = 1e6;
+
+/// "judge_cutoff": Hz and "judge_trim": s, what every torque figure is judged under (signal/judge.h).
+void read_judge(const fields::ObjectFields& object, JudgeOptions& judge) {
+  if (const fields::Json* value = object.find("judge_cutoff")) {
+    judge.cutoff_hz = fields::read_positive(*value, "judge_cutoff", kHighestCutoff, " Hz");
+  }
+  if (const fields::Json* value = object.find("judge_trim")) judge.trim_seconds = fields::read_non_negative(*value, "judge_trim");
+}
+
+/// "torque_joints": 1-based joint numbers, as 0-based indices.
+void read_torque_joints(const fields::ObjectFields& object, std::vector<int>& torque_joints) {
+  if (const fields::Json* joints = object.find("torque_joints")) torque_joints = read_joint_numbers(*joints, "torque_joints");
+}
+
+/// The paper preset's options: a request on a stored robot refuses each by name, saying why, rather than
+/// "unknown field".
+const std::vector<std::string>& preset_only_fields() {
+  static const std::vector<std::string> names = {
       "simulation", "preset", "kinetic_energy", "method", "algorithm", "free", "initial", "lower", "upper", "kp", "kd",
       "torque_source", "max_evaluations", "max_seconds", "relative_x_tolerance", "relative_f_tolerance",
       "output_error_iterations"};
+  return names;
+}
+
+/// Throws InputError(key, key + `why`) for the first of `keys` the body has.
+void refuse_fields(const nlohmann::json& body, const std::vector<std::string>& keys, const std::string& why) {
+  if (!body.is_object()) return;
+  for (const std::string& key : keys) {
+    if (body.contains(key)) throw InputError(key, key + why);
+  }
+}
+
+}  // namespace
+
+RobotIdentificationSpec robot_identification_from_json(const nlohmann::json& body) {
+  refuse_fields(body, preset_only_fields(),
+                " belongs to the paper's preset model; a URDF robot (robot_id) is identified by linear input-error: its "
+                "options are friction, armature, physical, trim, dt, the filters, ridge, judge_cutoff, judge_trim, "
+                "torque_joints and weights");
   if (body.is_object()) {
-    for (const std::string& key : preset_only) {
-      if (body.contains(key)) {
-        throw InputError(key, key + " belongs to the paper's preset model; a URDF robot (robot_id) is identified by "
-                                    "linear input-error: its options are friction, armature, physical, trim, dt, the "
-                                    "filters, ridge, judge_cutoff, judge_trim, torque_joints and weights");
-      }
-    }
     for (const char* key : {"comparison_half_length", "comparison_band"}) {
       if (body.contains(key)) {
         throw InputError(key, std::string(key) + " no longer exists: the comparison low-pass is a zero-phase Butterworth "
@@ -175,15 +242,7 @@ RobotIdentificationSpec robot_identification_from_json(const nlohmann::json& bod
                                      "half_length", "band", "comparison_cutoff", "ridge", "judge_cutoff", "judge_trim",
                                      "torque_joints", "weights"});
   RobotIdentificationSpec spec;
-  const fields::Json* robot_id = object.find("robot_id");
-  spec.robot_id = read_id(*robot_id, "robot_id");
-  spec.dataset_ids = read_ids(object, "dataset_id", "dataset_ids", kMostRuns);
-  if (spec.dataset_ids.empty()) {
-    throw InputError("dataset_id", "missing dataset_id (or dataset_ids): the measured run(s) to identify from");
-  }
-  spec.dataset_id = spec.dataset_ids.front();
-  spec.validation_dataset_ids = read_ids(object, "validation_dataset_id", "validation_dataset_ids", kMostRuns);
-  if (!spec.validation_dataset_ids.empty()) spec.validation_dataset_id = spec.validation_dataset_ids.front();
+  static_cast<RobotRuns&>(spec) = read_robot_runs(object, "the stored robot to identify");
   robot::IdentificationOptions& options = spec.options;
   // Friction: "auto" (the default: chosen by held-out prediction) or the terms.
   const fields::Json* friction = object.find("friction");
@@ -197,31 +256,16 @@ RobotIdentificationSpec robot_identification_from_json(const nlohmann::json& bod
   } else {
     read_layout(object, options.layout);
   }
-  if (const fields::Json* physical = object.find("physical")) {
-    if (!physical->is_boolean()) throw InputError("physical", "physical must be true or false, got " + fields::describe(*physical));
-    spec.physical = physical->get<bool>();
-    options.physical = spec.physical;
-  }
-  if (const fields::Json* trim = object.find("trim")) {
-    if (!trim->is_array() || trim->size() != 2) {
-      throw InputError("trim", "trim must be [start, end]: the seconds dropped at each end, got " + fields::describe(*trim));
-    }
-    options.preparation.trim_start = fields::read_non_negative((*trim)[0], "trim[0]");
-    options.preparation.trim_end = fields::read_non_negative((*trim)[1], "trim[1]");
-  }
-  if (const fields::Json* dt = object.find("dt")) {
-    options.preparation.uniform.dt = fields::read_positive(*dt, "dt", kLongestSamplePeriod, " s");
-    if (options.preparation.uniform.dt < kShortestSamplePeriod) {
-      throw InputError("dt", "dt must be at least " + fields::format_number(kShortestSamplePeriod) + " s");
-    }
-  }
+  spec.physical = read_physical(object);
+  options.physical = spec.physical;
+  read_preparation(object, options.preparation);
   if (const fields::Json* value = object.find("half_length")) options.half_length = half_length_field(*value, "half_length");
   if (const fields::Json* value = object.find("band")) options.band = band_field(*value, "band");
   if ((options.half_length > 0) != (options.band > 0.0)) {
     throw InputError(options.band > 0.0 ? "half_length" : "band", "give half_length and band together, or neither");
   }
   if (const fields::Json* value = object.find("comparison_cutoff")) {
-    options.comparison_cutoff_hz = number_or_auto(*value, "comparison_cutoff", 0.0, 1e6, " Hz");
+    options.comparison_cutoff_hz = number_or_auto(*value, "comparison_cutoff", 0.0, kHighestCutoff, " Hz");
   }
   if (const fields::Json* value = object.find("ridge")) {
     if (value->is_number() && value->get<double>() == 0.0) {
@@ -230,18 +274,77 @@ RobotIdentificationSpec robot_identification_from_json(const nlohmann::json& bod
       options.ridge = number_or_auto(*value, "ridge", -1.0, 1.0, "");
     }
   }
-  if (const fields::Json* value = object.find("judge_cutoff")) {
-    options.judge.cutoff_hz = fields::read_positive(*value, "judge_cutoff", 1e6, " Hz");
-  }
-  if (const fields::Json* value = object.find("judge_trim")) {
-    options.judge.trim_seconds = fields::read_non_negative(*value, "judge_trim");
-  }
-  if (const fields::Json* joints = object.find("torque_joints")) options.torque_joints = read_joint_numbers(*joints, "torque_joints");
+  read_judge(object, options.judge);
+  read_torque_joints(object, options.torque_joints);
   if (const fields::Json* weights = object.find("weights")) {
     options.weighting = fields::read_choice(*weights, "weights", {"unit", "per-joint"}) == "per-joint"
                             ? robot::JointWeighting::per_joint
                             : robot::JointWeighting::unit;
   }
+  return spec;
+}
+
+namespace {
+
+/// fields::read_positive, its refusal saying what the field is for.
+double with_hint(const fields::Json& value, const char* field, double largest, const char* unit, const char* hint) {
+  try {
+    return fields::read_positive(value, field, largest, unit);
+  } catch (const InputError& error) {
+    throw InputError(error.field(), std::string(error.what()) + ": " + hint);
+  }
+}
+
+}  // namespace
+
+bool asks_for_payload(const nlohmann::json& body) { return body.is_object() && body.contains("payload"); }
+
+PayloadIdentificationSpec payload_identification_from_json(const nlohmann::json& body) {
+  refuse_fields(body, preset_only_fields(),
+                " belongs to the paper's preset model; a payload is identified on a stored robot (robot_id) by linear "
+                "least squares: its options are arm_job_id, known_mass, known_centre_of_mass, physical, trim, dt, "
+                "comparison_cutoff, judge_cutoff, judge_trim and torque_joints");
+  refuse_fields(body, {"friction", "armature", "half_length", "band", "ridge", "weights"},
+                " belongs to the arm's identification: a payload identification takes the arm as identified from "
+                "arm_job_id (a succeeded robot_identification of the same robot, its friction included), or the URDF's "
+                "values without it");
+  const fields::ObjectFields object(body, "",
+                                    {"payload", "robot_id", "arm_job_id", "dataset_id", "dataset_ids",
+                                     "validation_dataset_id", "validation_dataset_ids", "known_mass",
+                                     "known_centre_of_mass", "physical", "trim", "dt", "comparison_cutoff",
+                                     "judge_cutoff", "judge_trim", "torque_joints"});
+  const fields::Json* payload = object.find("payload");
+  if (!payload || !payload->is_boolean() || !payload->get<bool>()) {
+    throw InputError("payload", "payload must be true (a payload on the robot's tip link), got " +
+                                    (payload ? fields::describe(*payload) : std::string("nothing")) +
+                                    "; leave it out to identify the robot's arm");
+  }
+  PayloadIdentificationSpec spec;
+  static_cast<RobotRuns&>(spec) = read_robot_runs(object, "the stored robot the payload is mounted on");
+  if (const fields::Json* arm = object.find("arm_job_id")) spec.arm_job_id = read_id(*arm, "arm_job_id");
+  robot::PayloadOptions& options = spec.options;
+  if (const fields::Json* mass = object.find("known_mass")) {
+    options.known_mass = with_hint(*mass, "known_mass", 1e6, " kg", "the payload's mass when known; leave it out to estimate it");
+  }
+  if (const fields::Json* centre = object.find("known_centre_of_mass")) {
+    if (!centre->is_array() || centre->size() != 3) {
+      throw InputError("known_centre_of_mass", "known_centre_of_mass must be [x, y, z]: the payload's centre of mass in "
+                                                   "the tip link's frame, m, got " + fields::describe(*centre));
+    }
+    Eigen::Vector3d point;
+    for (std::size_t i = 0; i < 3; ++i) {
+      point[static_cast<Eigen::Index>(i)] = fields::read_number((*centre)[i], fields::element_path("known_centre_of_mass", i));
+    }
+    options.known_centre_of_mass = point;
+  }
+  options.physical = read_physical(object);
+  read_preparation(object, options.preparation);
+  if (const fields::Json* value = object.find("comparison_cutoff")) {
+    options.comparison_cutoff_hz = with_hint(*value, "comparison_cutoff", kHighestCutoff, " Hz",
+                                             "leave it out for the judge's cut-off, as the arm was judged");
+  }
+  read_judge(object, options.judge);
+  read_torque_joints(object, options.torque_joints);
   return spec;
 }
 

@@ -2,7 +2,7 @@ function job = manipid_job(url, job_id, wait)
 %MANIPID_JOB  A job's current state: progress while it runs, result or error when it ends.
 %   JOB = MANIPID_JOB(URL, JOB_ID) returns the job struct of GET /v1/jobs/{id}:
 %   id, kind (simulation, identification: the paper's preset, robot_identification:
-%   a URDF robot's, excitation), state (queued, running, succeeded, failed, cancelled), created_at,
+%   a URDF robot's, payload_identification: a payload on its tip link, excitation), state (queued, running, succeeded, failed, cancelled), created_at,
 %   started_at, finished_at, attempts, dataset_id, progress.evaluations,
 %   progress.best_cost, request, and result (when it succeeded or was cancelled)
 %   or error (a problem struct, when it failed).

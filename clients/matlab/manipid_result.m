@@ -37,6 +37,21 @@ function result = manipid_result(url, job_id)
 %     R.correlation (matrix, NaN where undefined), R.condition_number, R.unexcited,
 %     R.unidentifiable, R.torque_joints, R.warnings (cells), R.filters, R.selection
 %     (what held-out prediction chose), R.robot_id, R.dataset_id
+%   A payload identification (manipid_identify_payload) gives:
+%     R.detected         true when the mass exceeds two standard errors (or was given): a
+%                        run without a payload gives false, R.mass about 0 within its error
+%     R.mass, R.mass_std_error            kg
+%     R.centre_of_mass, R.centre_of_mass_std_errors
+%                        1-by-3, m, in the tip link's frame (NaN when nothing is detected)
+%     R.inertia, R.inertia_std
+%                        3-by-3 about the centre of mass, tip-link axes, kg m^2
+%                        (R.inertia_about_com: the URDF entries ixx ... izz)
+%     R.parameter_names, R.parameter_values, R.parameter_std, R.parameter_share
+%                        the 10 parameters about the tip link's origin (m, mx, ..., Izz)
+%     R.consistent       the payload is a real rigid body (R.consistency_findings: why not);
+%                        R.physical with 'Physical', true
+%     R.undetermined, R.warnings (cells), R.fit (arm_only_error, with_payload_error),
+%     R.validation (arm_only, with_payload), R.arm, R.arm_job_id, R.robot_id, R.dataset_id
 %   For a simulation job, R is its result (dataset_id, joints, samples, dt, ...); for
 %   an excitation, its dataset_id, samples, condition_number and coefficients.
 %   A cancelled identification returns the best point it reached (R.cancelled true).
@@ -73,6 +88,8 @@ if isfield(result, 'estimates') && isstruct(result.estimates)
   result = tidy_identification(result);
 elseif isfield(result, 'base_parameters') && (isstruct(result.base_parameters) || iscell(result.base_parameters))
   result = tidy_robot_identification(result);
+elseif isfield(result, 'detected') && isfield(result, 'parameters')
+  result = tidy_payload(result);
 end
 result.job_id = job.id;
 result.state = job.state;
@@ -160,6 +177,44 @@ end
 if isfield(figures, 'overall_relative_error') && isempty(figures.overall_relative_error)
   figures.overall_relative_error = NaN;
 end
+end
+
+function r = tidy_payload(r)
+r.mass = number(r.mass);
+r.mass_std_error = number(r.mass_std_error);
+r.centre_of_mass = numbers(r.centre_of_mass);
+r.centre_of_mass_std_errors = numbers(r.centre_of_mass_std_errors);
+r.inertia = tensor(r.inertia_about_com);
+r.inertia_std = tensor(r.inertia_std_errors);
+r.parameters = struct_array(r.parameters, {'name', 'estimate', 'std_error', 'data_share'});
+r.parameter_names = {r.parameters.name};
+r.parameter_values = [r.parameters.estimate];
+r.parameter_std = [r.parameters.std_error];
+r.parameter_share = [r.parameters.data_share];
+for name = {'warnings', 'undetermined', 'torque_joints', 'consistency_findings'}
+  if isfield(r, name{1}), r.(name{1}) = manipid_cellstr(r.(name{1})); end
+end
+end
+
+function x = number(value)
+%NUMBER  A decoded JSON number, NaN for null.
+if isempty(value), x = NaN; else, x = double(value); end
+end
+
+function x = numbers(value)
+%NUMBERS  A decoded JSON array of numbers (nulls among them) as a 1-by-n row, NaN for null.
+if iscell(value)
+  x = cellfun(@number, value);
+else
+  x = double(value);
+end
+x = reshape(x, 1, []);
+end
+
+function I = tensor(entries)
+%TENSOR  The symmetric 3-by-3 tensor of URDF entries ixx, ixy, ixz, iyy, iyz, izz (NaN for null).
+e = cellfun(@(name) number(entries.(name)), {'ixx', 'ixy', 'ixz', 'iyy', 'iyz', 'izz'});
+I = [e(1) e(2) e(3); e(2) e(4) e(5); e(3) e(5) e(6)];
 end
 
 function s = struct_array(value, fields)

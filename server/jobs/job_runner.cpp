@@ -3,14 +3,17 @@
 
 #include "manipid/api/job_kinds.h"
 #include "manipid/api/limits.h"
+#include "manipid/api/payload_json.h"
 #include "manipid/api/problem.h"
 #include "manipid/api/requests.h"
 #include "manipid/api/result_json.h"
 #include "manipid/api/robot_identification_run.h"
 #include "manipid/api/robot_json.h"
 #include "manipid/api/robot_requests.h"
+#include "manipid/api/robot_result.h"
 #include "manipid/core/robot/excitation.h"
 #include "manipid/core/robot/identification.h"
+#include "manipid/core/robot/payload.h"
 #include "manipid/core/paper/identification.h"
 #include "manipid/core/paper/simulation.h"
 
@@ -300,52 +303,62 @@ std::shared_ptr<const api::ParsedRobot> stored_robot(store::Store& store, const 
   return std::make_shared<const api::ParsedRobot>(api::parse_robot({robot->name, *urdf, robot->base, robot->tip}));
 }
 
-/// A URDF robot's identification: one least-squares solve on its runs (the filters, ridge and friction terms
-/// chosen by held-out prediction), judged on validation runs if asked. No evaluations to stream: the job's
-/// progress is its state.
-JobOutcome run_robot_identification_job(const api::JobInfo& job, store::Store& store, LiveJob& live,
-                                        const RunnerOptions& options) {
-  api::RobotIdentificationSpec spec = api::robot_identification_from_json(nlohmann::json::parse(job.request));
-  const auto fail_missing = [&](const std::string& what, const std::string& field) {
-    JobOutcome outcome = failed(api::problem_to_json({api::ProblemKind::not_found, what + " was deleted before the job ran", field}).dump());
-    outcome.dataset_id = spec.dataset_id;
-    return outcome;
-  };
-  const std::shared_ptr<const api::ParsedRobot> stored =
-      stored_robot(store, options, store.find_robot(api::all_owners, spec.robot_id));
-  if (!stored) return fail_missing("robot " + spec.robot_id, "robot_id");
-  const api::ParsedRobot& parsed = *stored;
-  const auto load = [&](const std::vector<std::string>& ids, const std::string& field, std::vector<Trajectory>& runs)
-      -> std::optional<JobOutcome> {
-    for (std::size_t i = 0; i < ids.size(); ++i) {
+/// A failed end for something a queued job names that was deleted before it ran.
+JobOutcome deleted_before_run(const std::string& what, const std::string& field, const std::string& dataset_id) {
+  JobOutcome outcome = failed(api::problem_to_json({api::ProblemKind::not_found, what + " was deleted before the job ran", field}).dump());
+  outcome.dataset_id = dataset_id;
+  return outcome;
+}
+
+/// What a job on a stored robot reads (api::RobotRuns): the robot parsed, its training and validation runs,
+/// each checked against it; or the failed end when one of them was deleted before the job ran.
+struct LoadedRobotRuns {
+  std::shared_ptr<const api::ParsedRobot> robot;
+  std::vector<Trajectory> runs, held_out;
+  std::optional<JobOutcome> missing;
+};
+
+LoadedRobotRuns load_robot_runs(store::Store& store, const RunnerOptions& options, const api::RobotRuns& spec) {
+  LoadedRobotRuns loaded;
+  loaded.robot = stored_robot(store, options, store.find_robot(api::all_owners, spec.robot_id));
+  if (!loaded.robot) {
+    loaded.missing = deleted_before_run("robot " + spec.robot_id, "robot_id", spec.dataset_id);
+    return loaded;
+  }
+  const robot::Model& model = loaded.robot->model;
+  const auto load = [&](const std::vector<std::string>& ids, const std::string& field, std::vector<Trajectory>& runs) {
+    for (std::size_t i = 0; i < ids.size() && !loaded.missing; ++i) {
       const std::string where = ids.size() > 1 ? field + "s[" + std::to_string(i) + "]" : field;
       auto data = store.load_dataset(api::all_owners, ids[i]);
-      if (!data) return fail_missing("dataset " + ids[i], where);
-      api::check_robot_data(parsed.model.joint_count(), parsed.model.name, data->joint_count(), data->has_torque(), where);
+      if (!data) {
+        loaded.missing = deleted_before_run("dataset " + ids[i], where, spec.dataset_id);
+        return;
+      }
+      api::check_robot_data(model.joint_count(), model.name, data->joint_count(), data->has_torque(), where);
       runs.push_back(std::move(*data));
     }
-    return std::nullopt;
   };
-  std::vector<Trajectory> runs, held_out;
-  if (auto missing = load(spec.dataset_ids, "dataset_id", runs)) return *missing;
-  if (auto missing = load(spec.validation_dataset_ids, "validation_dataset_id", held_out)) return *missing;
+  load(spec.dataset_ids, "dataset_id", loaded.runs);
+  load(spec.validation_dataset_ids, "validation_dataset_id", loaded.held_out);
+  return loaded;
+}
 
-  spec.options.cancel = &live.cancel;
-  const api::RobotIdentificationRun run =
-      api::run_robot_identification(parsed.model, runs, spec.options, [&held_out] { return std::move(held_out); });
-  const robot::IdentificationResult& result = run.result;
+/// The end of a job on a stored robot that its cancel flag stopped: put back in the queue at a shutdown,
+/// else cancelled.
+JobOutcome stopped_robot_job(const LiveJob& live, const std::string& dataset_id) {
   JobOutcome outcome;
-  outcome.dataset_id = spec.dataset_id;
-  if (result.cancelled) {
-    if (live.shutdown.load()) {
-      outcome.requeue = true;
-      return outcome;
-    }
-    outcome.state = api::JobState::cancelled;
-    outcome.result = nlohmann::ordered_json{{"cancelled", true}, {"dataset_id", spec.dataset_id}}.dump();
+  outcome.dataset_id = dataset_id;
+  if (live.shutdown.load()) {
+    outcome.requeue = true;
     return outcome;
   }
-  nlohmann::ordered_json json = run.json;
+  outcome.state = api::JobState::cancelled;
+  outcome.result = nlohmann::ordered_json{{"cancelled", true}, {"dataset_id", dataset_id}}.dump();
+  return outcome;
+}
+
+/// The runs a job read, as its result names them.
+void name_runs(nlohmann::ordered_json& json, const api::RobotRuns& spec) {
   json["robot_id"] = spec.robot_id;
   json["dataset_id"] = spec.dataset_id;
   json["dataset_ids"] = spec.dataset_ids;
@@ -353,11 +366,90 @@ JobOutcome run_robot_identification_job(const api::JobInfo& job, store::Store& s
     json["validation_dataset_id"] = spec.validation_dataset_id;
     json["validation_dataset_ids"] = spec.validation_dataset_ids;
   }
+}
+
+/// A URDF robot's identification: one least-squares solve on its runs (the filters, ridge and friction terms
+/// chosen by held-out prediction), judged on validation runs if asked. No evaluations to stream: the job's
+/// progress is its state.
+JobOutcome run_robot_identification_job(const api::JobInfo& job, store::Store& store, LiveJob& live,
+                                        const RunnerOptions& options) {
+  api::RobotIdentificationSpec spec = api::robot_identification_from_json(nlohmann::json::parse(job.request));
+  LoadedRobotRuns loaded = load_robot_runs(store, options, spec);
+  if (loaded.missing) return *loaded.missing;
+  const api::ParsedRobot& parsed = *loaded.robot;
+
+  spec.options.cancel = &live.cancel;
+  const api::RobotIdentificationRun run = api::run_robot_identification(
+      parsed.model, loaded.runs, spec.options, [&loaded] { return std::move(loaded.held_out); });
+  const robot::IdentificationResult& result = run.result;
+  if (result.cancelled) return stopped_robot_job(live, spec.dataset_id);
+  nlohmann::ordered_json json = run.json;
+  name_runs(json, spec);
+  JobOutcome outcome;
+  outcome.dataset_id = spec.dataset_id;
   outcome.state = api::JobState::succeeded;
   outcome.result = json.dump();
   for (int i = 0; i < result.base.size(); ++i) {
     const double error = result.std_errors[i];
     outcome.estimates.push_back({result.base.names[static_cast<std::size_t>(i)], result.estimate[i],
+                                 std::isfinite(error) ? std::optional<double>(error) : std::nullopt});
+  }
+  return outcome;
+}
+
+/// A payload on a stored robot's tip link (robot/payload.h): the arm from arm_job_id's result (or the URDF's
+/// values), one linear least-squares solve on the runs carrying the payload, the held-out runs predicted with
+/// and without it. The result is payload_json.h's object with the runs and the arm it used ("arm_point"), so its
+/// views stand when the arm's job is deleted.
+JobOutcome run_payload_identification_job(const api::JobInfo& job, store::Store& store, LiveJob& live,
+                                          const RunnerOptions& options) {
+  api::PayloadIdentificationSpec spec = api::payload_identification_from_json(nlohmann::json::parse(job.request));
+  LoadedRobotRuns loaded = load_robot_runs(store, options, spec);
+  if (loaded.missing) return *loaded.missing;
+  const robot::Model& model = loaded.robot->model;
+  robot::ArmParameters arm = api::urdf_arm(model);
+  std::string arm_source = "the URDF's values";
+  if (!spec.arm_job_id.empty()) {
+    const std::optional<api::JobInfo> arm_job = store.find_job(api::all_owners, spec.arm_job_id);
+    if (!arm_job) return deleted_before_run("job " + spec.arm_job_id, "arm_job_id", spec.dataset_id);
+    arm = api::arm_of_job(model, arm_job, spec.arm_job_id, spec.robot_id);
+    arm_source = "identified (job " + spec.arm_job_id + ")";
+  }
+
+  spec.options.cancel = &live.cancel;
+  // The core names the run's parts ("q", "tau", "validation") and the arm ("arm"): the request's fields say them.
+  const auto in_request = [](const InputError& error, const std::string& runs_field) -> InputError {
+    if (error.field() == "arm") return InputError("arm_job_id", error.what());
+    if (error.field() == "q" || error.field() == "tau" || error.field() == "validation") return InputError(runs_field, error.what());
+    return error;
+  };
+  robot::PayloadResult result;
+  try {
+    result = robot::identify_payload(model, arm, loaded.runs, spec.options);
+  } catch (const InputError& error) {
+    throw in_request(error, "dataset_id");
+  }
+  if (result.cancelled) return stopped_robot_job(live, spec.dataset_id);
+  std::optional<robot::PayloadValidation> validation;
+  if (!loaded.held_out.empty()) {
+    try {
+      validation = robot::validate_payload(model, arm, result, loaded.held_out, spec.options);
+    } catch (const InputError& error) {
+      throw in_request(error, "validation_dataset_id");
+    }
+  }
+  nlohmann::ordered_json json = api::payload_to_json(model, result, spec.options, arm_source, validation);
+  name_runs(json, spec);
+  json["arm_job_id"] = spec.arm_job_id.empty() ? nlohmann::ordered_json(nullptr) : nlohmann::ordered_json(spec.arm_job_id);
+  json["arm_point"] = api::arm_point_json(model, arm);
+  JobOutcome outcome;
+  outcome.dataset_id = spec.dataset_id;
+  outcome.state = api::JobState::succeeded;
+  outcome.result = json.dump();
+  for (std::size_t i = 0; i < robot::PayloadResult::names().size(); ++i) {
+    const auto k = static_cast<Eigen::Index>(i);
+    const double error = result.std_errors[k];
+    outcome.estimates.push_back({robot::PayloadResult::names()[i], result.estimate[k],
                                  std::isfinite(error) ? std::optional<double>(error) : std::nullopt});
   }
   return outcome;
@@ -472,6 +564,8 @@ constexpr std::array<KindRunner, std::size(api::kJobKinds)> kRunners = {{
      [](const JobRun& run) { return run_excitation_job(run.job, run.store, run.live, run.options); }},
     {api::JobKind::robot_identification,
      [](const JobRun& run) { return run_robot_identification_job(run.job, run.store, run.live, run.options); }},
+    {api::JobKind::payload_identification,
+     [](const JobRun& run) { return run_payload_identification_job(run.job, run.store, run.live, run.options); }},
 }};
 
 constexpr bool runners_in_kind_order() {

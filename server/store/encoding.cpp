@@ -26,8 +26,9 @@ std::uint64_t reverse_bytes(std::uint64_t value) {
 
 constexpr std::array<const char*, 5> kStateTexts = {"queued", "running", "succeeded", "failed", "cancelled"};
 /// In api::JobKind's order. robot_identification since schema 6 (SQLite) and 3 (PostgreSQL), whose migrations
-/// renamed the identifications that name a robot.
-constexpr std::array<const char*, 4> kKindTexts = {"simulation", "identification", "excitation", "robot_identification"};
+/// renamed the identifications that name a robot; payload_identification since schema 7 (SQLite) and 4 (PostgreSQL).
+constexpr std::array<const char*, 5> kKindTexts = {"simulation", "identification", "excitation", "robot_identification",
+                                                   "payload_identification"};
 static_assert(std::size(api::kJobKinds) == kKindTexts.size(), "every job kind has its name in the store");
 
 }  // namespace

@@ -70,6 +70,23 @@ TEST(JobShape, RobotIdentificationCountsBothDatasetsAndItsLayout) {
   EXPECT_EQ(finer.field, "dt");
 }
 
+TEST(JobShape, PayloadIdentificationCountsItsRunsAndHoldsLessThanTheArms) {
+  const json request = {{"payload", true}, {"robot_id", "rb_7"}, {"dataset_ids", {"ds_7", "ds_7"}},
+                        {"validation_dataset_id", "ds_7"}, {"arm_job_id", "job_1"}};
+  const JobShape payload = shape(JobKind::payload_identification, request);
+  EXPECT_EQ(payload.samples, 30003);
+  EXPECT_EQ(payload.joints, 7);
+  EXPECT_EQ(payload.work, "payload identification");
+  EXPECT_EQ(payload.field, "dataset_id");
+  // Body n's ten columns, not the arm's every one: less per sample than the arm's identification.
+  const JobShape arm = shape(JobKind::robot_identification, {{"robot_id", "rb_7"}, {"dataset_id", "ds_7"}});
+  EXPECT_LT(payload.bytes_per_sample_joint, arm.bytes_per_sample_joint);
+  json finer = request;
+  finer["dt"] = 1e-4;
+  EXPECT_EQ(shape(JobKind::payload_identification, finer).field, "dt");
+  EXPECT_THROW(shape(JobKind::payload_identification, {{"robot_id", "rb_7"}, {"dataset_id", "ds_7"}}), InputError);
+}
+
 TEST(JobShape, ExcitationCountsItsPeriodsAtItsStep) {
   const JobShape excitation = shape(JobKind::excitation, {{"robot_id", "rb_7"}, {"period", 10}, {"duration", 30}});
   EXPECT_EQ(excitation.samples, 30001);

@@ -12,6 +12,7 @@
 #include "manipid/api/robot_requests.h"
 #include "manipid/api/routes.h"
 #include "manipid/core/robot/parameters.h"
+#include "manipid/core/robot/payload.h"
 #include "manipid/core/robot/rnea.h"
 
 #include "manipid/api/http_server.h"  // includes httplib.h: after the manipid headers (it breaks Eigen if first)
@@ -825,6 +826,12 @@ TEST(JobKinds, EveryKindHasItsEntryAndPresetIdentificationsStayIdentifications) 
   for (const JobKind kind : kJobKinds) EXPECT_EQ(job_kind_handler(kind).kind, kind);
   EXPECT_EQ(identification_kind(Json{{"robot_id", "rb_1"}, {"dataset_id", "ds_1"}}), JobKind::robot_identification);
   EXPECT_EQ(identification_kind(Json{{"dataset_id", "ds_1"}}), JobKind::identification);
+  EXPECT_EQ(identification_kind(Json{{"payload", true}, {"robot_id", "rb_1"}}), JobKind::payload_identification);
+  EXPECT_EQ(identification_kind(Json{{"payload", false}}), JobKind::payload_identification);  // refused by its parser
+  EXPECT_STREQ(job_kind_handler(JobKind::payload_identification).doing, "identifying the payload");
+  EXPECT_TRUE(job_kind_handler(JobKind::payload_identification).on_robot);
+  EXPECT_TRUE(job_kind_handler(JobKind::payload_identification).writes_urdf);
+  EXPECT_FALSE(job_kind_handler(JobKind::payload_identification).has_history);
   EXPECT_EQ(kind_with_article(JobKind::robot_identification), "a robot_identification");
   EXPECT_EQ(kind_with_article(JobKind::identification), "an identification");
   EXPECT_STREQ(job_kind_handler(JobKind::robot_identification).doing, "identifying the robot");
@@ -1494,7 +1501,7 @@ TEST_F(Routes, OnlyASucceededRobotIdentificationHasAnIdentifiedUrdf) {
   fake_.add_job(job_info("job_paper", JobKind::identification, JobState::succeeded));
   for (const char* id : {"job_excitation", "job_running", "job_paper"}) {
     const Json problem = expect_problem(get(std::string("/v1/jobs/") + id + "/urdf"), 409, "CONFLICT", "id");
-    EXPECT_NE(problem["detail"].get<std::string>().find("not a succeeded robot identification"), std::string::npos)
+    EXPECT_NE(problem["detail"].get<std::string>().find("not a succeeded robot or payload identification"), std::string::npos)
         << problem;
   }
   expect_problem(get("/v1/jobs/job_none/urdf"), 404, "NOT_FOUND", "id");
@@ -1764,6 +1771,206 @@ TEST_F(Routes, ARobotFitShowsWhatFrictionMustExplainOnTheFittedLaw) {
   ASSERT_TRUE(without);
   ASSERT_EQ(without->status, 200) << without->body;
   EXPECT_FALSE(json_of(without).contains("friction"));
+}
+
+namespace {
+
+/// A succeeded robot identification of `robot_id` whose result's point is `model`'s URDF values (viscous and
+/// Coulomb friction): what a payload identification's arm_job_id names.
+JobInfo arm_job(const robot::Model& model, const std::string& id, const std::string& robot_id, JobState state) {
+  const robot::ParameterLayout layout;
+  const Eigen::VectorXd pi = robot::standard_parameters(model, layout);
+  const std::vector<std::string> names = robot::standard_parameter_names(model, layout);
+  Json point = Json::object();
+  for (std::size_t i = 0; i < names.size(); ++i) point[names[i]] = pi[static_cast<Eigen::Index>(i)];
+  JobInfo job = job_info(id, JobKind::robot_identification, state);
+  job.robot_id = robot_id;
+  job.dataset_id = "ds_arm";
+  if (state == JobState::succeeded) {
+    job.result = Json{{"parameters", {{"friction", {"viscous", "coulomb"}}, {"armature", false}}},
+                      {"point", point},
+                      {"judge", {{"cutoff_hz", 5.0}, {"trim_seconds", 0.3}}},
+                      {"filters", {{"differentiation", {{"dt", 0.002}}}}},
+                      {"torque_joints", {"j1", "j2"}}}
+                     .dump();
+  }
+  return job;
+}
+
+}  // namespace
+
+TEST_F(Routes, APayloadIdentificationIsCheckedAgainstTheRobotItsRunsAndItsArm) {
+  ASSERT_EQ(post("/v1/robots", kTwoJointUrdf, "application/xml")->status, 201);  // rb_1
+  ASSERT_EQ(post("/v1/robots", kTwoJointUrdf, "application/xml")->status, 201);  // rb_2
+  const robot::Model model = parse_robot({"two", kTwoJointUrdf, "", ""}).model;
+  fake_.add_dataset(dataset_info("ds_tool", 2, 5000));
+  fake_.add_dataset(dataset_info("ds_check", 2, 4000));
+  fake_.add_dataset(dataset_info("ds_four", 4, 5000));
+  fake_.add_dataset(dataset_info("ds_no_tau", 2, 5000, false, true));
+  fake_.add_job(arm_job(model, "job_arm", "rb_1", JobState::succeeded));
+  fake_.add_job(arm_job(model, "job_other_robot", "rb_2", JobState::succeeded));
+  fake_.add_job(arm_job(model, "job_running", "rb_1", JobState::running));
+  fake_.add_job(arm_job(model, "job_failed", "rb_1", JobState::failed));
+  JobInfo design = job_info("job_design", JobKind::excitation, JobState::succeeded);
+  design.robot_id = "rb_1";
+  fake_.add_job(design);
+  JobInfo broken = arm_job(model, "job_broken", "rb_1", JobState::succeeded);
+  broken.result = R"({"point": {}})";
+  fake_.add_job(broken);
+
+  const Json request = {{"payload", true}, {"robot_id", "rb_1"}, {"dataset_ids", {"ds_tool"}},
+                        {"validation_dataset_id", "ds_check"}, {"arm_job_id", "job_arm"}, {"known_mass", 1.5},
+                        {"known_centre_of_mass", {0.0, 0.01, 0.05}}, {"physical", true}, {"trim", {0.2, 0.3}}, {"dt", 0.002},
+                        {"comparison_cutoff", 4}, {"judge_cutoff", 3}, {"judge_trim", 0.2}, {"torque_joints", {2}}};
+  const auto queued = post("/v1/identifications", request.dump());
+  ASSERT_TRUE(queued);
+  ASSERT_EQ(queued->status, 202) << queued->body;
+  ASSERT_EQ(fake_.submissions().size(), 1u);
+  EXPECT_EQ(fake_.submissions()[0].kind, JobKind::payload_identification);
+  EXPECT_EQ(fake_.submissions()[0].robot_id, "rb_1");
+  EXPECT_EQ(fake_.submissions()[0].dataset_id, "ds_tool");
+  EXPECT_EQ(fake_.submissions()[0].validation_dataset_id, "ds_check");
+  const Json job = json_of(queued);
+  EXPECT_EQ(job["kind"], "payload_identification");
+  const std::string self = "/v1/jobs/" + job["id"].get<std::string>();
+  EXPECT_EQ(job["links"]["robot"], "/v1/robots/rb_1");
+  EXPECT_EQ(job["links"]["fit"], self + "/fit");
+  EXPECT_EQ(job["links"]["validation"], self + "/validation");
+  EXPECT_EQ(job["links"]["urdf"], self + "/urdf");
+  EXPECT_FALSE(job["links"].contains("history"));
+  // The request as the runner reads it: the rules the robot identification's fields follow.
+  const PayloadIdentificationSpec spec = payload_identification_from_json(request);
+  EXPECT_EQ(spec.arm_job_id, "job_arm");
+  EXPECT_EQ(spec.dataset_ids, std::vector<std::string>{"ds_tool"});
+  EXPECT_EQ(spec.options.known_mass, 1.5);
+  EXPECT_EQ(*spec.options.known_centre_of_mass, Eigen::Vector3d(0.0, 0.01, 0.05));
+  EXPECT_TRUE(spec.options.physical);
+  EXPECT_FALSE(payload_identification_from_json(Json{{"payload", true}, {"robot_id", "rb_1"}, {"dataset_id", "ds_tool"}})
+                   .options.physical);
+  EXPECT_EQ(spec.options.preparation.trim_start, 0.2);
+  EXPECT_EQ(spec.options.preparation.trim_end, 0.3);
+  EXPECT_EQ(spec.options.preparation.uniform.dt, 0.002);
+  EXPECT_EQ(spec.options.comparison_cutoff_hz, 4.0);
+  EXPECT_EQ(spec.options.judge.cutoff_hz, 3.0);
+  EXPECT_EQ(spec.options.judge.trim_seconds, 0.2);
+  EXPECT_EQ(spec.options.torque_joints, std::vector<int>{1});
+  // Without an arm the URDF's values are the arm.
+  const auto plain = post("/v1/identifications", R"({"payload": true, "robot_id": "rb_1", "dataset_id": "ds_tool"})");
+  ASSERT_TRUE(plain);
+  EXPECT_EQ(plain->status, 202) << plain->body;
+
+  const auto refused = [&](Json body, const std::string& field, const std::string& says) {
+    const Json problem = expect_problem(post("/v1/identifications", body.dump()), 422, "INVALID_FIELD", field);
+    EXPECT_NE(problem["detail"].get<std::string>().find(says), std::string::npos) << problem;
+  };
+  const Json base = {{"payload", true}, {"robot_id", "rb_1"}, {"dataset_id", "ds_tool"}};
+  const auto with = [&](const char* key, Json value) {
+    Json body = base;
+    body[key] = std::move(value);
+    return body;
+  };
+  refused({{"payload", true}, {"dataset_id", "ds_tool"}}, "robot_id", "missing robot_id");
+  refused({{"payload", true}, {"robot_id", "rb_1"}}, "dataset_id", "missing dataset_id");
+  refused(with("payload", false), "payload", "payload must be true");
+  refused(with("robot_id", "rb_9"), "robot_id", "rb_9");
+  refused(with("dataset_id", "ds_four"), "dataset_id", "4 joints, the robot two has 2");
+  refused(with("dataset_id", "ds_no_tau"), "dataset_id", "no tau");
+  refused(with("validation_dataset_id", "ds_nothing"), "validation_dataset_id", "no dataset");
+  refused(with("known_mass", 0), "known_mass", "known_mass");
+  refused(with("known_mass", -1), "known_mass", "known_mass");
+  refused(with("known_centre_of_mass", {1, 2}), "known_centre_of_mass", "[x, y, z]");
+  refused(with("torque_joints", {3}), "torque_joints", "has 2");
+  refused(with("physical", "yes"), "physical", "true or false");
+  refused(with("comparison_cutoff", "auto"), "comparison_cutoff", "comparison_cutoff");
+  refused(with("friction", {"viscous"}), "friction", "arm_job_id");
+  refused(with("ridge", 0), "ridge", "arm's identification");
+  refused(with("free", {"m2"}), "free", "paper's preset");
+  refused(with("known_mas", 1), "known_mas", "did you mean");
+  refused(with("arm_job_id", ""), "arm_job_id", "empty");
+  refused(with("arm_job_id", "job_nothing"), "arm_job_id", "no job job_nothing");
+  refused(with("arm_job_id", "job_design"), "arm_job_id", "is an excitation, not a robot_identification");
+  refused(with("arm_job_id", "job_other_robot"), "arm_job_id", "identified robot rb_2, not rb_1");
+  refused(with("arm_job_id", "job_running"), "arm_job_id", "is running: submit the payload identification once");
+  refused(with("arm_job_id", "job_failed"), "arm_job_id", "failed: it has no arm to use");
+  refused(with("arm_job_id", "job_broken"), "arm_job_id", "no usable result");
+  EXPECT_EQ(fake_.submissions().size(), 2u);  // nothing more was queued
+}
+
+TEST_F(Routes, APayloadJobsViewsShowTheTorqueWithAndWithoutItAndItsUrdf) {
+  ASSERT_EQ(post("/v1/robots?name=arm", kTwoJointUrdf, "application/xml")->status, 201);
+  const robot::Model model = parse_robot({"two", kTwoJointUrdf, "", ""}).model;
+  const int n = model.joint_count();
+  const robot::ArmParameters arm = urdf_arm(model);
+  const robot::InertialParameters tool =
+      robot::InertialParameters::from_centre_of_mass(0.8, Eigen::Vector3d(0.02, 0.01, 0.04),
+                                                     Eigen::Matrix3d(Eigen::Vector3d(2e-3, 3e-3, 1e-3).asDiagonal()));
+  const Eigen::VectorXd loaded = robot::with_payload(model, arm, tool.vector());
+  const double dt = 0.002, pi2 = 2.0 * std::numbers::pi;
+  const int samples = 4001;
+  Trajectory data;
+  data.t.resize(samples);
+  data.q.resize(samples, n);
+  data.tau.resize(samples, n);
+  for (int i = 0; i < samples; ++i) {
+    const double t = i * dt;
+    data.t[i] = t;
+    Eigen::VectorXd q(n), qd(n), qdd(n);
+    for (int k = 0; k < n; ++k) {
+      const double w = pi2 * (0.4 + 0.15 * k);
+      q[k] = 0.8 * std::sin(w * t + k);
+      qd[k] = 0.8 * w * std::cos(w * t + k);
+      qdd[k] = -0.8 * w * w * std::sin(w * t + k);
+    }
+    data.q.row(i) = q.transpose();
+    data.tau.row(i) = robot::inverse_dynamics(model, arm.layout, loaded, q, qd, qdd).transpose();
+  }
+  fake_.add_dataset(dataset_info("ds_tool", n, samples), data);
+  const auto stored = [&](const std::string& id, bool detected) {
+    Json parameters = Json::array();
+    for (std::size_t i = 0; i < 10; ++i) {
+      parameters.push_back({{"name", robot::PayloadResult::names()[i]}, {"estimate", tool.vector()[static_cast<Eigen::Index>(i)]}});
+    }
+    JobInfo job = job_info(id, JobKind::payload_identification, JobState::succeeded);
+    job.robot_id = "rb_1";
+    job.dataset_id = "ds_tool";
+    job.validation_dataset_id = "ds_tool";
+    job.request = Json{{"payload", true}, {"robot_id", "rb_1"}, {"dataset_id", "ds_tool"}}.dump();
+    job.result = Json{{"detected", detected}, {"mass", 0.8}, {"parameters", parameters}, {"torque_joints", {"j1", "j2"}},
+                      {"arm_point", Json::parse(arm_point_json(model, arm).dump())}}
+                     .dump();
+    fake_.add_job(job);
+  };
+  stored("job_payload", true);
+  stored("job_none", false);
+
+  for (const char* view : {"fit", "validation"}) {
+    const auto answer = get(std::string("/v1/jobs/job_payload/") + view + "?max_points=300");
+    ASSERT_TRUE(answer);
+    ASSERT_EQ(answer->status, 200) << answer->body;
+    const Json fit = json_of(answer);
+    ASSERT_EQ(fit["joints"].size(), 2u);
+    for (const Json& joint : fit["joints"]) {
+      EXPECT_EQ(joint["arm_only"].size(), fit["t"].size());
+      EXPECT_EQ(joint["model"].size(), fit["t"].size());
+    }
+    // The true payload predicts the run (the judge's states and low-pass on both sides); the arm alone does not.
+    const double with_payload = fit["overall_relative_error"].get<double>();
+    const double arm_only = fit["arm_only"]["overall_relative_error"].get<double>();
+    EXPECT_LT(with_payload, 0.01) << view;
+    EXPECT_GT(arm_only, 5 * with_payload) << view;
+    EXPECT_EQ(fit["judge"]["cutoff_hz"], 5.0);
+  }
+  const auto urdf = get("/v1/jobs/job_payload/urdf");
+  ASSERT_TRUE(urdf);
+  ASSERT_EQ(urdf->status, 200) << urdf->body;
+  EXPECT_EQ(urdf->get_header_value("Content-Disposition"), "attachment; filename=\"arm-payload.urdf\"");
+  EXPECT_NE(urdf->body.find("<link name=\"manipid_payload\">"), std::string::npos) << urdf->body;
+  EXPECT_NE(urdf->body.find("job job_payload"), std::string::npos) << urdf->body;
+  // The document with the payload mounted predicts the loaded arm.
+  const robot::Model mounted = parse_robot({"two", urdf->body, "", ""}).model;
+  EXPECT_LT((robot::standard_parameters(mounted, arm.layout) - loaded).norm(), 1e-9 * loaded.norm());
+  const Json none = expect_problem(get("/v1/jobs/job_none/urdf"), 409, "CONFLICT", "id");
+  EXPECT_NE(none["detail"].get<std::string>().find("no payload"), std::string::npos) << none;
 }
 
 TEST(RobotResultDecoder, ReadsAStoredResultAndNamesWhatIsMissing) {

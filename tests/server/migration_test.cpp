@@ -1,7 +1,8 @@
 // migration_test.cpp — a database written by the last release (manipid 0.1.0, schema version 1) opens
 // with today's schema and keeps every job, dataset, history, estimate and idempotency key; its rows
 // belong to no owner (the admin's to see, no named token's). And a version 5 database's robot
-// identifications (identification jobs that name a robot) read as robot_identification after 5 → 6.
+// identifications (identification jobs that name a robot) read as robot_identification after 5 → 6, and a
+// version 6 database keeps its rows through 6 → 7 and takes payload_identification jobs after it.
 //
 // tests/server/data/manipid-0.1.0.db was made by that release's own binary
 // (tests/server/data/make_release_0.1.0_db.sh); this test reads the file's rows with plain SQL first, opens a
@@ -210,7 +211,7 @@ TEST_F(ReleaseDatabase, VersionFiveRobotIdentificationsBecomeTheirOwnKind) {
     EXPECT_GT(std::stol(query(path, "SELECT seq FROM jobs WHERE id = '" + added + "'")[0][0]), highest_seq);
   }
 
-  EXPECT_EQ(query(path, "PRAGMA user_version")[0][0], "6");
+  EXPECT_EQ(query(path, "PRAGMA user_version")[0][0], std::to_string(sqlite::current_schema_version()));
   EXPECT_EQ(query(path, "PRAGMA integrity_check")[0][0], "ok");
   EXPECT_TRUE(query(path, "PRAGMA foreign_key_check").empty());
   auto jobs_after = query(path, "SELECT seq, id, state, request, dataset_id, robot_id, validation_dataset_id, created_at, "
@@ -227,6 +228,85 @@ TEST_F(ReleaseDatabase, VersionFiveRobotIdentificationsBecomeTheirOwnKind) {
                 {"jobs_by_kind"}, {"jobs_by_lease"}, {"jobs_by_owner"}, {"jobs_by_robot"}, {"jobs_by_state"}}));
   // The two migrated and the one added.
   EXPECT_EQ(query(path, "SELECT count(*) FROM jobs WHERE kind = 'robot_identification'")[0][0], "3");
+}
+
+TEST_F(ReleaseDatabase, VersionSixKeepsItsRowsAndTakesPayloadIdentifications) {
+  const std::string path = (directory_ / "version6.db").string();
+  {
+    sqlite::Connection connection(path);
+    sqlite::prepare_database(connection, 6);
+  }
+  ASSERT_EQ(query(path, "PRAGMA user_version")[0][0], "6");
+  const std::string at = "2026-01-01T00:00:00.000Z";
+  execute_sql(path,
+              "INSERT INTO robots (id, name, created_at, joints, summary, urdf) VALUES ('rb_1', 'arm', '" + at +
+                  "', 2, '{}', '<robot name=\"arm\"/>');"
+                  "INSERT INTO jobs (id, kind, state, request, dataset_id, robot_id, validation_dataset_id, created_at, "
+                  "result, owner) VALUES "
+                  "('job_arm', 'robot_identification', 'succeeded', '{\"robot_id\": \"rb_1\"}', 'ds_1', 'rb_1', 'ds_2', '" +
+                  at + "', '{\"point\": {}}', 'alice'),"
+                  "('job_waiting', 'robot_identification', 'queued', '{\"robot_id\": \"rb_1\"}', 'ds_1', 'rb_1', NULL, '" +
+                  at + "', NULL, ''),"
+                  "('job_gone', 'simulation', 'succeeded', '{}', NULL, NULL, NULL, '" + at + "', NULL, '');"
+                  "INSERT INTO estimates (job_id, name, value, std_error) VALUES ('job_arm', 'm1', 1.5, 0.1);"
+                  "DELETE FROM jobs WHERE id = 'job_gone';");
+  // Before the migration the CHECK refuses the new kind.
+  {
+    sqlite3* database = nullptr;
+    ASSERT_EQ(sqlite3_open_v2(path.c_str(), &database, SQLITE_OPEN_READWRITE, nullptr), SQLITE_OK);
+    EXPECT_NE(sqlite3_exec(database,
+                           ("INSERT INTO jobs (id, kind, state, request, created_at) VALUES ('job_early', "
+                            "'payload_identification', 'queued', '{}', '" + at + "')").c_str(),
+                           nullptr, nullptr, nullptr),
+              SQLITE_OK);
+    sqlite3_close(database);
+  }
+  const std::string columns = "SELECT seq, id, kind, state, request, dataset_id, robot_id, validation_dataset_id, created_at, "
+                              "result, owner FROM jobs ORDER BY seq";
+  const auto jobs_before = query(path, columns);
+  const auto estimates_before = query(path, "SELECT job_id, name, value, std_error FROM estimates ORDER BY job_id, name");
+  const long highest_seq = std::stol(query(path, "SELECT seq FROM sqlite_sequence WHERE name = 'jobs'")[0][0]);
+
+  std::string added;
+  {
+    const auto store = sqlite::open_store(path);
+    EXPECT_EQ(store->find_job(api::all_owners, "job_arm")->kind, api::JobKind::robot_identification);
+    added = store->submit_job({api::JobKind::payload_identification, "{\"payload\": true}", "ds_3", "rb_1", "", "alice"},
+                              std::nullopt, 0)
+                .job.id;
+    const auto job = store->find_job(api::all_owners, added);
+    ASSERT_TRUE(job);
+    EXPECT_EQ(job->kind, api::JobKind::payload_identification);
+    api::JobFilter payloads;
+    payloads.kind = api::JobKind::payload_identification;
+    payloads.robot_id = "rb_1";
+    EXPECT_EQ(job_ids(store->list_jobs(api::OwnerScope("alice"), payloads, {})), std::set<std::string>{added});
+    // The queued job from before is claimed first, as its kind; then the payload identification.
+    const auto first = store->claim_next_job("test:1", std::chrono::seconds(30));
+    ASSERT_TRUE(first);
+    EXPECT_EQ(first->id, "job_waiting");
+    const auto second = store->claim_next_job("test:1", std::chrono::seconds(30));
+    ASSERT_TRUE(second);
+    EXPECT_EQ(second->id, added);
+    EXPECT_EQ(second->kind, api::JobKind::payload_identification);
+  }
+
+  EXPECT_EQ(query(path, "PRAGMA user_version")[0][0], std::to_string(sqlite::current_schema_version()));
+  EXPECT_EQ(query(path, "PRAGMA integrity_check")[0][0], "ok");
+  EXPECT_TRUE(query(path, "PRAGMA foreign_key_check").empty());
+  auto jobs_after = query(path, columns);
+  ASSERT_EQ(jobs_after.size(), jobs_before.size() + 1);
+  EXPECT_GT(std::stol(jobs_after.back()[0]), highest_seq);  // the AUTOINCREMENT counter came along
+  jobs_after.pop_back();
+  for (auto& row : jobs_after) {
+    if (row[1] == "job_waiting") row[3] = "queued";  // claimed above
+  }
+  EXPECT_EQ(jobs_after, jobs_before);
+  EXPECT_EQ(query(path, "SELECT job_id, name, value, std_error FROM estimates ORDER BY job_id, name"), estimates_before);
+  EXPECT_EQ(query(path, "SELECT name FROM sqlite_master WHERE type = 'index' AND tbl_name = 'jobs' AND sql IS NOT NULL "
+                        "ORDER BY name"),
+            (std::vector<std::vector<std::string>>{
+                {"jobs_by_kind"}, {"jobs_by_lease"}, {"jobs_by_owner"}, {"jobs_by_robot"}, {"jobs_by_state"}}));
 }
 
 }  // namespace

@@ -1441,7 +1441,10 @@ TEST_P(StoreContract, EveryKindIsStoredAndFilteredAsItself) {
   for (const api::JobKind kind : api::kJobKinds) {
     NewJob job = identification_job();
     job.kind = kind;
-    if (kind == api::JobKind::excitation || kind == api::JobKind::robot_identification) job.robot_id = robot;
+    if (kind == api::JobKind::excitation || kind == api::JobKind::robot_identification ||
+        kind == api::JobKind::payload_identification) {
+      job.robot_id = robot;
+    }
     ids[kind] = submit(job);
     EXPECT_EQ(store_->find_job(api::all_owners, ids[kind])->kind, kind) << api::to_string(kind);
   }
@@ -1482,6 +1485,33 @@ TEST_P(StoreContract, APostgresVersionTwoRobotIdentificationBecomesItsOwnKind) {
   EXPECT_EQ(ids_of(store_->list_jobs(api::all_owners, {.state = {}, .kind = api::JobKind::robot_identification, .robot_id = {}}, {})),
             std::set<std::string>{robot_job});
   EXPECT_FALSE(submit(on_robot).empty());  // the new CHECK takes the kind in
+}
+
+// A PostgreSQL database of schema version 3 (made here by putting back its CHECK) opens migrated: its rows kept,
+// and the CHECK on kind takes payload_identification in.
+TEST_P(StoreContract, APostgresVersionThreeTakesPayloadIdentifications) {
+  if (GetParam().name != "postgres") GTEST_SKIP() << "SQLite's migrations: migration_test.cpp";
+  const std::string robot = store_->insert_robot(some_robot(), std::nullopt).robot.id;
+  NewJob on_robot = identification_job(R"({"robot_id": "rb"})");
+  on_robot.kind = api::JobKind::robot_identification;
+  on_robot.robot_id = robot;
+  const std::string robot_job = submit(on_robot);
+  store_.reset();
+  postgres_admin(
+      "ALTER TABLE jobs DROP CONSTRAINT jobs_kind_check; "
+      "ALTER TABLE jobs ADD CONSTRAINT jobs_kind_check "
+      "CHECK (kind IN ('simulation', 'identification', 'excitation', 'robot_identification')); "
+      "DELETE FROM manipid_schema WHERE version > 3",
+      postgres_database(directory_));
+  reopen();
+  EXPECT_EQ(store_->find_job(api::all_owners, robot_job)->kind, api::JobKind::robot_identification);
+  NewJob payload = identification_job(R"({"payload": true, "robot_id": "rb"})");
+  payload.kind = api::JobKind::payload_identification;
+  payload.robot_id = robot;
+  const std::string payload_job = submit(payload);
+  EXPECT_EQ(store_->find_job(api::all_owners, payload_job)->kind, api::JobKind::payload_identification);
+  EXPECT_EQ(ids_of(store_->list_jobs(api::all_owners, {.state = {}, .kind = api::JobKind::payload_identification, .robot_id = robot}, {})),
+            std::set<std::string>{payload_job});
 }
 
 TEST(IdempotencyRule, ReplaysRefusesOrGoesOn) {

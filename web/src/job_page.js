@@ -4,12 +4,13 @@
 // live while it runs; then the result table, correlation heat map, identifiability findings,
 // and the filtered measured torque beside the model torque at the estimate with the residual;
 // for every job with data, the measured angles (with the reference) and torques (Fig. 2).
-// A job on a URDF robot (a robot_identification or an excitation) shares the header, the
-// live state and Cancel; its sections are robot_job.js's.
+// A job on a URDF robot (a robot_identification, a payload_identification or an excitation) shares the
+// header, the live state and Cancel; its sections are robot_job.js's (payload_job.js's for a payload).
 import { api } from "./api.js";
 import { lineChart, positive, PALETTE } from "./charts.js";
 import { h, number, section, stateBadge, when } from "./dom.js";
 import { robotPath } from "./paths.js";
+import { payloadSections } from "./payload_job.js";
 import { excitationSections, robotIdentificationSections } from "./robot_job.js";
 
 const MAX_POINTS = 2000;  // per series, for drawing; the server keeps every sample and evaluation
@@ -44,7 +45,9 @@ async function trueValues(job) {
 }
 
 function summaryList(job) {
-  const kind = job.kind === "robot_identification" ? "identification of a URDF robot's base parameters" : job.kind;
+  const kinds = { robot_identification: "identification of a URDF robot's base parameters",
+                  payload_identification: "identification of a payload on a URDF robot's tip link" };
+  const kind = kinds[job.kind] || job.kind;
   const rows = [["Kind", kind], ["Created", when(job.created_at)], ["Started", when(job.started_at)],
                 ["Finished", when(job.finished_at)]];
   if (job.robot_id) rows.push(["Robot", h("a", { href: robotPath(job.robot_id) }, job.robot_id)]);
@@ -246,7 +249,8 @@ async function dataSection(parent, datasetId) {
 
 export async function jobView(main, id) {
   let job = await api(`/v1/jobs/${id}`);
-  const onRobot = job.kind === "robot_identification" || job.kind === "excitation";  // the paper's pictures (history, true values) are the preset's
+  // The paper's pictures (history, true values) are the preset's.
+  const onRobot = ["robot_identification", "payload_identification", "excitation"].includes(job.kind);
   const truth = onRobot ? null : await trueValues(job);
   const badge = h("span", { id: "job-state" }, stateBadge(job.state));
   const summary = h("div", {}, summaryList(job));
@@ -303,6 +307,7 @@ export async function jobView(main, id) {
   if (onRobot) {
     if (job.kind === "robot_identification" && job.result) await robotIdentificationSections(body, job, drawOrExplain);
     if (job.kind === "excitation" && job.result) await excitationSections(body, job, drawOrExplain);
+    if (job.kind === "payload_identification" && job.state === "succeeded") await payloadSections(body, job, drawOrExplain);
     document.body.dataset.ready = "true";
     return;
   }

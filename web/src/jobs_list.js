@@ -126,7 +126,7 @@ async function robotNames() {
 export async function jobsListView(main, navigate) {
   const [preset, names] = await Promise.all([api("/v1/presets/cedro2009"), robotNames()]);
   const stateFilter = select("filter-state", "state", ["any", "queued", "running", "succeeded", "failed", "cancelled"], "any");
-  const kindFilter = select("filter-kind", "kind", ["any", "identification", "robot_identification", "simulation", "excitation"], "any");
+  const kindFilter = select("filter-kind", "kind", ["any", "identification", "robot_identification", "payload_identification", "simulation", "excitation"], "any");
   const body = h("tbody");
   const more = h("button", { type: "button", id: "jobs-more", hidden: true }, "Older jobs");
   const table = h("table", { id: "jobs", class: "data" },

@@ -21,7 +21,7 @@ const PAIRS = 10, STRONG = 0.9;
 const WELL = 0.1, DETERMINED = 1;
 
 const isPrismatic = (joint) => joint?.type === "prismatic";
-const torqueUnit = (joint) => (isPrismatic(joint) ? "N" : "N·m");
+export const torqueUnit = (joint) => (isPrismatic(joint) ? "N" : "N·m");
 
 // ---- at a glance ----------------------------------------------------------------------------
 
@@ -36,7 +36,7 @@ function consistencyInWords(result) {
 }
 
 /** "judged under a zero-phase Butterworth low-pass at 5 Hz, 0.3 s trimmed at each end". */
-function judgeInWords(judge) {
+export function judgeInWords(judge) {
   if (!judge) return "judged under the identification's filters";
   return `judged under a zero-phase 4th-order Butterworth low-pass at ${number(judge.cutoff_hz, 3)} Hz, ` +
          `${number(judge.trim_seconds, 3)} s trimmed at each end`;
@@ -78,8 +78,21 @@ function urdfActions(job, result) {
         "opened by a comment saying where it came from."));
   }
   const bad = (result.consistency.links || []).filter((link) => !link.consistent).map((link) => link.link);
+  return h("div", { id: "urdf-unavailable", class: "actions" },
+    h("p", {}, h("strong", {}, "No identified URDF: "),
+      `a URDF holds only real rigid bodies, and ${bad.length ? bad.join(", ") : "some links"} of this estimate ` +
+      `${bad.length === 1 ? "is" : "are"} not (see `, h("a", { href: "#consistency" }, "Physical consistency"), "). " +
+      "The same identification with physical consistency keeps every link a real body, fitting the data as closely as that allows."),
+    h("p", {}, againWithPhysical(job, "identify-physical", "Identify again, physically consistent")));
+}
+
+/**
+ * A button that submits the job's request again with physical: true and opens the new job's page, and the
+ * status beside it (what was refused, if it was).
+ */
+export function againWithPhysical(job, id, label) {
   const status = h("span", { class: "form-status", role: "status", "aria-live": "polite" });
-  const again = h("button", { type: "button", id: "identify-physical" }, "Identify again, physically consistent");
+  const again = h("button", { type: "button", id }, label);
   again.addEventListener("click", async () => {
     again.disabled = true;
     status.textContent = "Submitting…";
@@ -91,12 +104,7 @@ function urdfActions(job, result) {
       again.disabled = false;
     }
   });
-  return h("div", { id: "urdf-unavailable", class: "actions" },
-    h("p", {}, h("strong", {}, "No identified URDF: "),
-      `a URDF holds only real rigid bodies, and ${bad.length ? bad.join(", ") : "some links"} of this estimate ` +
-      `${bad.length === 1 ? "is" : "are"} not (see `, h("a", { href: "#consistency" }, "Physical consistency"), "). " +
-      "The same identification with physical consistency keeps every link a real body, fitting the data as closely as that allows."),
-    h("p", {}, again, " ", status));
+  return [again, " ", status];
 }
 
 // ---- the links as the URDF holds them ---------------------------------------------------------
@@ -459,9 +467,10 @@ function identifiabilitySection(result) {
 
 /**
  * Small multiples: one chart per joint over a shared time axis (the cursor follows across them),
- * and a switch between the torques and the residual. Returns the element.
+ * and a switch between the torques and the residual. `extra` ({field, label}): a third torque per
+ * joint, fit.joints[i][field], drawn dotted beside the two (a payload's arm alone). Returns the element.
  */
-function jointTorqueCharts(id, fit, joints, { measuredLabel, modelLabel }) {
+export function jointTorqueCharts(id, fit, joints, { measuredLabel, modelLabel, extra = null }) {
   const boxes = fit.joints.map((joint) => h("div", { id: `chart-${id}-${joint.joint}`, dataset: { jointName: joint.name } }));
   const choice = (value, label, checked) => h("label", {},
     h("input", { type: "radio", name: `${id}-plot`, value, checked }), ` ${label}`);
@@ -471,6 +480,7 @@ function jointTorqueCharts(id, fit, joints, { measuredLabel, modelLabel }) {
   const key = h("p", { class: "key", "aria-hidden": "true" },
     h("span", {}, h("span", { class: "swatch measured" }), ` ${measuredLabel}`),
     h("span", {}, h("span", { class: "swatch model" }), ` ${modelLabel} (dashed, a colour per joint)`),
+    extra ? h("span", {}, h("span", { class: "swatch extra" }), ` ${extra.label} (dotted)`) : null,
     h("span", {}, h("span", { class: "swatch residual" }), " residual"));
   const element = h("div", { class: "joint-charts" }, toggle, key, h("div", { class: "grid joints" }, boxes));
   const charts = [];
@@ -483,16 +493,25 @@ function jointTorqueCharts(id, fit, joints, { measuredLabel, modelLabel }) {
   };
   const drawJoint = (joint, i) => {
     const meta = joints[joint.joint - 1];  // the fitted joints may be fewer than the robot's
+    const series = [{ label: measuredLabel, color: "#333" }, { label: modelLabel, color: PALETTE[i % PALETTE.length], dash: [5, 3] },
+                    { label: "residual", color: "#b42318", show: false }];
+    const data = [fit.t, joint.measured, joint.model, joint.residual];
+    if (extra) {
+      series.push({ label: extra.label, color: "#8a8a8a", dash: [2, 3] });
+      data.push(joint[extra.field]);
+    }
     charts.push(lineChart(boxes[i], {
       title: `${joint.name}: error ${percent(joint.relative_error)}`,
-      xLabel: "t, s", yLabel: `τ, ${torqueUnit(meta)}`, height: 200, sync: id, legend: false,
-      series: [{ label: measuredLabel, color: "#333" }, { label: modelLabel, color: PALETTE[i % PALETTE.length], dash: [5, 3] },
-               { label: "residual", color: "#b42318", show: false }],
-      data: [fit.t, joint.measured, joint.model, joint.residual] }));
+      xLabel: "t, s", yLabel: `τ, ${torqueUnit(meta)}`, height: 200, sync: id, legend: false, series, data }));
   };
   toggle.addEventListener("change", () => {
     const torque = toggle.querySelector("input:checked").value === "torque";
-    for (const chart of charts) { chart.showSeries(0, torque); chart.showSeries(1, torque); chart.showSeries(2, !torque); }
+    for (const chart of charts) {
+      chart.showSeries(0, torque);
+      chart.showSeries(1, torque);
+      chart.showSeries(2, !torque);
+      if (extra) chart.showSeries(3, torque);
+    }
   });
   return element;
 }
@@ -555,7 +574,7 @@ function frictionCurves(friction, joints, judge) {
 }
 
 /** The identification's run as measured (its first run when there were several): joint angles and torques. */
-async function measuredDataSection(body, job, result) {
+export async function measuredDataSection(body, job, result) {
   const data = await api(`/v1/datasets/${job.dataset_id}/data?max_points=${DATA_POINTS}`);
   const joints = result.robot?.joints || [];
   const name = (j) => joints[j]?.name || `joint ${j + 1}`;

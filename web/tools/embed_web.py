@@ -13,7 +13,7 @@ import sys
 
 TYPES = {".html": "text/html; charset=utf-8", ".js": "text/javascript; charset=utf-8", ".css": "text/css; charset=utf-8"}
 SOURCES = ["index.html", "app.js", "api.js", "charts.js", "dom.js", "paths.js", "jobs_list.js", "job_page.js", "robot_job.js",
-           "robots.js", "app.css"]
+           "payload_job.js", "robots.js", "app.css"]
 VENDOR = ["uPlot.iife.min.js", "uPlot.min.css"]
 NOTICE = b"""<!doctype html><html lang="en"><head><meta charset="utf-8"><title>manipid</title>
 <link rel="icon" href="data:,"></head><body><main><h1>manipid</h1>

@@ -1,11 +1,10 @@
 // jobs.cpp — the /v1/jobs routes: list, state (long-poll, ETag), cost history (pages, CSV,
-// thinned for drawing), torque fit, cancel, delete.
+// thinned for drawing), torque fit, validation, the URDF with a result written in, cancel, delete.
 #include "manipid/api/job_kinds.h"
 #include "manipid/api/problem.h"
 #include "manipid/api/resources_json.h"
 #include "manipid/api/robot_json.h"
 #include "manipid/api/robot_requests.h"
-#include "manipid/core/robot/urdf_writer.h"
 
 #include "http/request_helpers.h"  // includes httplib.h, after the manipid headers
 #include "http/responses.h"
@@ -83,9 +82,9 @@ void list_jobs(RouteState& state, const httplib::Request& request, httplib::Resp
   if (request.has_param("kind")) {
     filter.kind = parse_job_kind(request.get_param_value("kind"));
     if (!filter.kind) {
-      throw ApiError(ProblemKind::invalid_field,
-                     "kind must be simulation, identification, robot_identification or excitation, got '" +
-                         request.get_param_value("kind") + "'",
+      std::string kinds;
+      for (const JobKind kind : kJobKinds) kinds += std::string(kinds.empty() ? "" : ", ") + to_string(kind);
+      throw ApiError(ProblemKind::invalid_field, "kind must be one of " + kinds + ", got '" + request.get_param_value("kind") + "'",
                      "kind");
     }
   }
@@ -209,7 +208,8 @@ void job_validation(RouteState& state, const httplib::Request& request, httplib:
   if (!job) throw ApiError(ProblemKind::not_found, "no job " + id, "id");
   if (!job_kind_handler(job->kind).has_validation || job->validation_dataset_id.empty()) {
     throw ApiError(ProblemKind::conflict,
-                   "job " + id + " has no validation run: only a robot identification with a validation_dataset_id has one",
+                   "job " + id + " has no validation run: only a robot or payload identification with a "
+                   "validation_dataset_id has one",
                    "id");
   }
   if (job->state != JobState::succeeded) {
@@ -227,35 +227,31 @@ void job_urdf(RouteState& state, const httplib::Request& request, httplib::Respo
   const std::string id = request.matches[1];
   const auto job = state.service.job(caller, id);
   if (!job) throw ApiError(ProblemKind::not_found, "no job " + id, "id");
-  if (!job_kind_handler(job->kind).writes_urdf || job->state != JobState::succeeded) {
-    throw ApiError(ProblemKind::conflict, "job " + id + " is not a succeeded robot identification: no estimate to write", "id");
+  const JobKindHandler& handler = job_kind_handler(job->kind);
+  if (!handler.writes_urdf || job->state != JobState::succeeded) {
+    throw ApiError(ProblemKind::conflict,
+                   "job " + id + " is not a succeeded robot or payload identification: nothing to write into a URDF", "id");
   }
   const auto robot = state.service.robot(caller, job->robot_id);
   const auto urdf = state.service.robot_urdf(caller, job->robot_id);
   if (!robot || !urdf) throw ApiError(ProblemKind::conflict, "the robot of job " + id + " was deleted", "robot_id");
   const std::shared_ptr<const ParsedRobot> stored = job_robot(state, caller, *job);
-  const ParsedRobot& parsed = *stored;
-  // The result's point names its layout (fv…, fc…, fo…, Ia…).
-  const nlohmann::json result = nlohmann::json::parse(job->result);
-  const ParameterValues point = parameters_from_json(parsed.model, result, "result");
-  // Where it came from: the job and its (first) dataset; the result says how many runs.
-  const std::string note = identified_urdf_note(result, "job " + id + ", dataset " + job->dataset_id);
+  UrdfDocument document;
   try {
-    response.status = 200;
-    response.set_content(robot::write_identified_urdf(*urdf, parsed.model, point.layout, point.values, note),
-                         "application/xml");
-    // The name is the user's: only letters, digits, '.', '_' and '-' reach the header.
-    std::string file = robot->name;
-    for (char& c : file) {
-      if (!std::isalnum(static_cast<unsigned char>(c)) && c != '.' && c != '_' && c != '-') c = '_';
-    }
-    response.set_header("Content-Disposition", "attachment; filename=\"" + file + "-identified.urdf\"");
-  } catch (const InputError& error) {  // an estimate a URDF cannot hold
-    throw ApiError(ProblemKind::conflict,
-                   std::string(error.what()) + "; for a URDF, identify again with \"physical\": true (every link a real "
-                   "rigid body)",
-                   "physical");
+    document = handler.urdf({*job, *urdf, stored->model});
+  } catch (const nlohmann::json::exception&) {
+    throw ApiError(ProblemKind::conflict, "job " + id + " has no usable stored result", "id");
+  } catch (const InputError&) {
+    throw ApiError(ProblemKind::conflict, "job " + id + " has no usable stored result", "id");
   }
+  response.status = 200;
+  response.set_content(document.text, "application/xml");
+  // The name is the user's: only letters, digits, '.', '_' and '-' reach the header.
+  std::string file = robot->name;
+  for (char& c : file) {
+    if (!std::isalnum(static_cast<unsigned char>(c)) && c != '.' && c != '_' && c != '-') c = '_';
+  }
+  response.set_header("Content-Disposition", "attachment; filename=\"" + file + "-" + document.suffix + ".urdf\"");
 }
 
 void cancel_job_with_id(RouteState& state, const Caller& caller, const std::string& id, httplib::Response& response) {

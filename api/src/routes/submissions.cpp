@@ -21,7 +21,8 @@ void submit_job(RouteState& state, const httplib::Request& request, httplib::Res
   const nlohmann::json body = json_body(request);
   const SubmissionLookups lookups{
       [&](const std::string& id) { return state.service.dataset(caller, id); },
-      [&](const std::string& id, const std::string& field) { return stored_robot(state, caller, id, field); }};
+      [&](const std::string& id, const std::string& field) { return stored_robot(state, caller, id, field); },
+      [&](const std::string& id) { return state.service.job(caller, id); }};
   const JobSubmission submission = job_kind_handler(kind_of(body)).submission(body, lookups);
   const SubmitResult submitted = state.service.submit(caller, submission, key);
   response.set_header("Location", "/v1/jobs/" + submitted.job.id);
@@ -34,7 +35,7 @@ void submit_simulation(RouteState& state, const httplib::Request& request, httpl
 }
 
 void submit_identification(RouteState& state, const httplib::Request& request, httplib::Response& response) {
-  submit_job(state, request, response, identification_kind);  // the preset's, or a stored robot's
+  submit_job(state, request, response, identification_kind);  // the preset's, a stored robot's, or a payload's
 }
 
 void list_presets(RouteState&, const httplib::Request&, httplib::Response& response) {

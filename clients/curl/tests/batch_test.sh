@@ -15,7 +15,10 @@
 #      against it with the friction asked for, the base parameters by name in the summary and
 #      near the truth, the validation error small; a re-run creates no robot, dataset or job;
 #      other friction makes new jobs only; a robot whose joints do not match, a broken URDF and
-#      robot options without --robot fail with the reason.
+#      robot options without --robot fail with the reason;
+#   7. a payload: the README's payload block word for word on a run with a tool on the tip link
+#      (robot_data.py's tool.csv) and the arm identified in 6: the tool's mass, the torque with
+#      and without it, the URDF with it mounted.
 # Usage: clients/curl/tests/batch_test.sh path/to/manipid    (exit 0 when everything passes)
 set -euo pipefail
 
@@ -252,6 +255,25 @@ status=0
 check "robot: a broken URDF: exit 1, the reason printed, no summary" \
   bash -c '[[ $0 -eq 1 ]] && grep -q "broken.urdf: robot upload failed: INVALID_FIELD (field urdf)" "$1" && [[ ! -e "$2" ]]' \
   "$status" "$work/robot-broken.out" "$work/robot-broken.csv"
+
+# ---- 7. A payload: the README's block word for word, on the arm identified above ----------
+payload_dir="$work/payload"
+mkdir -p -- "$payload_dir"
+cp -- "$work/robot-data/tool.csv" "$payload_dir/"
+sed -n '/^### A payload on the tip link/,/^Delete a robot/p' "$root/clients/curl/README.md" |
+  sed -n '/^```sh$/,/^```$/p' | sed '1d;$d' >"$payload_dir/readme.sh"
+status=0
+(cd "$payload_dir" && M="$url" RB="$robot_id" JOB="$job_id" bash -euo pipefail readme.sh) >"$work/payload.out" 2>&1 || status=$?
+check "payload: the README's block runs" test "$status" -eq 0
+[[ $status -eq 0 ]] || cat -- "$work/payload.out"
+tool_mass=$(jq '.tool_truth.mass' "$work/robot-data.json")
+check "payload: detected, the mass within 3 % of the tool's" \
+  jq_true ".detected and ((.mass - $tool_mass) | fabs) < 0.03 * $tool_mass" "$(sed -n 1p "$work/payload.out")"
+check "payload: the fit with the payload is better than without it" \
+  jq_true '.with_payload < .arm_only / 2' "$(sed -n 3p "$work/payload.out")"
+check "payload: the URDF with the payload mounted" grep -q '<link name="manipid_payload"' "$payload_dir/arm-with-tool.urdf"
+check "payload: one payload_identification job on the robot" \
+  test "$(curl -sS "$url/v1/jobs?kind=payload_identification&robot_id=$robot_id" | jq '.items | length')" -eq 1
 stop_server
 status=0
 "$batch" --url http://127.0.0.1:9 --out "$work/x.csv" --friction viscous "$robot_runs" >"$work/usage.out" 2>&1 || status=$?

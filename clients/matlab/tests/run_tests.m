@@ -6,11 +6,12 @@ function run_tests(url, run_csv)
 %   and history checked; shapes of one joint / few samples; Idempotency-Key; cancel;
 %   and the error mapping (problem+json code/field, NaN refused before sending).
 %   With the environment variables MANIPID_URDF (a 7-joint URDF: examples/robots/
-%   panda_like.urdf) and MANIPID_ROBOT_DIR (run.csv, check.csv and truth.json made by
-%   run_tests.sh with manipid excitation and manipid torque), also the URDF robot
-%   functions: upload (byte for byte back, idempotent), identification with friction
-%   and validation checked against the truth by name, the identified URDF's masses,
-%   an excitation design and its trajectory, and their errors; MANIPID_UR5 (a 6-joint
+%   panda_like.urdf) and MANIPID_ROBOT_DIR (run.csv, check.csv, tool.csv, tool.json and
+%   truth.json made by run_tests.sh with manipid excitation and manipid torque), also the
+%   URDF robot functions: upload (byte for byte back, idempotent), identification with
+%   friction and validation checked against the truth by name, the identified URDF's
+%   masses, a payload on the identified arm checked against the tool's values, an
+%   excitation design and its trajectory, and their errors; MANIPID_UR5 (a 6-joint
 %   URDF) adds the joint-count mismatch.
 %   Without arguments, URL and RUN_CSV come from the environment variables MANIPID_URL
 %   and MANIPID_RUN_CSV. When the server was started with --token, MANIPID_TOKEN must
@@ -224,6 +225,34 @@ check(isequal(size(r.validation.relative_error), [1 7]) ...
       && r.validation.overall_relative_error < r.validation.prior.overall_relative_error / 5, ...
       sprintf('validation: %.3g of the torque, the URDF''s own values %.3g', ...
               r.validation.overall_relative_error, r.validation.prior.overall_relative_error));
+passed = passed + 1;
+
+% A payload: the tool on the tip link, on the arm as identified above (its truth: tool.json).
+T = dlmread(fullfile(robot_dir, 'tool.csv'), ',', 1, 0);
+tool = jsondecode(fileread(fullfile(robot_dir, 'tool.json')));
+tds = manipid_upload(url, T(:, 1), T(:, 2:8), T(:, 23:29), [], 'tool run');
+pj = manipid_identify_payload(url, tds, rb, 'Arm', job, 'Validate', tds, 'JudgeTrim', 0.25, 'Physical', true);
+check(strcmp(pj.kind, 'payload_identification') && strcmp(pj.robot_id, rb.id) && pj.request.payload ...
+      && strcmp(pj.request.arm_job_id, job.id) && pj.request.judge_trim == 0.25 && pj.request.physical, ...
+      'manipid_identify_payload sends a payload identification with the arm and the options by their names');
+p = manipid_result(url, manipid_wait(url, pj, 300, 'Quiet', true));
+com = reshape(tool.centre_of_mass, 1, 3);
+check(p.detected && abs(p.mass - tool.mass) < 0.03 * tool.mass && norm(p.centre_of_mass - com) < 5e-3, ...
+      sprintf('the payload: %.4f +- %.2g kg (truth %.2f) at [%.4f %.4f %.4f] m', p.mass, p.mass_std_error, tool.mass, ...
+              p.centre_of_mass));
+check(isequal(size(p.inertia), [3 3]) && isequal(p.inertia, p.inertia') && isequal(size(p.centre_of_mass_std_errors), [1 3]) ...
+      && numel(p.parameter_names) == 10 && strcmp(p.parameter_names{1}, 'm') && p.parameter_values(1) == p.mass, ...
+      'the inertia as a symmetric 3-by-3, the ten parameters by name');
+check(p.consistent && isstruct(p.physical) && iscell(p.consistency_findings), 'a real rigid body, as asked (Physical)');
+check(p.validation.with_payload.overall_relative_error < p.validation.arm_only.overall_relative_error / 2, ...
+      'the run is predicted better with the payload than without it');
+payload_urdf = manipid_identified_urdf(url, pj);
+check(~isempty(strfind(payload_urdf, '<link name="manipid_payload"')), 'the URDF with the payload mounted on the tip link');
+[code, ~, problem] = caught(@() manipid_identify_payload(url, tds, rb, 'Arm', preset_job));
+check(strcmp(code, 'manipid:INVALID_FIELD') && strcmp(problem.field, 'arm_job_id') && problem.status == 422, ...
+      ['an arm that is not a robot identification: field arm_job_id: ' problem.detail]);
+[code, ~, problem] = caught(@() manipid_identify_payload(url, tds, rb, 'Mass', -1));
+check(strcmp(code, 'manipid:INVALID_FIELD') && strcmp(problem.field, 'known_mass'), 'a negative mass: field known_mass');
 passed = passed + 1;
 
 % Two runs together, judged at 4 Hz over joints 1..6: the request's arrays stay arrays.

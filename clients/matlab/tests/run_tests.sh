@@ -4,7 +4,8 @@
 # Starts `manipid serve --port 0` on a temporary database (with a bearer token, so the
 # Authorization header is exercised), writes the paper's run with `manipid simulate` and a
 # URDF robot's runs with `manipid excitation` and `manipid torque` (examples/robots/
-# panda_like.urdf, a known truth; run.csv noise-free, check.csv with 1 % torque noise), runs
+# panda_like.urdf, a known truth; run.csv noise-free, check.csv with 1 % torque noise, tool.csv with a
+# tool on the tip link), runs
 # clients/matlab/tests/run_tests.m in octave-cli, stops the server (SIGTERM, expects exit 0)
 # and exits non-zero on any failure.
 #
@@ -52,6 +53,20 @@ echo '{"m3": 3.0, "fv2": 0.4, "fc2": 0.7, "fo3": 0.05}' > "$work/robot/truth.jso
   --out "$work/robot/run.csv" 2> /dev/null
 "$binary" torque --robot "$urdf" --params "$work/robot/truth.json" --with-states --in "$work/robot/excitation.csv" \
   --noise-tau-relative 0.01 --seed 2 --out "$work/robot/check.csv" 2> /dev/null
+# A tool on the tip link (the clients' tests' own, clients/python/tests/robot_data.py): the URDF with the
+# tool as a fixed link, the same motion and truth, and the tool's values for the test to compare with.
+python3 - "$root/clients/python/tests" "$urdf" "$work/robot" <<'PYTHON'
+import json, os, sys
+sys.path.insert(0, sys.argv[1])
+from robot_data import TOOL, tip_link, with_tool
+document = open(sys.argv[2]).read()
+with open(os.path.join(sys.argv[3], "tool.urdf"), "w") as stream:
+    stream.write(with_tool(document, tip_link(document)))
+with open(os.path.join(sys.argv[3], "tool.json"), "w") as stream:
+    json.dump(TOOL, stream)
+PYTHON
+"$binary" torque --robot "$work/robot/tool.urdf" --params "$work/robot/truth.json" --with-states \
+  --in "$work/robot/excitation.csv" --noise-tau-relative 0.01 --seed 3 --out "$work/robot/tool.csv" 2> /dev/null
 
 # The first stdout line is "listening on http://HOST:PORT"; keep reading the pipe from a
 # file descriptor so that the server never blocks on a full stdout.

@@ -115,8 +115,8 @@ class History(NamedTuple):
 
 
 class Job:
-    """A simulation, identification (the paper's preset), robot_identification (a URDF robot's) or
-    excitation job. `data` is the JSON last seen from the server; `refresh()` fetches it again,
+    """A simulation, identification (the paper's preset), robot_identification (a URDF robot's),
+    payload_identification (a payload on one's tip link) or excitation job. `data` is the JSON last seen from the server; `refresh()` fetches it again,
     `wait()` long-polls until the job ends."""
 
     def __init__(self, client: "Client", data: Mapping[str, Any]) -> None:
@@ -136,7 +136,8 @@ class Job:
     @property
     def kind(self) -> Optional[str]:
         """simulation, identification (the paper's preset), robot_identification (submitted with a
-        robot: a URDF robot's base parameters) or excitation."""
+        robot: a URDF robot's base parameters), payload_identification (identify_payload) or
+        excitation."""
         return self.data.get("kind")
 
     @property
@@ -525,16 +526,19 @@ class Client:
         """GET /v1/jobs/{id}/validation: the validation run's filtered torque beside what the
         estimate predicts, per joint, with the error ({"t", "joints": [{"measured", "model",
         "residual", "relative_error", ...}], "overall_relative_error", "prior": the URDF's own
-        values' errors}). 409 CONFLICT unless the job is a succeeded robot identification that
-        was given validate=."""
+        values' errors}; a payload identification's: "model" with the payload, "arm_only" without
+        it). 409 CONFLICT unless the job is a succeeded robot or payload identification that was
+        given validate=."""
         return self._request("GET", f"/v1/jobs/{_quote(_job_id(job))}/validation", query={"max_points": max_points})
 
     def to_urdf(self, job: Union[str, Job], path: Optional[PathLike] = None) -> str:
         """The identified URDF: GET /v1/jobs/{id}/urdf, the robot's document with the estimate
         (each body's <inertial>, each joint's <dynamics>) written in by the server. Returns the
-        text; with `path`, also writes it there (byte for byte). 409 CONFLICT for a job that is
-        not a succeeded robot identification, or whose estimate no URDF can hold (a body with a
-        negative mass: identify with physical=True)."""
+        text; with `path`, also writes it there (byte for byte). A payload identification's: the
+        robot's document with the payload mounted on its tip link as a fixed link
+        (manipid_payload). 409 CONFLICT for a job that is not a succeeded robot or payload
+        identification, whose estimate no URDF can hold (a body with a negative mass: identify with
+        physical=True), or that found no payload."""
         document = self._request("GET", f"/v1/jobs/{_quote(_job_id(job))}/urdf", accept="application/xml", raw=True)
         if path is not None:
             with open(path, "wb") as stream:
@@ -622,6 +626,62 @@ class Client:
         body.update(robot_fields)
         return Job(self, self._request("POST", "/v1/identifications", body, headers=_idempotency(idempotency_key)))
 
+    def identify_payload(self, dataset: Union[str, Dataset, Mapping[str, Any], Sequence[Any]],
+                         robot: Union[str, Robot, Mapping[str, Any]],
+                         arm: Union[str, Job, Mapping[str, Any], None] = None,
+                         idempotency_key: Optional[str] = None, *,
+                         validate: Union[str, Dataset, Mapping[str, Any], Sequence[Any], None] = None,
+                         known_mass: Optional[float] = None, known_centre_of_mass: Optional[Sequence[float]] = None,
+                         physical: Optional[bool] = None, trim: Optional[Sequence[float]] = None, dt: Optional[float] = None,
+                         comparison_cutoff: Optional[float] = None, judge_cutoff: Optional[float] = None,
+                         judge_trim: Optional[float] = None, torque_joints: Optional[Sequence[int]] = None,
+                         **options: Any) -> Job:
+        """Queues a payload identification (POST /v1/identifications with "payload": true); returns
+        its Job (kind "payload_identification").
+
+        A payload (a tool, a gripper, a part) rigidly fixed to the robot's tip link: its mass,
+        centre of mass and inertia from the torque the arm leaves unexplained on runs carrying it.
+        - dataset: the run(s) with the payload (a Dataset or id, or a list of them);
+        - robot: the robot it is mounted on (a Robot, its id, or its dict);
+        - arm: the arm as identified, a finished robot identification of the same robot without
+          the payload (a Job or its id); None: the URDF's own values. One that is not a succeeded
+          robot identification of this robot is refused (ManipidError 422 naming arm_job_id);
+        - validate: runs with the payload the arm then predicts with and without it;
+        - known_mass (kg) / known_centre_of_mass ((x, y, z) m, the tip link's frame): values you
+          know; only the rest is estimated;
+        - physical=True: a real rigid body (mass > 0, inertia about the centre of mass positive
+          definite, triangle inequalities), which a URDF and a simulator take; the result's
+          "consistent" says whether the payload is one either way;
+        - trim, dt, judge_cutoff, judge_trim, torque_joints: as identify(robot=...) takes them;
+          comparison_cutoff: the residual's low-pass, Hz (default the judge's cut-off).
+        The result (job.wait()) is what `manipid payload --json` prints: "mass",
+        "mass_std_error", "centre_of_mass", "inertia_about_com", their standard errors,
+        "detected" (False for a run without a payload: ≈ 0 kg within its uncertainty, not an
+        error), "undetermined", "warnings", "fit" and "validation" (torque error without and with
+        the payload). fit(job) / validation(job) draw the torque with and without it;
+        to_urdf(job) writes the robot's URDF with the payload mounted on its tip link.
+        Arguments left at None are not sent (the server's default applies).
+        """
+        body = _drop_none({"payload": True, "robot_id": _robot_id(robot),
+                           "arm_job_id": _job_id(arm) if arm is not None else None,
+                           "known_mass": known_mass,
+                           "known_centre_of_mass": list(known_centre_of_mass) if known_centre_of_mass is not None else None,
+                           "physical": physical, "trim": list(trim) if trim is not None else None, "dt": dt,
+                           "comparison_cutoff": comparison_cutoff, "judge_cutoff": judge_cutoff,
+                           "judge_trim": judge_trim,
+                           "torque_joints": list(torque_joints) if torque_joints is not None else None,
+                           **options})
+        if _is_several(dataset):
+            body["dataset_ids"] = [_dataset_id(item) for item in dataset]
+        else:
+            body["dataset_id"] = _dataset_id(dataset)
+        if validate is not None:
+            if _is_several(validate):
+                body["validation_dataset_ids"] = [_dataset_id(item) for item in validate]
+            else:
+                body["validation_dataset_id"] = _dataset_id(validate)
+        return Job(self, self._request("POST", "/v1/identifications", body, headers=_idempotency(idempotency_key)))
+
     def job(self, job_id: Union[str, Job, Mapping[str, Any]]) -> Job:
         """A job by id (e.g. one submitted by another script), fetched anew."""
         return Job(self, self._request("GET", f"/v1/jobs/{_quote(_job_id(job_id))}"))
@@ -629,7 +689,8 @@ class Client:
     def jobs(self, state: Optional[str] = None, kind: Optional[str] = None, page_size: int = 50,
              robot: Union[None, str, Robot, Mapping[str, Any]] = None) -> Iterator[Job]:
         """Every job, newest first, optionally of one state, kind (simulation, identification,
-        robot_identification, excitation) and/or robot (its identifications and excitations), paged
+        robot_identification, payload_identification, excitation) and/or robot (its identifications,
+        payload identifications and excitations), paged
         as you iterate. Listed jobs carry no `request`; refresh() one for the full record."""
         query: Dict[str, Any] = {"page_size": page_size}
         if state is not None:

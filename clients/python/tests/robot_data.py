@@ -10,6 +10,9 @@
   first), so the torques are consistent with the times;
 - `check.csv`: a second, different excitation through the same truth: a validation run;
 - `clean.csv`: run.csv's motion and truth without noise (an estimate a URDF can hold);
+- `tool.csv`: run.csv's motion and truth with a tool of known mass, centre of mass and inertia (TOOL)
+  mounted on the tip link (`tool.urdf`: the URDF with the tool as a fixed link), with noise: a
+  payload identification's run;
 - `truth.json`: the parameter values by name the torques were made with.
 
 Shared by the Python tests and the curl batch test:
@@ -37,6 +40,35 @@ from typing import Dict, List, Mapping, Sequence
 # Link 3 is heavier, not lighter: with its first moments and inertia kept, a lighter link 3
 # would not be a real rigid body (its inertia about the centre of mass would not be positive).
 TRUTH = {"m3": 3.0, "fv2": 0.4, "fc2": 0.7, "fo3": 0.05}
+
+
+# A tool on the tip link, in the tip link's frame: kg, m, kg m² about its centre of mass (URDF entries).
+TOOL = {"mass": 1.5, "centre_of_mass": [0.02, -0.01, 0.06],
+        "inertia": {"ixx": 0.004, "ixy": 0.0003, "ixz": -0.0002, "iyy": 0.005, "iyz": 0.0001, "izz": 0.003}}
+
+
+def with_tool(document: str, tip: str, tool: Mapping = TOOL) -> str:
+    """The URDF document with `tool` mounted on the link `tip` by a fixed joint at the identity (a link
+    "test_tool"): a URDF parser merges it into the tip body, so the arm carries the tool."""
+    x, y, z = tool["centre_of_mass"]
+    inertia = " ".join(f'{key}="{value!r}"' for key, value in tool["inertia"].items())
+    mounted = (f'<link name="test_tool"><inertial><origin xyz="{x!r} {y!r} {z!r}" rpy="0 0 0"/>'
+               f'<mass value="{tool["mass"]!r}"/><inertia {inertia}/></inertial></link>'
+               f'<joint name="test_tool_joint" type="fixed"><parent link="{tip}"/><child link="test_tool"/>'
+               '<origin xyz="0 0 0" rpy="0 0 0"/></joint>')
+    end = document.rindex("</robot>")
+    return document[:end] + mounted + document[end:]
+
+
+def tip_link(document: str) -> str:
+    """The URDF's only leaf link (the default tip)."""
+    import xml.etree.ElementTree as ElementTree
+    root = ElementTree.fromstring(document)
+    parents = {joint.find("parent").get("link") for joint in root.iter("joint")}
+    leaves = [link.get("name") for link in root.iter("link") if link.get("name") not in parents]
+    if len(leaves) != 1:
+        raise ValueError(f"the URDF has {len(leaves)} leaf links, expected one: {leaves}")
+    return leaves[0]
 
 
 def run(binary: str, *arguments: str) -> None:
@@ -122,13 +154,13 @@ def stale_repeats(rows: List[List[float]], every: int = 18) -> int:
 
 
 def make_robot_runs(binary: str, urdf: str, directory: str, truth: Mapping[str, float] = TRUTH) -> Dict[str, object]:
-    """Writes excitation.csv, run.csv, clean.csv, jitter.csv, check.csv and truth.json into
-    `directory`; returns their paths ("run", "clean", "jitter", "check", "excitation"), the
-    truth, the joint count, and jitter.csv's rows and stale repeats."""
+    """Writes excitation.csv, run.csv, clean.csv, jitter.csv, check.csv, tool.urdf, tool.csv and
+    truth.json into `directory`; returns their paths ("run", "clean", "jitter", "check", "excitation",
+    "tool"), the truth, the tool, the joint count, and jitter.csv's rows and stale repeats."""
     os.makedirs(directory, exist_ok=True)
     files = {name: os.path.join(directory, name) for name in
              ("excitation.csv", "states.csv", "run.csv", "clean.csv", "jitter.csv", "check-excitation.csv", "check.csv",
-              "truth.json")}
+              "tool.urdf", "tool.csv", "truth.json")}
     with open(files["truth.json"], "w") as stream:
         json.dump(dict(truth), stream)
     noise = ["--noise-tau-relative", "0.01", "--noise-q", "2e-5", "--quantize-q", "18"]
@@ -139,6 +171,12 @@ def make_robot_runs(binary: str, urdf: str, directory: str, truth: Mapping[str, 
         files["truth.json"], *noise, "--seed", "11", "--out", files["run.csv"])
     run(binary, "torque", "--robot", urdf, "--in", files["excitation.csv"], "--with-states", "--params",
         files["truth.json"], "--out", files["clean.csv"])
+    with open(urdf) as stream:
+        document = stream.read()
+    with open(files["tool.urdf"], "w") as stream:
+        stream.write(with_tool(document, tip_link(document)))
+    run(binary, "torque", "--robot", files["tool.urdf"], "--in", files["excitation.csv"], "--with-states", "--params",
+        files["truth.json"], *noise, "--seed", "14", "--out", files["tool.csv"])
 
     rows = jittered_rows(coefficients, 20.0, random.Random(5))
     joints = len(coefficients["q0"])
@@ -155,11 +193,14 @@ def make_robot_runs(binary: str, urdf: str, directory: str, truth: Mapping[str, 
     run(binary, "torque", "--robot", urdf, "--in", files["check-excitation.csv"], "--with-states", "--params",
         files["truth.json"], *noise, "--seed", "13", "--out", files["check.csv"])
     return {"run": files["run.csv"], "clean": files["clean.csv"], "jitter": files["jitter.csv"], "check": files["check.csv"],
-            "excitation": files["excitation.csv"], "truth": dict(truth), "joints": joints,
+            "excitation": files["excitation.csv"], "tool": files["tool.csv"], "truth": dict(truth), "tool_truth": TOOL,
+            "joints": joints,
             "jitter_rows": len(measured), "jitter_repeats": repeats}
 
 
 MANIFEST = "manifest.json"
+# The files a manifest names, copied from a shared folder.
+FILES = ("run", "clean", "jitter", "check", "excitation", "tool")
 
 
 def robot_runs(binary: str, urdf: str, directory: str) -> Dict[str, object]:
@@ -175,10 +216,10 @@ def robot_runs(binary: str, urdf: str, directory: str) -> Dict[str, object]:
                 manifest = json.load(stream)
         except (OSError, ValueError):
             manifest = {}
-        if manifest.get("made_by") == made_by:
+        if manifest.get("made_by") == made_by and all(key in manifest.get("runs", {}) for key in FILES):
             os.makedirs(directory, exist_ok=True)
             runs = dict(manifest["runs"])
-            for key in ("run", "clean", "jitter", "check", "excitation"):
+            for key in FILES:
                 copy = os.path.join(directory, os.path.basename(runs[key]))
                 shutil.copyfile(runs[key], copy)
                 runs[key] = copy

@@ -444,6 +444,53 @@ class RobotsAgainstServer(unittest.TestCase):
         with self.assertRaises(TypeError):  # checked here: nothing is sent
             self.client.identify(self.jitter, validate=self.check)
 
+    # --- payloads --------------------------------------------------------------------------
+    def test_a_tool_on_the_identified_arm(self) -> None:
+        tool = self.client.upload_dataset(self.runs["tool"], name="with the tool")
+        truth = self.runs["tool_truth"]
+        job = self.client.identify_payload(tool, self.arm, arm=self.job, validate=tool, judge_trim=0.25, physical=True)
+        self.assertEqual(job.kind, "payload_identification")
+        self.assertEqual(job.robot_id, self.arm.id)
+        result = job.wait(timeout=300)
+        self.assertTrue(result["detected"], result["warnings"])
+        self.assertEqual(result["arm_job_id"], self.job.id)
+        # The arm as identified from the jittery run without the tool: the payload within 3 % and 5 mm.
+        self.assertLess(abs(result["mass"] - truth["mass"]), 0.03 * truth["mass"], result["mass"])
+        self.assertLess(math.dist(result["centre_of_mass"], truth["centre_of_mass"]), 5e-3, result["centre_of_mass"])
+        self.assertGreater(result["mass_std_error"], 0.0)
+        self.assertEqual(result["judge"]["trim_seconds"], 0.25)
+        self.assertTrue(result["consistent"] and result["physical"] is not None, result["physical"])
+        self.assertEqual(job.refresh().data["request"]["physical"], True)
+        # The torque with and without the tool, and the URDF with the tool mounted on the tip link.
+        fit = job.fit(max_points=200)
+        self.assertEqual(len(fit["joints"]), 7)
+        self.assertEqual(len(fit["joints"][6]["arm_only"]), len(fit["t"]))
+        self.assertLess(fit["overall_relative_error"], fit["arm_only"]["overall_relative_error"] / 2)
+        self.assertEqual(job.validation(max_points=200)["arm_only"], fit["arm_only"])  # the same run
+        document = ElementTree.fromstring(job.to_urdf())
+        mounted = {link.get("name"): link for link in document.iter("link")}["manipid_payload"]
+        self.assertAlmostEqual(float(mounted.find("inertial/mass").get("value")), result["mass"], delta=1e-6)
+        # A run of the arm without the tool: no payload, not an error.
+        none = self.client.identify_payload(self.jitter, self.arm.id, arm=self.job.id, known_centre_of_mass=[0, 0, 0.05])
+        empty = none.wait(timeout=300)
+        self.assertFalse(empty["detected"], empty)
+        self.assertLess(abs(empty["mass"]), 3 * empty["mass_std_error"])
+
+    def test_a_payload_refused_names_its_field(self) -> None:
+        tool = self.client.upload_dataset(self.runs["tool"])
+        for kwargs, field in (({"arm": "job_0000000000000000"}, "arm_job_id"), ({"known_mass": 0}, "known_mass"),
+                              ({"known_centre_of_mass": [0, 0]}, "known_centre_of_mass"),
+                              ({"friction": ["viscous"]}, "friction")):
+            with self.assertRaises(ManipidError) as caught:
+                self.client.identify_payload(tool, self.arm, **kwargs)
+            self.assertEqual((caught.exception.status, caught.exception.field), (422, field), kwargs)
+        preset = self.client.simulate(duration=0.2)
+        preset.wait(timeout=300)
+        with self.assertRaises(ManipidError) as caught:  # not an identification of the arm
+            self.client.identify_payload(tool, self.arm, arm=preset)
+        self.assertEqual(caught.exception.field, "arm_job_id")
+        self.assertIn("not a robot_identification", caught.exception.detail)
+
     def test_drawings_and_urdf_of_jobs_that_have_none(self) -> None:
         preset = self.client.identify(None, simulation={"duration": 2}, half_length=100, band=0.2)
         preset.wait(timeout=300)

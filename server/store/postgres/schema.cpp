@@ -16,7 +16,7 @@ constexpr const char* kMigrationLock = "1835101801";
 
 // kMigrations[i] takes version i to i + 1. A migration is appended, never edited: databases in the
 // field have run the old ones.
-constexpr std::array<const char*, 3> kMigrations = {
+constexpr std::array<const char*, 4> kMigrations = {
     R"sql(
     -- seq orders rows newest first for keyset paging; a sequence never hands a value out twice.
     -- The samples come last: reading a description (find, list) never fetches them (TOAST).
@@ -143,6 +143,14 @@ constexpr std::array<const char*, 3> kMigrations = {
     ALTER TABLE jobs ADD CONSTRAINT jobs_kind_check
       CHECK (kind IN ('simulation', 'identification', 'excitation', 'robot_identification'));
     UPDATE jobs SET kind = 'robot_identification' WHERE kind = 'identification' AND robot_id IS NOT NULL AND robot_id <> '';
+    )sql",
+
+    // 3 → 4: a payload on a robot's tip link is a kind of its own, payload_identification (new: no rows to
+    // rename), as in the SQLite store's 6 → 7: the CHECK on kind takes it in.
+    R"sql(
+    ALTER TABLE jobs DROP CONSTRAINT jobs_kind_check;
+    ALTER TABLE jobs ADD CONSTRAINT jobs_kind_check
+      CHECK (kind IN ('simulation', 'identification', 'excitation', 'robot_identification', 'payload_identification'));
     )sql",
 };
 

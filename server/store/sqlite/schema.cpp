@@ -11,7 +11,7 @@ namespace manipid::server::store::sqlite {
 namespace {
 
 // kMigrations[i] takes user_version i to i + 1, and sets it.
-constexpr std::array<const char*, 6> kMigrations = {
+constexpr std::array<const char*, 7> kMigrations = {
     // 0 → 1: the first schema.
     R"sql(
     -- seq orders datasets newest first for keyset paging; AUTOINCREMENT never hands out a
@@ -332,6 +332,55 @@ constexpr std::array<const char*, 6> kMigrations = {
     CREATE INDEX jobs_by_owner ON jobs (owner, seq);
 
     PRAGMA user_version = 6;
+    )sql",
+
+    // 6 → 7: a payload on a robot's tip link is a kind of its own, payload_identification (new: no rows to
+    // rename). The CHECK on kind changes: jobs is rebuilt as in 5 → 6 (foreign keys off around it), its rows
+    // copied as they are, its AUTOINCREMENT counter carried over, and its indexes made again.
+    R"sql(
+    CREATE TABLE jobs_v7 (
+      seq                   INTEGER PRIMARY KEY AUTOINCREMENT,
+      id                    TEXT    NOT NULL UNIQUE,
+      kind                  TEXT    NOT NULL
+                            CHECK (kind IN ('simulation', 'identification', 'excitation', 'robot_identification',
+                                            'payload_identification')),
+      state                 TEXT    NOT NULL
+                            CHECK (state IN ('queued', 'running', 'succeeded', 'failed', 'cancelled')),
+      request               TEXT    NOT NULL,
+      dataset_id            TEXT,
+      robot_id              TEXT,
+      validation_dataset_id TEXT,
+      created_at            TEXT    NOT NULL,
+      started_at            TEXT,
+      finished_at           TEXT,
+      evaluations           INTEGER NOT NULL DEFAULT 0,
+      best_cost             REAL,
+      cancel_requested      INTEGER NOT NULL DEFAULT 0,
+      attempts              INTEGER NOT NULL DEFAULT 0,
+      worker_losses         INTEGER NOT NULL DEFAULT 0,
+      result                TEXT,
+      error                 TEXT,
+      worker                TEXT,
+      lease_expires_at      REAL,
+      owner                 TEXT    NOT NULL DEFAULT ''
+    );
+    INSERT INTO jobs_v7 (seq, id, kind, state, request, dataset_id, robot_id, validation_dataset_id, created_at,
+                         started_at, finished_at, evaluations, best_cost, cancel_requested, attempts, worker_losses,
+                         result, error, worker, lease_expires_at, owner)
+      SELECT seq, id, kind, state, request, dataset_id, robot_id, validation_dataset_id, created_at, started_at,
+             finished_at, evaluations, best_cost, cancel_requested, attempts, worker_losses, result, error, worker,
+             lease_expires_at, owner FROM jobs;
+    DELETE FROM sqlite_sequence WHERE name = 'jobs_v7';
+    INSERT INTO sqlite_sequence (name, seq) SELECT 'jobs_v7', seq FROM sqlite_sequence WHERE name = 'jobs';
+    DROP TABLE jobs;
+    ALTER TABLE jobs_v7 RENAME TO jobs;
+    CREATE INDEX jobs_by_state ON jobs (state, seq);
+    CREATE INDEX jobs_by_kind ON jobs (kind, seq);
+    CREATE INDEX jobs_by_robot ON jobs (robot_id) WHERE robot_id IS NOT NULL;
+    CREATE INDEX jobs_by_lease ON jobs (lease_expires_at) WHERE state = 'running';
+    CREATE INDEX jobs_by_owner ON jobs (owner, seq);
+
+    PRAGMA user_version = 7;
     )sql",
 };
 

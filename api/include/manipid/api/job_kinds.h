@@ -27,6 +27,8 @@ struct SubmissionLookups {
   /// A stored robot, parsed (robot_requests.h: parsed_robot); throws ApiError(invalid_field, `field`) when the
   /// caller has none by that id.
   std::function<std::shared_ptr<const ParsedRobot>(const std::string& id, const std::string& field)> robot;
+  /// A job by id (a payload identification's arm_job_id), or nullopt when the caller has none by that id.
+  std::function<std::optional<JobInfo>(const std::string& id)> job;
 };
 
 /// What a fit (GET /v1/jobs/{id}/fit or /validation) is drawn from.
@@ -38,6 +40,19 @@ struct FitInputs {
   const robot::Model* robot = nullptr;  ///< the job's robot, for a kind that works on one (on_robot)
 };
 
+/// What a URDF view (GET /v1/jobs/{id}/urdf) is written from.
+struct UrdfInputs {
+  const JobInfo& job;          ///< succeeded
+  const std::string& urdf;     ///< the robot's document as uploaded
+  const robot::Model& robot;   ///< parsed as the job parsed it
+};
+
+/// A URDF view's document and what its file name ends with ("<robot>-<suffix>.urdf").
+struct UrdfDocument {
+  std::string text;
+  std::string suffix;
+};
+
 struct JobKindHandler {
   JobKind kind;
   /// What a running job of this kind is doing, for messages ("... while identifying the robot").
@@ -46,7 +61,7 @@ struct JobKindHandler {
   bool has_history;     ///< evaluates a cost step by step: GET /v1/jobs/{id}/history has entries
   bool has_fit;         ///< its estimate's torque beside the measured: GET /v1/jobs/{id}/fit
   bool has_validation;  ///< judges a validation dataset when it names one: GET /v1/jobs/{id}/validation
-  bool writes_urdf;     ///< its robot with the estimate: GET /v1/jobs/{id}/urdf
+  bool writes_urdf;     ///< its robot with the estimate (or payload): GET /v1/jobs/{id}/urdf
   /// Checks a submission's body in full against what it names and says what to queue; throws ApiError or
   /// InputError naming the field at fault.
   JobSubmission (*submission)(const nlohmann::json& body, const SubmissionLookups& lookups);
@@ -55,13 +70,17 @@ struct JobKindHandler {
   /// The fit of a finished job (null when !has_fit); throws InputError or a JSON error when the stored request,
   /// result and data do not fit together.
   nlohmann::ordered_json (*fit)(const FitInputs& inputs);
+  /// The robot's document with a finished job's result written in (null when !writes_urdf); throws ApiError
+  /// (conflict) saying why when the result cannot be written, InputError or a JSON error when the stored result
+  /// does not fit the robot.
+  UrdfDocument (*urdf)(const UrdfInputs& inputs);
 };
 
 /// The entry of `kind`.
 const JobKindHandler& job_kind_handler(JobKind kind);
 
-/// The kind a body POSTed to /v1/identifications asks for: robot_identification when it names a robot_id,
-/// identification (the paper's preset) otherwise.
+/// The kind a body POSTed to /v1/identifications asks for: payload_identification when it has "payload",
+/// robot_identification when it names a robot_id, identification (the paper's preset) otherwise.
 JobKind identification_kind(const nlohmann::json& body);
 
 /// "a simulation", "an excitation", "a robot_identification": the kind's name with its article, for messages.

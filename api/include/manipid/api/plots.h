@@ -49,4 +49,11 @@ nlohmann::ordered_json robot_fit_to_json(const robot::Model& model, const std::s
                                          const std::string& result_json, const Trajectory& data, long max_points,
                                          bool prior);
 
+/// The same for a payload identification (payload_identification_from_json's request, a result with its
+/// "arm_point"): the measured torque on `data` beside what the arm predicts with the payload ("model") and
+/// without it ("arm_only" per joint, with "arm_only_relative_error"), both under the request's judge and on its
+/// grid; "arm_only": {"relative_error", "rms_error", "overall_relative_error"} over the judged joints.
+nlohmann::ordered_json payload_fit_to_json(const robot::Model& model, const std::string& request_json,
+                                           const std::string& result_json, const Trajectory& data, long max_points);
+
 }  // namespace manipid::api

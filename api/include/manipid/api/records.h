@@ -17,13 +17,14 @@ inline bool is_terminal(JobState state) {
 }
 
 /// What a job does. `identification` is the paper's preset model (a cost minimised step by step, or input-error);
-/// `robot_identification` a stored URDF robot's base parameters (one least-squares solve). Each kind's handling
+/// `robot_identification` a stored URDF robot's base parameters (one least-squares solve);
+/// `payload_identification` a payload on a stored robot's tip link (robot/payload.h). Each kind's handling
 /// is one entry of job_kinds.h (api) and of the runner's table (server/jobs/job_runner.cpp). The store keeps
 /// the enumerator's position nowhere: it writes the names below.
-enum class JobKind { simulation, identification, excitation, robot_identification };
+enum class JobKind { simulation, identification, excitation, robot_identification, payload_identification };
 /// Every kind, in declaration order.
 inline constexpr JobKind kJobKinds[] = {JobKind::simulation, JobKind::identification, JobKind::excitation,
-                                        JobKind::robot_identification};
+                                        JobKind::robot_identification, JobKind::payload_identification};
 const char* to_string(JobKind kind);
 std::optional<JobKind> parse_job_kind(std::string_view text);
 

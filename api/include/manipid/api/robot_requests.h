@@ -6,6 +6,7 @@
 #include "manipid/core/robot/excitation.h"
 #include "manipid/core/robot/identification.h"
 #include "manipid/core/robot/model.h"
+#include "manipid/core/robot/payload.h"
 
 #include <nlohmann/json.hpp>
 
@@ -47,12 +48,18 @@ inline constexpr std::size_t kRobotCacheBytes = 64u << 20;
 /// The most runs one identification (or its validation) may name.
 inline constexpr std::size_t kMostRuns = 16;
 
-struct RobotIdentificationSpec {
+/// The robot and runs a job on a stored robot reads: a robot identification's and a payload identification's,
+/// read from the body alike ("robot_id", "dataset_id" | "dataset_ids", "validation_dataset_id" |
+/// "validation_dataset_ids").
+struct RobotRuns {
   std::string robot_id;
   std::vector<std::string> dataset_ids;             ///< the training runs, 1 to kMostRuns
   std::string dataset_id;                           ///< the first of them (the job's dataset)
   std::vector<std::string> validation_dataset_ids;  ///< runs judged with the estimate; empty: no validation
   std::string validation_dataset_id;                ///< the first of them, empty: no validation
+};
+
+struct RobotIdentificationSpec : RobotRuns {
   robot::IdentificationOptions options;  ///< cancel left empty
   bool physical = false;
 };
@@ -70,6 +77,26 @@ bool names_a_robot(const nlohmann::json& body);
 ///  (method, algorithm, free, initial, kp, ...) are refused with the reason; so is a "preset" beside robot_id,
 ///  and the former comparison_half_length / comparison_band (naming comparison_cutoff).
 RobotIdentificationSpec robot_identification_from_json(const nlohmann::json& body);
+
+// ---- Payload identifications --------------------------------------------------------------
+
+struct PayloadIdentificationSpec : RobotRuns {
+  /// A succeeded robot_identification of the same robot whose result's point is the arm; empty: the URDF's
+  /// values (with its viscous and Coulomb friction).
+  std::string arm_job_id;
+  robot::PayloadOptions options;  ///< cancel left empty
+};
+
+/// True when the identification request asks for a payload (it has a "payload" member).
+bool asks_for_payload(const nlohmann::json& body);
+
+/// {"payload": true, "robot_id": "rb_…", "dataset_id": "ds_…" | "dataset_ids": [...] (runs carrying the payload),
+///  "arm_job_id"?: "job_…", "validation_dataset_id"? | "validation_dataset_ids"?, "known_mass"?: kg (> 0),
+///  "known_centre_of_mass"?: [x, y, z] m (tip-link frame), "physical"?: false (a real rigid body), "trim"?, "dt"?, "comparison_cutoff"?: Hz (default the
+///  judge's), "judge_cutoff"?, "judge_trim"?, "torque_joints"?: [1-based]} — the fields a robot identification
+///  shares read by the same rules. The arm's own options (friction, armature, filters, ridge, weights) are
+///  refused with the reason, as are the preset's.
+PayloadIdentificationSpec payload_identification_from_json(const nlohmann::json& body);
 
 // ---- Excitations -------------------------------------------------------------------------
 
