@@ -274,8 +274,10 @@ class Shutdown(unittest.TestCase):
         with temporary_directory() as directory:
             db = os.path.join(directory, "jobs.db")
             server = Server(db).start()
+            # Long enough that the signal finds it running in a Release build too (each evaluation simulates
+            # 12 s: about 6 ms there, 60 ms under the sanitizers).
             status, _, job = server.request("POST", "/v1/identifications", {
-                "simulation": {"duration": 3.0}, "method": "output-error", "max_evaluations": 40})
+                "simulation": {"duration": 12.0}, "method": "output-error", "max_evaluations": 60})
             self.assertEqual(status, 202, job)
             deadline = time.time() + 60
             while time.time() < deadline:

@@ -18,8 +18,9 @@ class KillAndRestart(unittest.TestCase):
             db = os.path.join(directory, "jobs.db")
             server = Server(db, workers=1).start()
             accepted = []
-            # A slow job first (output-error simulates per evaluation) so the rest stay queued.
-            requests = [{"simulation": {"duration": 3.0}, "method": "output-error", "max_evaluations": 30}]
+            # A slow job first (output-error simulates 12 s per evaluation) so the rest stay queued and the kill finds it
+            # running in a Release build too.
+            requests = [{"simulation": {"duration": 12.0}, "method": "output-error", "max_evaluations": 40}]
             requests += [{"simulation": {"duration": 1.0}, "half_length": 100, "band": 0.2, "free": ["m2", "m3"]}] * 3
             requests += [{"duration": 0.5}]  # a simulation job
             for index, body in enumerate(requests):
