@@ -116,12 +116,7 @@ for k = 1:size(robot_fields, 1)
     case 'robot_id'
       value = manipid_id(value, 'robot');
     case 'validation_dataset_id'
-      if iscell(value)
-        field = 'validation_dataset_ids';
-        value = cellfun(@(d) manipid_id(d, 'dataset'), value, 'UniformOutput', false);
-      else
-        value = manipid_id(value, 'dataset');
-      end
+      [field, value] = manipid_validation_ids(value);
     case 'torque_joints'
       value = reshape(double(value), 1, []);
     case 'friction'

@@ -68,12 +68,7 @@ for k = 1:size(fields, 1)
     case 'arm_job_id'
       value = manipid_id(value, 'job');
     case 'validation_dataset_id'
-      if iscell(value)
-        field = 'validation_dataset_ids';
-        value = cellfun(@(d) manipid_id(d, 'dataset'), value, 'UniformOutput', false);
-      else
-        value = manipid_id(value, 'dataset');
-      end
+      [field, value] = manipid_validation_ids(value);
     case {'known_centre_of_mass', 'trim', 'torque_joints'}
       value = reshape(double(value), 1, []);
     case 'physical'
