@@ -405,7 +405,12 @@ PayloadResult identify_payload(const Model& model, const ArmParameters& arm, con
         rows = std::move(candidate);
       }
     }
-    result.held_out_error = best;
+    if (std::isfinite(best)) {
+      result.held_out_error = best;
+    } else {  // no figure to choose by (a residual of zero: nothing to predict): the first candidate
+      result.candidates.clear();
+      rows = rows_at(cutoffs.front());
+    }
   }
   result.comparison_cutoff_hz = cutoffs[chosen];
   result.rows = static_cast<int>(rows.A.rows());

@@ -413,6 +413,22 @@ TEST(Payload, DISABLED_BesideTheTextbookOnTenRuns) {
   std::printf("RMS mass %.4f%% vs %.4f%%, com %.3f vs %.3f mm, heldout mean %.4f%% vs %.4f%% (true %.4f%%)\n", 100*std::sqrt(sm/10), 100*std::sqrt(st/10), 1e3*std::sqrt(cm/10), 1e3*std::sqrt(ct/10), 10*hm, 10*ht, 10*hr);
 }
 
+TEST(Payload, AResidualOfZeroIsNoPayloadNotACrash) {
+  // A massless arm and a run whose torque is zero throughout: nothing is left to explain, no held-out figure
+  // can choose a cut-off. The answer is "no payload", at the first candidate cut-off.
+  std::mt19937_64 engine(47);
+  const Scene scene(engine);
+  const ArmParameters massless{scene.layout, Eigen::VectorXd::Zero(scene.arm.size())};
+  Trajectory data = run(scene.model, scene.layout, scene.arm, 5.0, engine, false);
+  data.tau.setZero();
+  const PayloadResult result = identify_payload(scene.model, massless, {data}, {});
+  EXPECT_FALSE(result.detected);
+  EXPECT_EQ(result.mass, 0.0);
+  EXPECT_TRUE(result.candidates.empty());
+  EXPECT_TRUE(std::isnan(result.held_out_error));
+  EXPECT_EQ(result.comparison_cutoff_hz, candidate_cutoffs(0.0, 5.0, 1e-3).front());
+}
+
 TEST(Payload, RefusalsNameTheirField) {
   std::mt19937_64 engine(17);
   const Scene scene(engine);
