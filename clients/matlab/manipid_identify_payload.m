@@ -18,7 +18,7 @@ function job = manipid_identify_payload(url, dataset, robot, varargin)
 %                          says whether the payload is one either way
 %     'Trim', [A B]        seconds dropped at the start and at the end
 %     'Dt', S              the resampling period, s (default: the median time step)
-%     'ComparisonCutoff', HZ  the residual's low-pass (default: the judge's cut-off)
+%     'ComparisonCutoff', HZ  the residual's low-pass (default: chosen by held-out error)
 %     'JudgeCutoff', HZ    the low-pass the torque figures are judged under (5)
 %     'JudgeTrim', S       seconds the judge drops at each end of a run (0.3)
 %     'TorqueJoints', J    the joints whose torque is fitted, e.g. 1:6 (default: all)

@@ -111,6 +111,8 @@ try {
         "the torque error with the arm alone and with the payload, as the API's");
   check(close(parseFloat(await page.textContent("#payload-validation-with")), 100 * result.validation.with_payload.overall_relative_error, 1e-2),
         "the held-out run's error with the payload, as the API's");
+  check((await page.textContent("#payload-filters")).includes(`chosen by held-out error among ${result.filters.candidates.length}`),
+        "the low-pass says it was chosen by held-out error, among how many");
   check((await page.textContent("#payload-undetermined")).includes("none") === (result.undetermined.length === 0),
         "what the runs leave undetermined, as the API's");
   check(await page.getAttribute("#payload-urdf", "href") === `/v1/jobs/${payload.id}/urdf`, "a download of the URDF with the payload");

@@ -118,8 +118,12 @@ function payloadCard(job, result) {
           ["Standard errors", result.variance_inflation > 1.0001
             ? `widened ×${number(Math.sqrt(result.variance_inflation), 3)}: the residual is correlated over time`
             : "from the filtered residual"],
-          ["Fitted", `${plural(result.torque_joints?.length ?? 0, "joint")}, ${result.rows} rows; comparison low-pass ` +
-                     `${number(result.filters?.comparison_cutoff_hz, 3)} Hz`],
+          ["Fitted", h("span", { id: "payload-filters" }, `${plural(result.torque_joints?.length ?? 0, "joint")}, ${result.rows} rows; comparison low-pass ` +
+                     `${number(result.filters?.comparison_cutoff_hz, 3)} Hz` +
+                     (result.filters?.chosen_by_held_out
+                       ? ` (chosen by held-out error among ${result.filters.candidates.length}: ` +
+                         `${number(100 * result.filters.held_out_error, 3)} % of the arm's residual)`
+                       : ""))],
         ]),
         urdfActions(job, result)),
       h("figure", { id: "payload-figure" }, comPicture(result),
