@@ -65,6 +65,8 @@ nlohmann::ordered_json payload_to_json(const robot::Model& model, const robot::P
       {"filters", filters},
       {"judge", judge_to_json(options.judge)},
       {"torque_joints", joints},
+      {"weights", options.weighting == estimation::JointWeighting::per_joint ? "per-joint" : "unit"},
+      {"joint_weights", numbers(result.joint_weights)},
       {"rows", result.rows},
       {"fit", {{"arm_only_error", number(result.arm_only_error)}, {"with_payload_error", number(result.with_payload_error)}}},
       {"consistent", result.consistent},

@@ -10,6 +10,14 @@
 namespace manipid::api {
 namespace {
 
+/// "weights": "unit" (the default) or "per-joint" — each joint's rows divided by its residual RMS from a first fit.
+estimation::JointWeighting read_weights(const fields::ObjectFields& object) {
+  const fields::Json* weights = object.find("weights");
+  if (!weights) return estimation::JointWeighting::unit;
+  return fields::read_choice(*weights, "weights", {"unit", "per-joint"}) == "per-joint" ? estimation::JointWeighting::per_joint
+                                                                                        : estimation::JointWeighting::unit;
+}
+
 /// A non-empty array of joint numbers (1-based, as users count them) → 0-based indices; whether each is one of
 /// the robot's is checked against the robot.
 std::vector<int> read_joint_numbers(const fields::Json& value, const std::string& field) {
@@ -276,11 +284,7 @@ RobotIdentificationSpec robot_identification_from_json(const nlohmann::json& bod
   }
   read_judge(object, options.judge);
   read_torque_joints(object, options.torque_joints);
-  if (const fields::Json* weights = object.find("weights")) {
-    options.weighting = fields::read_choice(*weights, "weights", {"unit", "per-joint"}) == "per-joint"
-                            ? robot::JointWeighting::per_joint
-                            : robot::JointWeighting::unit;
-  }
+  options.weighting = read_weights(object);
   return spec;
 }
 
@@ -303,8 +307,8 @@ PayloadIdentificationSpec payload_identification_from_json(const nlohmann::json&
   refuse_fields(body, preset_only_fields(),
                 " belongs to the paper's preset model; a payload is identified on a stored robot (robot_id) by linear "
                 "least squares: its options are arm_job_id, known_mass, known_centre_of_mass, physical, trim, dt, "
-                "comparison_cutoff, judge_cutoff, judge_trim and torque_joints");
-  refuse_fields(body, {"friction", "armature", "half_length", "band", "ridge", "weights"},
+                "comparison_cutoff, judge_cutoff, judge_trim, torque_joints and weights");
+  refuse_fields(body, {"friction", "armature", "half_length", "band", "ridge"},
                 " belongs to the arm's identification: a payload identification takes the arm as identified from "
                 "arm_job_id (a succeeded robot_identification of the same robot, its friction included), or the URDF's "
                 "values without it");
@@ -312,7 +316,7 @@ PayloadIdentificationSpec payload_identification_from_json(const nlohmann::json&
                                     {"payload", "robot_id", "arm_job_id", "dataset_id", "dataset_ids",
                                      "validation_dataset_id", "validation_dataset_ids", "known_mass",
                                      "known_centre_of_mass", "physical", "trim", "dt", "comparison_cutoff",
-                                     "judge_cutoff", "judge_trim", "torque_joints"});
+                                     "judge_cutoff", "judge_trim", "torque_joints", "weights"});
   const fields::Json* payload = object.find("payload");
   if (!payload || !payload->is_boolean() || !payload->get<bool>()) {
     throw InputError("payload", "payload must be true (a payload on the robot's tip link), got " +
@@ -341,10 +345,11 @@ PayloadIdentificationSpec payload_identification_from_json(const nlohmann::json&
   read_preparation(object, options.preparation);
   if (const fields::Json* value = object.find("comparison_cutoff")) {
     options.comparison_cutoff_hz = with_hint(*value, "comparison_cutoff", kHighestCutoff, " Hz",
-                                             "leave it out for the judge's cut-off, as the arm was judged");
+                                             "leave it out to choose it by held-out error, as for the arm");
   }
   read_judge(object, options.judge);
   read_torque_joints(object, options.torque_joints);
+  options.weighting = read_weights(object);
   return spec;
 }
 

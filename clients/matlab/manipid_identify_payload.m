@@ -22,6 +22,7 @@ function job = manipid_identify_payload(url, dataset, robot, varargin)
 %     'JudgeCutoff', HZ    the low-pass the torque figures are judged under (5)
 %     'JudgeTrim', S       seconds the judge drops at each end of a run (0.3)
 %     'TorqueJoints', J    the joints whose torque is fitted, e.g. 1:6 (default: all)
+%     'Weights', W         'unit' (default) or 'per-joint': each joint by its residual
 %     'IdempotencyKey', K  a retry with the same K and request returns the first job
 %   An Arm that is not a succeeded robot identification of ROBOT, a known mass <= 0, a
 %   run whose joints are not the robot's: manipid:INVALID_FIELD naming the field
@@ -46,7 +47,7 @@ if nargin < 3
   error('manipid:usage', 'usage: job = manipid_identify_payload(url, dataset, robot, ''Arm'', arm_job, ...)');
 end
 defaults = struct('IdempotencyKey', '', 'Arm', [], 'Validate', [], 'Mass', [], 'CentreOfMass', [], 'Physical', [], 'Trim', [], ...
-                  'Dt', [], 'ComparisonCutoff', [], 'JudgeCutoff', [], 'JudgeTrim', [], 'TorqueJoints', []);
+                  'Dt', [], 'ComparisonCutoff', [], 'JudgeCutoff', [], 'JudgeTrim', [], 'TorqueJoints', [], 'Weights', []);
 settings = manipid_options(varargin, defaults, 'manipid_identify_payload');
 request = struct('payload', true, 'robot_id', manipid_id(robot, 'robot'));
 if iscell(dataset)
@@ -57,7 +58,7 @@ end
 % The options by their request names.
 fields = {'Arm', 'arm_job_id'; 'Validate', 'validation_dataset_id'; 'Mass', 'known_mass'; ...
           'CentreOfMass', 'known_centre_of_mass'; 'Physical', 'physical'; 'Trim', 'trim'; 'Dt', 'dt'; 'ComparisonCutoff', 'comparison_cutoff'; ...
-          'JudgeCutoff', 'judge_cutoff'; 'JudgeTrim', 'judge_trim'; 'TorqueJoints', 'torque_joints'};
+          'JudgeCutoff', 'judge_cutoff'; 'JudgeTrim', 'judge_trim'; 'TorqueJoints', 'torque_joints'; 'Weights', 'weights'};
 for k = 1:size(fields, 1)
   value = settings.(fields{k, 1});
   field = fields{k, 2};

@@ -94,6 +94,10 @@ CLI::App* add_payload_command(CLI::App& app, PayloadOptions& options) {
   command->add_option("--judge-trim", options.judge_trim, "Seconds the judge drops at each end of a run")
       ->check(non_negative_number())
       ->capture_default_str();
+  command->add_option("--weights", options.weights,
+                      "unit, or per-joint: each joint's rows divided by its residual RMS from a first fit (as identify --robot)")
+      ->check(CLI::IsMember({"unit", "per-joint"}))
+      ->capture_default_str();
   command->add_flag("--physical", options.physical,
                     "Make the payload a real rigid body (mass > 0, inertia about the centre of mass positive definite, "
                     "triangle inequalities): the least squares over such bodies only");
@@ -133,6 +137,7 @@ int run_payload(const PayloadOptions& options) {
   payload.preparation.uniform.dt = options.dt;
   payload.comparison_cutoff_hz = options.comparison_cutoff;
   payload.physical = options.physical;
+  payload.weighting = options.weights == "per-joint" ? estimation::JointWeighting::per_joint : estimation::JointWeighting::unit;
   payload.judge.cutoff_hz = options.judge_cutoff;
   payload.judge.trim_seconds = options.judge_trim;
   if (!options.torque_joints.empty()) payload.torque_joints = joint_list(options.torque_joints, model.joint_count(), "--torque-joints");

@@ -27,6 +27,7 @@ struct PayloadOptions {
   double judge_cutoff = 5.0;
   double judge_trim = 0.3;
   bool physical = false;
+  std::string weights = "unit";     ///< --weights unit | per-joint
   bool json = false;
   std::string write_urdf;             ///< the URDF with the payload as a fixed link on the tip, empty = none
 };

@@ -1847,6 +1847,9 @@ TEST_F(Routes, APayloadIdentificationIsCheckedAgainstTheRobotItsRunsAndItsArm) {
   EXPECT_TRUE(spec.options.physical);
   EXPECT_FALSE(payload_identification_from_json(Json{{"payload", true}, {"robot_id", "rb_1"}, {"dataset_id", "ds_tool"}})
                    .options.physical);
+  EXPECT_EQ(payload_identification_from_json(Json{{"payload", true}, {"robot_id", "rb_1"}, {"dataset_id", "ds_tool"},
+                                                  {"weights", "per-joint"}}).options.weighting,
+            estimation::JointWeighting::per_joint);
   EXPECT_EQ(spec.options.preparation.trim_start, 0.2);
   EXPECT_EQ(spec.options.preparation.trim_end, 0.3);
   EXPECT_EQ(spec.options.preparation.uniform.dt, 0.002);
@@ -1884,6 +1887,7 @@ TEST_F(Routes, APayloadIdentificationIsCheckedAgainstTheRobotItsRunsAndItsArm) {
   refused(with("comparison_cutoff", "auto"), "comparison_cutoff", "comparison_cutoff");
   refused(with("friction", {"viscous"}), "friction", "arm_job_id");
   refused(with("ridge", 0), "ridge", "arm's identification");
+  refused(with("weights", "inverse-variance"), "weights", "unit");
   refused(with("free", {"m2"}), "free", "paper's preset");
   refused(with("known_mas", 1), "known_mas", "did you mean");
   refused(with("arm_job_id", ""), "arm_job_id", "empty");

@@ -653,7 +653,8 @@ class Client:
           definite, triangle inequalities), which a URDF and a simulator take; the result's
           "consistent" says whether the payload is one either way;
         - trim, dt, judge_cutoff, judge_trim, torque_joints: as identify(robot=...) takes them;
-          comparison_cutoff: the residual's low-pass, Hz (default: chosen by held-out error, as for the arm).
+          comparison_cutoff: the residual's low-pass, Hz (default: chosen by held-out error, as for the arm);
+        - any other request field by name, e.g. weights="per-joint" (each joint by its residual).
         The result (job.wait()) is what `manipid payload --json` prints: "mass",
         "mass_std_error", "centre_of_mass", "inertia_about_com", their standard errors,
         "detected" (False for a run without a payload: ≈ 0 kg within its uncertainty, not an

@@ -66,21 +66,6 @@ std::vector<int> layout_map(const ParameterLayout& sub, const ParameterLayout& f
   return map;
 }
 
-/// Per-row weights from per-joint weights (rows are joint-major within each instant).
-Eigen::VectorXd row_weights(const Eigen::VectorXd& joint_weights, Eigen::Index rows) {
-  const Eigen::Index J = joint_weights.size();
-  Eigen::VectorXd weights(rows);
-  for (Eigen::Index r = 0; r < rows; ++r) weights[r] = joint_weights[r % J];
-  return weights;
-}
-
-Eigen::VectorXd joint_residual_rms(const Eigen::VectorXd& residual, Eigen::Index joints) {
-  Eigen::VectorXd rms = Eigen::VectorXd::Zero(joints);
-  const Eigen::Index instants = residual.size() / std::max<Eigen::Index>(joints, 1);
-  for (Eigen::Index r = 0; r < residual.size(); ++r) rms[r % joints] += residual[r] * residual[r];
-  return (rms / static_cast<double>(std::max<Eigen::Index>(instants, 1))).cwiseSqrt();
-}
-
 /// The rows of every run stacked, with each row's run.
 struct StackedRows {
   Eigen::MatrixXd W;
@@ -540,10 +525,8 @@ IdentificationResult identify_runs(const Model& model, const std::vector<Traject
   result.joint_weights = Eigen::VectorXd::Ones(J);
   estimation::LinearSolution solution = estimation::solve_linear(W_b, rows.tau, solve_options);
   if (options.weighting == JointWeighting::per_joint) {
-    const Eigen::VectorXd rms = joint_residual_rms(solution.residual, J);
-    for (Eigen::Index k = 0; k < J; ++k) result.joint_weights[k] = rms[k] > 0 ? 1.0 / rms[k] : 1.0;
-    result.joint_weights /= result.joint_weights.maxCoeff();  // the largest weight 1: costs stay in N·m²
-    const Eigen::VectorXd weights = row_weights(result.joint_weights, W_b.rows());
+    result.joint_weights = estimation::per_joint_weights(solution.residual, J);
+    const Eigen::VectorXd weights = estimation::row_weights(result.joint_weights, W_b.rows());
     solution = estimation::solve_linear(weights.asDiagonal() * W_b, weights.asDiagonal() * rows.tau, solve_options);
     solution.residual = rows.tau - W_b * solution.estimate;
   }
@@ -551,10 +534,10 @@ IdentificationResult identify_runs(const Model& model, const std::vector<Traject
 
   // Step 5.
   const Eigen::VectorXd& residual = solution.residual;
-  result.residual_rms = joint_residual_rms(residual, J);
+  result.residual_rms = estimation::joint_residual_rms(residual, J);
   const double dof = std::max(1.0, static_cast<double>(residual.size() - solution.determined));
   result.residual_variance = residual.squaredNorm() / dof;
-  const Eigen::VectorXd weighted = row_weights(result.joint_weights, residual.size()).cwiseProduct(residual);
+  const Eigen::VectorXd weighted = estimation::row_weights(result.joint_weights, residual.size()).cwiseProduct(residual);
   const double weighted_variance =
       weighted.squaredNorm() / dof * estimation::filtered_residual_factor(rows.row_step, rows.lowpass_energy);
   const Eigen::MatrixXd covariance = weighted_variance * solution.covariance_unit;
@@ -594,7 +577,7 @@ IdentificationResult identify_runs(const Model& model, const std::vector<Traject
   if (options.physical) {
     // The same rows and weights as the least squares, over every standard parameter of the chosen layout.
     ConsistentFitProblem problem;
-    const Eigen::VectorXd weights = row_weights(result.joint_weights, rows.W.rows());
+    const Eigen::VectorXd weights = estimation::row_weights(result.joint_weights, rows.W.rows());
     problem.R = weights.asDiagonal() * (W_b * C);  // every standard column: W = W_b C for any motion
     problem.z = weights.asDiagonal() * rows.tau;
     problem.unconstrained = result.point;
@@ -610,7 +593,7 @@ IdentificationResult identify_runs(const Model& model, const std::vector<Traject
     } else {
       result.point = result.physical->estimate;
       result.estimate = C * result.point;
-      result.residual_rms = joint_residual_rms(rows.tau - W_b * result.estimate, J);
+      result.residual_rms = estimation::joint_residual_rms(rows.tau - W_b * result.estimate, J);
       if (!result.physical->converged()) {
         result.warnings.push_back("the physically consistent fit did not converge: " + result.physical->message);
       }

@@ -3,6 +3,7 @@
 
 #include "manipid/core/errors.h"
 #include "manipid/core/estimation/cross_validation.h"
+#include "manipid/core/estimation/joint_weighting.h"
 #include "manipid/core/estimation/linear_least_squares.h"
 #include "manipid/core/estimation/rules.h"
 #include "manipid/core/robot/consistency.h"
@@ -23,6 +24,7 @@ namespace {
 using Vector10d = Eigen::Matrix<double, 10, 1>;
 using Matrix10d = Eigen::Matrix<double, 10, 10>;
 using manipid::detail::kNaN;
+using estimation::JointWeighting;
 
 /// A payload parameter whose data share is below this is not determined by the run (as an arm's base
 /// parameter is barely seen below it: robot/identification.cpp).
@@ -288,6 +290,10 @@ void check_input(const Model& model, const ArmParameters& arm, const std::vector
   if (!(options.comparison_cutoff_hz >= 0.0) || !std::isfinite(options.comparison_cutoff_hz)) {
     throw InputError("comparison_cutoff", "the comparison cut-off must be a positive number of Hz (or 0: the judge's)");
   }
+  if (options.weighting == JointWeighting::inverse_variance) {
+    throw InputError("weights", "a payload's joints are weighted unit or per-joint (by each joint's residual), not by the "
+                                "variance of their torque");
+  }
   for (int joint : options.torque_joints) {
     if (joint < 0 || joint >= n) {
       throw InputError("torque_joints", "joint " + std::to_string(joint + 1) + " is not one of the robot's " + std::to_string(n));
@@ -414,20 +420,37 @@ PayloadResult identify_payload(const Model& model, const ArmParameters& arm, con
   }
   result.comparison_cutoff_hz = cutoffs[chosen];
   result.rows = static_cast<int>(rows.A.rows());
-  const Eigen::MatrixXd& W_tip = rows.W_tip;
-  const Eigen::VectorXd& residual = rows.residual;
   const Eigen::MatrixXd& A = rows.A;
   const Eigen::VectorXd& y = rows.y;
   const int row_step = rows.row_step;
   const double lowpass_energy = rows.lowpass_energy;
+  const Eigen::Index J = static_cast<Eigen::Index>(result.torque_joints.size());
 
-  // Step 3b: the unknowns x, A x ≈ L r − W_tip g0.
-  const estimation::LinearSolution solution = estimation::solve_linear(A, y);
+  // Step 3b: the unknowns x, A x ≈ L r − W_tip g0 — with per_joint weighting, each joint's rows divided by
+  // its residual RMS from a first, unweighted solve (as an arm's identification weighs them; the weighted
+  // rows below are what the standard errors, the jackknife and the physical fit see).
+  estimation::LinearSolution solution = estimation::solve_linear(A, y);
+  result.joint_weights = Eigen::VectorXd::Ones(J);
+  Eigen::MatrixXd A_weighted, W_tip_weighted;
+  Eigen::VectorXd y_weighted, residual_weighted;
+  const bool weighted = options.weighting == JointWeighting::per_joint;
+  if (weighted) {
+    result.joint_weights = estimation::per_joint_weights(solution.residual, J);
+    const Eigen::VectorXd w = estimation::row_weights(result.joint_weights, A.rows());
+    A_weighted = w.asDiagonal() * A;
+    y_weighted = w.asDiagonal() * y;
+    W_tip_weighted = w.asDiagonal() * rows.W_tip;
+    residual_weighted = w.asDiagonal() * rows.residual;
+    solution = estimation::solve_linear(A_weighted, y_weighted);
+  }
+  const Eigen::MatrixXd& A_fit = weighted ? A_weighted : A;
+  const Eigen::VectorXd& y_fit = weighted ? y_weighted : y;
+  const Eigen::MatrixXd& W_tip = weighted ? W_tip_weighted : rows.W_tip;
+  const Eigen::VectorXd& residual = weighted ? residual_weighted : rows.residual;
   const double dof = std::max(1.0, static_cast<double>(y.size() - solution.determined));
   result.residual_variance =
       solution.residual.squaredNorm() / dof * estimation::filtered_residual_factor(row_step, lowpass_energy);
-  const double inflation = jackknife_inflation(A, y, solution, result.residual_variance,
-                                               static_cast<Eigen::Index>(result.torque_joints.size()));
+  const double inflation = jackknife_inflation(A_fit, y_fit, solution, result.residual_variance, J);
   result.variance_inflation = inflation;
   const Eigen::MatrixXd covariance_x = inflation * result.residual_variance * solution.covariance_unit;
   result.estimate = u.G * solution.estimate + u.g0;
@@ -449,7 +472,7 @@ PayloadResult identify_payload(const Model& model, const ArmParameters& arm, con
     }
   }
   const double torque_norm = std::sqrt(torque_energy[chosen]);
-  result.arm_only_error = torque_norm > 0 ? residual.norm() / torque_norm : kNaN;
+  result.arm_only_error = torque_norm > 0 ? rows.residual.norm() / torque_norm : kNaN;
   result.with_payload_error = torque_norm > 0 ? (y - A * solution.estimate).norm() / torque_norm : kNaN;
 
   // Step 4.
@@ -500,7 +523,7 @@ PayloadResult identify_payload(const Model& model, const ArmParameters& arm, con
       physical.report = fit.brief_report();
       result.estimate = fit.estimate;
       result.mass = result.estimate[0];
-      result.with_payload_error = torque_norm > 0 ? std::sqrt(after) / torque_norm : kNaN;
+      result.with_payload_error = torque_norm > 0 ? (rows.residual - rows.W_tip * fit.estimate).norm() / torque_norm : kNaN;
     }
     result.physical = physical;
   }
@@ -512,8 +535,8 @@ PayloadResult identify_payload(const Model& model, const ArmParameters& arm, con
                               "): the physical fit makes them one (--physical; \"physical\": true in a request)");
   }
   const Vector10d values = mounted(result.estimate);
-  const Matrix10d J = mounted_jacobian(result.estimate);
-  const Vector10d errors = (J * covariance * J.transpose()).diagonal().cwiseMax(0.0).cwiseSqrt();
+  const Matrix10d jacobian = mounted_jacobian(result.estimate);
+  const Vector10d errors = (jacobian * covariance * jacobian.transpose()).diagonal().cwiseMax(0.0).cwiseSqrt();
   result.centre_of_mass = values.segment<3>(1);
   result.centre_of_mass_std_errors = errors.segment<3>(1);
   if (options.known_centre_of_mass) {  // given: as it was given, exactly

@@ -15,7 +15,7 @@
 //     "given": {"mass": kg | null, "centre_of_mass": [...] | null},
 //     "filters": {"comparison_cutoff_hz", "chosen_by_held_out", "held_out_error" (null when given),
 //                 "candidates": [{"comparison_cutoff_hz", "held_out_error"}]}, "judge": {"lowpass", "cutoff_hz", "trim_seconds"},
-//     "torque_joints": [joint names], "rows",
+//     "torque_joints": [joint names], "weights": "unit" | "per-joint", "joint_weights": [per fitted joint], "rows",
 //     "fit": {"arm_only_error", "with_payload_error"}   ‖L r‖/‖L τ‖ on the training rows,
 //     "consistent": the estimate is a real rigid body, "consistency_findings": [why not],
 //     "physical": null (not asked, or no payload) | {"least_squares_consistent", "least_squares_findings",

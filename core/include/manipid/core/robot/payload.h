@@ -35,6 +35,7 @@
 // (IdentificationResult::point), whose base parameters need not be physically consistent.
 #pragma once
 
+#include "manipid/core/estimation/joint_weighting.h"
 #include "manipid/core/robot/model.h"
 #include "manipid/core/robot/parameters.h"
 #include "manipid/core/robot/prediction.h"
@@ -69,6 +70,9 @@ struct PayloadOptions {
   double comparison_cutoff_hz = 0.0;
   /// Joints (0-based) whose torque is fitted; empty = all.
   std::vector<int> torque_joints;
+  /// unit, or per_joint: each joint's rows divided by its residual RMS from a first, unweighted solve (as an
+  /// arm's identification offers; inverse_variance is refused with InputError("weights")).
+  estimation::JointWeighting weighting = estimation::JointWeighting::unit;
   /// Known mass, kg (a scale): only the rest is estimated.
   std::optional<double> known_mass;
   /// Known centre of mass in the tip link's frame, m: only the rest is estimated.
@@ -109,6 +113,7 @@ struct PayloadResult {
   std::vector<std::string> undetermined;
 
   std::vector<int> torque_joints;   ///< the joints fitted (0-based)
+  Eigen::VectorXd joint_weights;    ///< per fitted joint (all 1 with unit weighting; the largest 1 with per_joint)
   int rows = 0;                     ///< least-squares rows
   double comparison_cutoff_hz = 0;  ///< L's cut-off as used (given or chosen), Hz
   /// Step 3a's candidates, each with its held-out error: the relative RMS of its held-out predictions of the
