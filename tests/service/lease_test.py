@@ -107,7 +107,8 @@ class Leases(unittest.TestCase):
         self.assertEqual((after["state"], after["attempts"]), ("succeeded", 2))
 
     def test_a_cancel_through_the_other_process_stops_the_running_job(self):
-        body = {"simulation": {"duration": 3.0}, "method": "output-error", "max_evaluations": 400}
+        # Long enough to be cancelled in a Release build too (each evaluation simulates 12 s; 400 of 3 s took 0.4 s).
+        body = {"simulation": {"duration": 12.0}, "method": "output-error", "max_evaluations": 2000}
         status, _, job = self.servers[0].request("POST", "/v1/identifications", body)
         self.assertEqual(status, 202, job)
         running = wait_for(lambda j: j["state"] == "running" and j["progress"]["evaluations"] > 0,
