@@ -21,7 +21,8 @@
 //      one target for all — the arm's residual through the judge's low-pass;
 //   3b. solve by the one linear least-squares rule (estimation/linear_least_squares.h) with the prior 0 (no
 //      payload): a direction the run does not excite stays at 0 and is named, never filled with noise; a
-//      known mass or centre of mass is moved to the right-hand side (or into a combined column) first;
+//      known mass or centre of mass is moved to the right-hand side (or into a combined column) first; with
+//      per_joint weighting, each joint's rows are divided by its residual RMS from a first solve;
 //   4. report in the units a tool is mounted with: mass (kg), centre of mass (m, tip-link frame), inertia
 //      about the centre of mass in tip-link axes (kg·m², URDF tensor entries), each with its standard error
 //      (σ² of the filtered residual corrected as estimation::filtered_residual_factor says, inflated when a
